@@ -1,0 +1,126 @@
+"""The vector-loop equations and their time derivatives, vectorised over N inputs.
+
+With the loop vectors ``m_t mu(phi_t)`` of :class:`analytic.topology.LoopTerms`
+(``mu = (cos, sin)``, ``sigma = (-sin, cos)``), each loop ``l`` satisfies
+
+* position:      ``f_l(q) = sum_t m_t mu(phi_t) = 0``
+* velocity:      ``sum_t (m'_t mu + m_t phi'_t sigma) = J(q) q' = 0``
+* acceleration:  ``J(q) q'' + gamma(q, q') = 0`` with
+  ``gamma = sum_t (2 m'_t phi'_t sigma - m_t phi'_t^2 mu)``
+
+because ``d mu/dt = phi' sigma`` and ``d sigma/dt = -phi' mu``.  The Jacobian
+column of a group angle is ``sum m_t sigma(phi_t)``, of a slider displacement
+``sign_t mu(phi_t)``.  The driver adds the linear row ``c . q = value + const``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .linalg import solve_small
+from .topology import Topology
+
+
+class LoopEquations:
+    """Evaluate ``f``, ``J`` and ``gamma`` for a topology.  Rows are ordered
+    ``[x_0, y_0, x_1, y_1, ...]`` (loop by loop), columns as ``q``."""
+
+    def __init__(self, topo: Topology):
+        t = topo.terms
+        self.topo = topo
+        self.ng = topo.n_groups
+        self.ns = len(topo.prismatic)
+        self.nq = topo.nq
+        self.L = topo.n_loops
+        T = len(t.loop)
+        # group/slider index into arrays padded with a trailing zero column
+        self.gi = np.where(t.group >= 0, t.group, self.ng)
+        self.si = np.where(t.slider >= 0, t.slider, self.ns)
+        self.beta = t.beta
+        self.r = t.r
+        self.sign = t.sign
+        self.Lmat = np.zeros((T, self.L))
+        self.Lmat[np.arange(T), t.loop] = 1.0
+        self.Eq = np.zeros((T, self.L, self.nq))
+        self.Es = np.zeros((T, self.L, self.nq))
+        for k in range(T):
+            if t.group[k] >= 0:
+                self.Eq[k, t.loop[k], t.group[k]] = 1.0
+            if t.slider[k] >= 0:
+                self.Es[k, t.loop[k], self.ng + t.slider[k]] = t.sign[k]
+        self.Eq = self.Eq.reshape(T, -1)
+        self.Es = self.Es.reshape(T, -1)
+
+    def _phi_m(self, q):
+        N = q.shape[0]
+        z = np.zeros((N, 1))
+        th = np.concatenate([q[:, :self.ng], z], axis=1)
+        s = np.concatenate([q[:, self.ng:], z], axis=1)
+        phi = th[:, self.gi] + self.beta
+        m = self.r + self.sign * s[:, self.si]
+        return th, s, phi, m
+
+    def _interleave(self, x, y):
+        return np.stack([x, y], axis=2).reshape(x.shape[0], 2 * self.L, *x.shape[2:])
+
+    def residual(self, q: np.ndarray) -> np.ndarray:
+        """Loop closure residual ``(N, 2L)`` in m."""
+        _, _, phi, m = self._phi_m(q)
+        return self._interleave((m * np.cos(phi)) @ self.Lmat, (m * np.sin(phi)) @ self.Lmat)
+
+    def jacobian(self, q: np.ndarray, _pre=None) -> np.ndarray:
+        """``(N, 2L, nq)`` derivative of the residual with respect to ``q``."""
+        _, _, phi, m = _pre if _pre is not None else self._phi_m(q)
+        c, s = np.cos(phi), np.sin(phi)
+        N = q.shape[0]
+        jx = ((-m * s) @ self.Eq + c @ self.Es).reshape(N, self.L, self.nq)
+        jy = ((m * c) @ self.Eq + s @ self.Es).reshape(N, self.L, self.nq)
+        return self._interleave(jx, jy)
+
+    def gamma(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``(N, 2L)`` velocity-product terms of the loop accelerations."""
+        _, _, phi, m = self._phi_m(q)
+        N = q.shape[0]
+        z = np.zeros((N, 1))
+        w = np.concatenate([qd[:, :self.ng], z], axis=1)[:, self.gi]
+        md = self.sign * np.concatenate([qd[:, self.ng:], z], axis=1)[:, self.si]
+        c, s = np.cos(phi), np.sin(phi)
+        gx = (-2 * md * w * s - m * w * w * c) @ self.Lmat
+        gy = (2 * md * w * c - m * w * w * s) @ self.Lmat
+        return self._interleave(gx, gy)
+
+    # -- the square system with the driver row -------------------------------
+    def split(self, J: np.ndarray):
+        """Partition ``J`` into the columns of the unknowns and of the driven variable.
+
+        Returns ``(A, col_d)`` where ``A`` is the square system for the unknown
+        variables and ``col_d`` the driven variable's column (or ``None`` when the
+        driver is a general linear row, in which case ``A`` includes that row).
+        """
+        k = self.topo.driven_var
+        if k is not None:
+            keep = [i for i in range(self.nq) if i != k]
+            return J[:, :, keep], J[:, :, k]
+        N = J.shape[0]
+        row = np.broadcast_to(self.topo.driver_row, (N, 1, self.nq))
+        return np.concatenate([J, row], axis=1), None
+
+    def solve_rates(self, J: np.ndarray, rhs_loops: np.ndarray, drive_rate: np.ndarray):
+        """Solve ``J x = rhs_loops`` with the driver row ``c . x = drive_rate``.
+
+        ``x`` is q' (rhs 0) or q'' (rhs ``-gamma``).  Returns ``(N, nq)``.
+        """
+        k = self.topo.driven_var
+        A, col = self.split(J)
+        N = J.shape[0]
+        if k is not None:
+            xd = drive_rate / self.topo.driver_row[k]
+            rhs = rhs_loops - col * xd[:, None]
+            xu = solve_small(A, rhs) if A.shape[-1] else np.zeros((N, 0))
+            return np.insert(xu, k, xd, axis=1)
+        rhs = np.concatenate([rhs_loops, drive_rate[:, None]], axis=1)
+        return solve_small(A, rhs)
+
+    def driver_value(self, q: np.ndarray) -> np.ndarray:
+        """The driver coordinate ``c . q - const`` (rad or m)."""
+        return q @ self.topo.driver_row - self.topo.driver_const

@@ -1,0 +1,43 @@
+"""Every numerical tolerance of the solver and its checks, with why it has its size.
+
+Relative errors elsewhere in the project are normalised by the peak magnitude of
+the quantity over the cycle (see :func:`reports.compare.compare`), so zero
+crossings do not blow them up.
+"""
+
+# --- solver -----------------------------------------------------------------
+
+#: Loop-closure residual accepted from the position solution, relative to the
+#: mechanism's size (its longest in-body point distance).  The closed forms are
+#: exact to a few ulps (~1e-16 relative); Newton stops below this.  1e-12 leaves
+#: four orders of magnitude for the rounding of sums of ~10 loop vectors.
+LOOP_RESIDUAL = 1e-12
+
+#: Newton-Raphson iteration cap.  Quadratic convergence from a continuation
+#: predictor needs 3-5 iterations; 50 covers damped starts from rough hints.
+NEWTON_MAX_ITER = 50
+
+#: Condition number of the loop Jacobian (in the unknowns) above which a
+#: configuration is treated as singular (dead centre / change point) and a
+#: single-point solve raises.  In double precision a condition number of 1e10
+#: leaves ~6 significant digits in the velocities, the least this tool reports.
+SINGULAR_CONDITION = 1e10
+
+#: Power balance of the kinetostatic solution: drive power = dKE/dt - power of
+#: gravity and loads.  Both sides are sums of products of exact quantities, so
+#: they agree to rounding; 1e-9 of the peak drive power allows for the
+#: cancellation of large inertia terms (up to ~1e5 x the net) in fast cases.
+POWER_BALANCE = 1e-9
+
+# --- independent checks used by the tests -----------------------------------
+
+#: Central finite differences of positions (velocities) or of analytic
+#: velocities (accelerations) in time, step h: the truncation error is
+#: O(h^2 * third derivative) ~ 1e-8 relative at h = 1e-4 of a period, and the
+#: rounding error O(eps / h) ~ 1e-12.  1e-6 of the peak leaves a margin of
+#: 100 for sharply peaked accelerations near toggle positions.
+FINITE_DIFFERENCE = 1e-6
+
+#: Agreement with the exact values in REFERENCE.md, which are printed to 5-6
+#: significant figures: half a unit in the 6th figure.
+REFERENCE_RELATIVE = 5e-6
