@@ -23,7 +23,7 @@ import numpy as np
 from .errors import AssemblyError
 from .loops import LoopEquations
 from .mechanism import Prismatic, Revolute
-from .tolerances import LOOP_RESIDUAL, NEWTON_MAX_ITER
+from .tolerances import LOOP_RESIDUAL, NEWTON_MAX_ITER, TOGGLE_SNAP
 from .topology import Topology
 
 
@@ -112,7 +112,7 @@ class ClosedForm:
                 h2 = L1s - a * a
                 disc = np.where(D > 0, h2 / L1s, -1.0)
                 discs.append(disc)
-                h = np.sqrt(np.maximum(h2, 0.0))
+                h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
                 sg = next(si)
                 perp = np.stack([-d[:, 1], d[:, 0]], axis=1)
                 P2 = P1 + (a[:, None] * d + sg * h[:, None] * perp) / Dsafe[:, None]
@@ -149,7 +149,7 @@ class ClosedForm:
                 h2 = eu * eu - np.einsum("ni,ni->n", e, e) + L1s
                 discs.append(h2 / L1s)
                 sg = next(si)
-                t = -eu + sg * np.sqrt(np.maximum(h2, 0.0))
+                t = -eu + sg * np.where(h2 / L1s > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
                 P2 = base + t[:, None] * ud
                 e1 = P2 - P1
                 theta[:, x1] = np.arctan2(e1[:, 1], e1[:, 0]) - math.atan2(c1[1], c1[0])
@@ -175,15 +175,18 @@ class ClosedForm:
                 D = np.hypot(d[:, 0], d[:, 1])
                 Dsafe = np.where(D > 0, D, 1.0)
                 ratio = -kconst / Dsafe
-                discs.append(np.where(D > 0, 1.0 - ratio * ratio, -1.0))
+                disc = np.where(D > 0, 1.0 - ratio * ratio, -1.0)
+                discs.append(disc)
                 sg = next(si)
                 psi = np.arctan2(d[:, 1], d[:, 0])
-                th = psi - (jt.direction + math.pi / 2) + sg * np.arccos(np.clip(ratio, -1, 1))
+                acos = np.where(disc > TOGGLE_SNAP, np.arccos(np.clip(ratio, -1, 1)),
+                                np.where(ratio > 0, 0.0, math.pi))
+                th = psi - (jt.direction + math.pi / 2) + sg * acos
                 theta[:, g] = th
                 theta[:, s_] = th + jt.angle
                 origin[:, g] = PG - rotate(th, aG)
                 origin[:, s_] = PSr - rotate(theta[:, s_], aS)
-                trans.append((jt.name, rotate(th, nl), d))
+                # no transmission angle: the slot's force is always normal to it
             elif st.kind == "PRP":
                 x1, x2 = st.bodies
                 j1, j2, j3 = st.joints
@@ -291,7 +294,7 @@ def choose_branches(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, 
     best, best_score = None, math.inf
     for signs in itertools.product((1, -1), repeat=cf.n_branch):
         th, org, disc, _ = cf.run(np.array([value]), signs)
-        if disc.size and np.any(disc < -1e-12):
+        if disc.size and np.any(disc < -TOGGLE_SNAP):
             continue
         sc = _hint_score(topo, th, org)
         if sc < best_score - 1e-15:
@@ -331,26 +334,51 @@ def input_span(topo: Topology) -> tuple[float, float]:
     return v0 - 2 * L, v0 + 2 * L
 
 
-def feasible_ranges(topo: Topology, n: int = 3601) -> list[tuple[float, float]]:
-    """Input intervals (SI) where every dyad closes (for any branch), sampled on
-    ``n`` points of :func:`input_span`; interval ends are accurate to the sample step."""
+def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[float, float]]:
+    """Input intervals (SI) where every dyad closes, on :func:`input_span`.
+
+    ``signs`` restricts the test to one branch combination (default: any).  The
+    intervals are found on ``n`` samples, then each end is refined by bisection to
+    1e-12 of the span.  A mechanism without a closed form reports the whole span.
+    """
     lo, hi = input_span(topo)
-    x = np.linspace(lo, hi, n)
     if topo.plan is None:
         return [(lo, hi)]
     cf = ClosedForm(topo)
-    ok = np.zeros(n, bool)
-    for signs in itertools.product((1, -1), repeat=cf.n_branch):
-        _, _, disc, _ = cf.run(x, signs)
-        ok |= np.all(disc >= 0, axis=1) if disc.size else True
+    combos = [tuple(signs)] if signs is not None else \
+        list(itertools.product((1, -1), repeat=cf.n_branch))
+
+    def ok(x):
+        out = np.zeros(len(x), bool)
+        for sg in combos:
+            _, _, disc, _ = cf.run(x, sg)
+            out |= np.all(disc >= -TOGGLE_SNAP, axis=1) if disc.size else True
+        return out
+
+    x = np.linspace(lo, hi, n)
+    good = ok(x)
+
+    def refine(a, b):  # a feasible, b not: bisect to the boundary (feasible side)
+        for _ in range(60):
+            m = 0.5 * (a + b)
+            if ok(np.array([m]))[0]:
+                a = m
+            else:
+                b = m
+            if abs(b - a) < 1e-12 * (hi - lo):
+                break
+        return a
+
     out = []
     i = 0
     while i < n:
-        if ok[i]:
+        if good[i]:
             k = i
-            while k + 1 < n and ok[k + 1]:
+            while k + 1 < n and good[k + 1]:
                 k += 1
-            out.append((float(x[i]), float(x[k])))
+            a = refine(x[i], x[i - 1]) if i > 0 else x[i]
+            b = refine(x[k], x[k + 1]) if k < n - 1 else x[k]
+            out.append((float(a), float(b)))
             i = k + 1
         else:
             i += 1
@@ -432,7 +460,7 @@ class PositionSolver:
         if self.cf is not None:
             theta, origin, disc, trans = self.cf.run(values, self.signs)
             if disc.size:
-                bad = np.flatnonzero(np.any(disc < -1e-12, axis=1))
+                bad = np.flatnonzero(np.any(disc < -TOGGLE_SNAP, axis=1))
                 if bad.size:
                     raise _infeasible(self.topo, float(values[bad[0]]))
             q = q_from_poses(self.topo, theta, origin)

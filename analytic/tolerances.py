@@ -13,6 +13,15 @@ crossings do not blow them up.
 #: four orders of magnitude for the rounding of sums of ~10 loop vectors.
 LOOP_RESIDUAL = 1e-12
 
+#: Dyad discriminants (h^2 / L^2, the squared distance of the inner joint from the
+#: line of the outer joints, relative) inside [-TOGGLE_SNAP, TOGGLE_SNAP] are taken
+#: as exactly 0: the dyad is at its toggle.  Rounding leaves |h^2 / L^2| of a few
+#: eps at an exact toggle (so h ~ 1e-8 L would be pure noise); setting h^2 to 0
+#: moves the inner joint along its link by h^2 / (2 L) <= 5e-13 L, inside
+#: LOOP_RESIDUAL, and makes the Jacobian exactly singular there, so a requested
+#: dead-centre position is reported as one.  Below -TOGGLE_SNAP the loop cannot close.
+TOGGLE_SNAP = 1e-12
+
 #: Newton-Raphson iteration cap.  Quadratic convergence from a continuation
 #: predictor needs 3-5 iterations; 50 covers damped starts from rough hints.
 NEWTON_MAX_ITER = 50

@@ -1,0 +1,236 @@
+"""The ``xval`` command line.
+
+``xval cases``                         list the built-in cases
+``xval solve CASE_OR_FILE --angle DEG``  one configuration, tabulated as in the notes
+``xval sweep CASE_OR_FILE``            the full-cycle table (CSV)
+
+Errors in the input (bad file, unknown case, an angle where the loops cannot
+close, a singular position) print one line naming the problem and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from analytic import Linkage, LinkageError, case_names, load_case
+from analytic.mechanism import Prismatic, Revolute
+
+CONVENTIONS = {
+    "units": "SI: m, rad, s, kg, N; angle_deg in degrees",
+    "frame": "world: x right, y up; angles, omega, alpha counter-clockwise positive",
+    "joint_force": "force exerted by the joint's body_a (prismatic: the guide) on body_b "
+                   "(the slider), world axes, N",
+    "prismatic": "normal: force along the line normal (direction rotated +90 deg) on the "
+                 "slider, N; moment: couple on the slider, N m",
+    "drive": "torque (N m, ccw on body_b) or force (N, on the slider along the line); "
+             "power = effort x input velocity, W",
+}
+
+
+def _solve_one(args):
+    mech = load_case(args.case)
+    lk = Linkage(mech)
+    rev = isinstance(mech.driver_joint, Revolute)
+    value = None
+    if args.angle is not None:
+        if not rev:
+            raise LinkageError(f"case {mech.name!r} is driven by prismatic joint "
+                               f"{mech.driver.joint!r}: give --value (m), not --angle")
+        value = math.radians(args.angle)
+    if args.value is not None:
+        if rev:
+            raise LinkageError(f"case {mech.name!r} is driven by revolute joint "
+                               f"{mech.driver.joint!r}: give --angle (deg), not --value")
+        value = args.value
+    kin = lk.kinematics(value, args.omega, args.alpha)
+    frc = lk.forces(kin) if mech.has_mass else None
+    return mech, lk, kin, frc
+
+
+def _result_dict(mech, lk, kin, frc) -> dict:
+    topo = lk.topo
+    rev = isinstance(mech.driver_joint, Revolute)
+    out = {
+        "case": mech.name,
+        "input": {"joint": mech.driver.joint,
+                  ("angle_deg" if rev else "s"): float(np.degrees(kin.value[0]) if rev
+                                                       else kin.value[0]),
+                  "velocity": float(kin.velocity[0]),
+                  "acceleration": float(kin.acceleration[0])},
+        "bodies": {}, "points": {}, "sliders": {}, "joints": {},
+        "conventions": CONVENTIONS,
+    }
+    for b, body in enumerate(mech.bodies):
+        if b == topo.ground:
+            continue
+        ang = math.degrees(kin.theta[0, b])
+        out["bodies"][body.name] = {"angle_deg": 180.0 - (180.0 - ang) % 360.0,
+                                    "omega": float(kin.omega[0, b]),
+                                    "alpha": float(kin.alpha[0, b])}
+        for pn in body.points:
+            p, v, a = kin.point(body.name, pn)
+            out["points"][f"{body.name}.{pn}"] = {
+                "position": p[0].tolist(), "velocity": v[0].tolist(),
+                "acceleration": a[0].tolist()}
+    for j in topo.prismatic:
+        jn = topo.joint_names[j]
+        s, v, a = kin.slider(jn)
+        out["sliders"][jn] = {"s": float(s[0]), "v": float(v[0]), "a": float(a[0])}
+    if frc is not None:
+        for jt in mech.joints:
+            d = {"body_a": jt.body_a, "body_b": jt.body_b,
+                 "force": frc.joint_force[jt.name][0].tolist(),
+                 "magnitude": float(np.hypot(*frc.joint_force[jt.name][0]))}
+            if isinstance(jt, Prismatic):
+                d["normal"] = float(frc.normal[jt.name][0])
+                d["moment"] = float(frc.moment[jt.name][0])
+            out["joints"][jt.name] = d
+        out["drive"] = {("torque" if rev else "force"): float(frc.effort[0]),
+                        "power": float(frc.power[0]),
+                        "power_balance_residual": float(frc.power_residual[0])}
+    else:
+        out["drive"] = None
+        out["forces_note"] = "no masses in the description: forces not computed"
+    out["jacobian_condition"] = float(kin.condition[0])
+    out["transmission_deg"] = {k: float(v[0]) for k, v in kin.transmission.items()}
+    return out
+
+
+def _print_tables(res: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+    con = Console()
+    if con.width < 150:  # keep the tables whole when piped or in a narrow terminal
+        con = Console(width=150)
+    inp = res["input"]
+    head = (f"[bold]{res['case']}[/]  input {inp['joint']} = "
+            + (f"{inp['angle_deg']:.6g} deg, omega = {inp['velocity']:.6g} rad/s, "
+               f"alpha = {inp['acceleration']:.6g} rad/s^2" if "angle_deg" in inp else
+               f"{inp['s']:.6g} m, v = {inp['velocity']:.6g} m/s, "
+               f"a = {inp['acceleration']:.6g} m/s^2"))
+    con.print(head)
+    t = Table(title="Links: position, velocity, acceleration")
+    for c in ("link", "theta (deg)", "omega (rad/s)", "alpha (rad/s^2)"):
+        t.add_column(c, justify="right")
+    for n, d in res["bodies"].items():
+        t.add_row(n, f"{d['angle_deg']:.6f}", f"{d['omega']:.6f}", f"{d['alpha']:.6f}")
+    con.print(t)
+    t = Table(title="Points (world frame)")
+    for c in ("point", "x (m)", "y (m)", "vx", "vy", "|v| (m/s)", "ax", "ay", "|a| (m/s^2)"):
+        t.add_column(c, justify="right")
+    for n, d in res["points"].items():
+        p, v, a = d["position"], d["velocity"], d["acceleration"]
+        t.add_row(n, f"{p[0]:.6f}", f"{p[1]:.6f}", f"{v[0]:.6g}", f"{v[1]:.6g}",
+                  f"{math.hypot(*v):.6g}", f"{a[0]:.6g}", f"{a[1]:.6g}", f"{math.hypot(*a):.6g}")
+    con.print(t)
+    if res["sliders"]:
+        t = Table(title="Sliders")
+        for c in ("joint", "s (m)", "s' (m/s)", "s'' (m/s^2)"):
+            t.add_column(c, justify="right")
+        for n, d in res["sliders"].items():
+            t.add_row(n, f"{d['s']:.6f}", f"{d['v']:.6f}", f"{d['a']:.6f}")
+        con.print(t)
+    if res["drive"] is not None:
+        t = Table(title="Joint forces (by body_a on body_b, world axes)")
+        for c in ("joint", "by -> on", "fx (N)", "fy (N)", "|F| (N)", "moment (N m)"):
+            t.add_column(c, justify="right")
+        for n, d in res["joints"].items():
+            t.add_row(n, f"{d['body_a']} -> {d['body_b']}", f"{d['force'][0]:.6g}",
+                      f"{d['force'][1]:.6g}", f"{d['magnitude']:.6g}",
+                      f"{d['moment']:.6g}" if "moment" in d else "")
+        con.print(t)
+        dr = res["drive"]
+        eff = (f"drive torque T = {dr['torque']:.6g} N m" if "torque" in dr
+               else f"drive force F = {dr['force']:.6g} N")
+        con.print(f"{eff}, input power P = {dr['power']:.6g} W "
+                  f"(power-balance residual {dr['power_balance_residual']:.2g} W)")
+    else:
+        con.print("[dim]no masses in the description: forces not computed[/]")
+
+
+def cmd_cases(args) -> int:
+    for n in case_names():
+        m = load_case(n)
+        first = m.description.strip().splitlines()[0] if m.description else ""
+        print(f"{n:24s} {first}")
+    return 0
+
+
+def cmd_solve(args) -> int:
+    res = _result_dict(*_solve_one(args))
+    if args.json:
+        print(json.dumps(res, indent=2))
+    else:
+        _print_tables(res)
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    mech = load_case(args.case)
+    lk = Linkage(mech)
+    r = lk.sweep(args.points)
+    if args.csv:
+        r.frame.to_csv(args.csv, index=False)
+    print(f"{mech.name}: {len(r.frame)} points, "
+          + ("full cycle" if r.full_cycle else "feasible range only")
+          + (f", {r.grashof}" if r.grashof else ""))
+    for n in r.notes:
+        print("note:", n)
+    if len(r.events):
+        print(r.events.to_string(index=False))
+    if r.forces is not None:
+        print(f"peak |drive effort| {np.max(np.abs(r.forces.effort)):.6g}, "
+              f"power balance error {r.forces.power_balance_error():.2g} (relative)")
+    if args.csv:
+        print(f"wrote {args.csv}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="xval", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    s = sub.add_parser("cases", help="list the built-in cases")
+    s.set_defaults(func=cmd_cases)
+    s = sub.add_parser("solve", help="solve one configuration")
+    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("--angle", type=float, help="input angle, deg (revolute driver)")
+    s.add_argument("--value", type=float, help="input displacement, m (prismatic driver)")
+    s.add_argument("--omega", type=float, help="input velocity, rad/s (or m/s)")
+    s.add_argument("--alpha", type=float, help="input acceleration, rad/s^2 (or m/s^2)")
+    s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
+    s.set_defaults(func=cmd_solve)
+    s = sub.add_parser("sweep", help="full-cycle table")
+    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("--points", type=int, default=360)
+    s.add_argument("--csv", help="write the table to this CSV file")
+    s.set_defaults(func=cmd_sweep)
+    _register_more(sub)
+    return p
+
+
+def _register_more(sub) -> None:
+    """Engine and report commands (kept apart so the solver CLI has no engine imports)."""
+    try:
+        from . import cli_engines
+    except ImportError:  # pragma: no cover - engines not built yet
+        return
+    cli_engines.register(sub)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except LinkageError as e:
+        print(f"xval: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
