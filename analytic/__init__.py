@@ -10,8 +10,13 @@ Front door::
 """
 
 from .cases import case_names, load_case
-from .errors import (AssemblyError, DescriptionError, LinkageError, MissingMassError,
-                     SingularConfigurationError)
+from .errors import (
+                     AssemblyError,
+                     DescriptionError,
+                     LinkageError,
+                     MissingMassError,
+                     SingularConfigurationError,
+)
 from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Assembly, Body, Driver, Load, Mechanism, Prismatic, Revolute

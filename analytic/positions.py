@@ -22,7 +22,7 @@ import numpy as np
 
 from .errors import AssemblyError
 from .loops import LoopEquations
-from .mechanism import Prismatic, Revolute
+from .mechanism import Revolute
 from .tolerances import LOOP_RESIDUAL, NEWTON_MAX_ITER, TOGGLE_SNAP
 from .topology import Topology
 

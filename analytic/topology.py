@@ -140,7 +140,7 @@ def build_topology(mech: Mechanism) -> Topology:
         leader[b], off[b] = r, off[b] + o
         return r, off[b]
 
-    for k, j in enumerate(joints):
+    for j in joints:
         if isinstance(j, Prismatic):
             ga, oa = find(idx[j.guide])
             gb, ob = find(idx[j.slider])

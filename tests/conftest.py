@@ -19,7 +19,7 @@ def rod(name, length, mass=None, extra=None):
     return Body(name, pts, mass, (length / 2, 0.0), mass * length ** 2 / 12)
 
 
-def four_bar(ground, crank, coupler, rocker, theta=math.radians(60), omega=15.0, alpha=0.0,
+def four_bar(ground, crank, coupler, rocker, theta=math.pi / 3, omega=15.0, alpha=0.0,
              masses=(0.2, 0.6, 0.5), open_branch=True, gravity=(0.0, 0.0)) -> Mechanism:
     """Crank pivot O2 at the origin, rocker pivot O4 at (ground, 0); B above (open) or
     below (crossed) the line from A to O4."""
@@ -40,7 +40,7 @@ def four_bar(ground, crank, coupler, rocker, theta=math.radians(60), omega=15.0,
                      gravity=gravity, assembly=Assembly({"coupler.P1": tuple(hint)}))
 
 
-def slider_crank(crank, rod_len, offset=0.0, theta=math.radians(30), omega=200.0, alpha=0.0,
+def slider_crank(crank, rod_len, offset=0.0, theta=math.pi / 6, omega=200.0, alpha=0.0,
                  masses=(0.0, 3.0, 0.6), load=(0.0, 0.0), gravity=(0.0, 0.0)) -> Mechanism:
     """Crank about the origin, slider on the line y = offset along +x, slider to the right."""
     m = masses
@@ -48,7 +48,8 @@ def slider_crank(crank, rod_len, offset=0.0, theta=math.radians(30), omega=200.0
                if m and m[0] == 0 else rod("crank", crank, m[0] if m else None))
     bodies = (Body("ground", {"O": (0.0, 0.0), "L": (0.0, offset)}), crank_b,
               rod("rod", rod_len, m[1] if m else None),
-              Body("piston", {"C": (0.0, 0.0)}, *((m[2], (0.0, 0.0), 1e-4) if m else ())))
+              Body("piston", {"C": (0.0, 0.0)},
+                   *((m[2], (0.0, 0.0), 1e-4 if m[2] else 0.0) if m else ())))
     joints = (Revolute("A", "ground", "O", "crank", "P0"),
               Revolute("B", "crank", "P1", "rod", "P0"),
               Revolute("C", "rod", "P1", "piston", "C"),

@@ -189,8 +189,8 @@ def grashof_crank_rockers(draw):
     if crank + l_ > 0.97 * (p + q):
         l_ = 0.97 * (p + q) - crank
     ground, coupler, rocker = draw(st.permutations([l_, p, q]))
-    return ground, crank, coupler, rocker, draw(st.booleans()), draw(st.floats(-50, 50)
-                                                                      .filter(lambda w: abs(w) > 0.1))
+    omega = draw(st.floats(-50, 50).filter(lambda w: abs(w) > 0.1))
+    return ground, crank, coupler, rocker, draw(st.booleans()), omega
 
 
 @settings(max_examples=40, deadline=None)
