@@ -20,17 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import SingularConfigurationError
-from .linalg import condition
+from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
-from .positions import PositionSolver, poses_from_q, rotate
+from .positions import PositionSolver, as_xy, cplx
 from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
-
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    """Rotate by +90 deg: ``J v``."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
 @dataclass
@@ -66,12 +61,28 @@ class Kinematics:
     theta: np.ndarray
     omega: np.ndarray
     alpha: np.ndarray
-    origin: np.ndarray
-    v_origin: np.ndarray
-    a_origin: np.ndarray
+    E: np.ndarray       # exp(i theta), complex (N, B)
+    zO: np.ndarray      # origins, complex (N, B)
+    zv: np.ndarray      # their velocities
+    za: np.ndarray      # their accelerations
     condition: np.ndarray
     determinant: np.ndarray
     transmission: dict[str, np.ndarray] = field(default_factory=dict)
+    joint_point: dict[int, np.ndarray] = field(default_factory=dict)
+    # joint index -> world position (complex) of its point on body_b (the slider point
+    # for a prismatic joint)
+
+    @property
+    def origin(self) -> np.ndarray:
+        return as_xy(self.zO)
+
+    @property
+    def v_origin(self) -> np.ndarray:
+        return as_xy(self.zv)
+
+    @property
+    def a_origin(self) -> np.ndarray:
+        return as_xy(self.za)
 
     @property
     def n(self) -> int:
@@ -82,19 +93,24 @@ class Kinematics:
 
         ``point`` is a point name or body-frame coordinates in m.
         """
+        return tuple(as_xy(z) for z in self.point_c(body, point))
+
+    def point_c(self, body: str | int, point):
+        """As :meth:`point`, as complex ``(N,)`` arrays (x + iy)."""
         topo = self.linkage.topo
-        b = self.linkage.body_index(body)
+        if isinstance(body, str):
+            b = self.linkage.body_index(body)
+        else:
+            b, body = body, topo.body_names[body]
         if isinstance(point, str):
             self.linkage.mech.body(body).point(point)  # typed error for an unknown name
-            c = topo.body_points[b][point]
+            c = cplx(topo.body_points[b][point])
         else:
-            c = np.asarray(point, float)
-        r = rotate(self.theta[:, b], c)
-        w, al = self.omega[:, b, None], self.alpha[:, b, None]
-        p = self.origin[:, b] + r
-        v = self.v_origin[:, b] + w * _perp(r)
-        a = self.a_origin[:, b] + al * _perp(r) - w * w * r
-        return p, v, a
+            c = cplx(point)
+        r = self.E[:, b] * c
+        w = self.omega[:, b]
+        return (self.zO[:, b] + r, self.zv[:, b] + 1j * w * r,
+                self.za[:, b] + (1j * self.alpha[:, b] - w * w) * r)
 
     def slider(self, joint: str):
         """Displacement s (m), velocity s' and acceleration s'' ``(N,)`` of a prismatic joint."""
@@ -106,9 +122,12 @@ class Kinematics:
         return self.q[:, i], self.qd[:, i], self.qdd[:, i]
 
     def com(self, b: int):
-        """Centre-of-mass position, velocity, acceleration of body index ``b``."""
-        body = self.linkage.mech.bodies[b]
-        return self.point(body.name, body.com)
+        """Centre-of-mass position, velocity, acceleration ``(N, 2)`` of body index ``b``."""
+        return tuple(as_xy(z) for z in self.com_c(b))
+
+    def com_c(self, b: int):
+        """As :meth:`com`, complex ``(N,)``."""
+        return self.point_c(b, self.linkage.mech.bodies[b].com)
 
 
 class Linkage:
@@ -162,18 +181,20 @@ class Linkage:
                                          float), (N,)).copy()
         acc = np.broadcast_to(np.asarray(d.acceleration if acceleration is None
                                          else acceleration, float), (N,)).copy()
-        q, trans = self.positions.solve(values)
+        q, theta, E, O, trans, pre = self.positions.solve(values)
         eqs = self.eqs
         L2 = 2 * eqs.L
-        J = eqs.jacobian(q)
+        J = eqs.jacobian(q, pre)
         A, _ = eqs.split(J)
-        cond = condition(A) if A.shape[-1] else np.ones(N)
         if A.shape[-1]:
-            colnorm = np.prod(np.linalg.norm(A, axis=1), axis=1)
-            from .linalg import det_small
+            cond = condition(A)
+            n = A.shape[-1]
+            colnorm = np.ones(N)
+            for c in range(n):  # product of column norms, short axes unrolled
+                colnorm *= np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
             det = det_small(A) / np.where(colnorm > 0, colnorm, 1.0)
         else:
-            det = np.ones(N)
+            cond, det = np.ones(N), np.ones(N)
         bad = np.flatnonzero(~(cond < SINGULAR_CONDITION))
         if bad.size and on_singular == "raise":
             v = float(values[bad[0]])
@@ -184,17 +205,15 @@ class Linkage:
                 f"{cond[bad[0]]:.3g}; velocities are not determined by the input there", v)
         with np.errstate(all="ignore"):
             qd = eqs.solve_rates(J, np.zeros((N, L2)), vel)
-            qdd = eqs.solve_rates(J, -eqs.gamma(q, qd), acc)
-        theta, origin = poses_from_q(self.topo, q)
+            qdd = eqs.solve_rates(J, -eqs.gamma(q, qd, pre), acc)
         omega, alpha = self._group_rates(qd), self._group_rates(qdd)
-        v_o, a_o = self._propagate(q, qd, qdd, theta, origin, omega, alpha)
+        zv, za, jp = self._propagate(qd, qdd, E, O, omega, alpha)
         tr = {}
         for name, e1, e2 in trans:
-            c = np.einsum("ni,ni->n", e1, e2) / (np.linalg.norm(e1, axis=1)
-                                                 * np.linalg.norm(e2, axis=1))
+            c = (e1.conjugate() * e2).real / (np.abs(e1) * np.abs(e2))
             tr[name] = np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
         return Kinematics(self, values, vel, acc, q, qd, qdd, theta, omega, alpha,
-                          origin, v_o, a_o, cond, det, tr)
+                          E, O, zv, za, cond, det, tr, jp)
 
     def _group_rates(self, x: np.ndarray) -> np.ndarray:
         g = self.topo.group_of
@@ -203,42 +222,50 @@ class Linkage:
         out[:, m] = x[:, g[m]]
         return out
 
-    def _propagate(self, q, qd, qdd, theta, origin, omega, alpha):
+    def _propagate(self, qd, qdd, E, O, omega, alpha):
+        """Origin velocities and accelerations (complex), walking the spanning tree;
+        also the world point of every joint (on body_b)."""
         topo = self.topo
-        N, B = theta.shape
-        v_o = np.zeros((N, B, 2))
-        a_o = np.zeros((N, B, 2))
-
-        def carry(b, P, vP, aP, to):
-            """Velocity/acceleration of point ``to`` of body b from point P of b."""
-            r = to - P
-            w, al = omega[:, b, None], alpha[:, b, None]
-            return vP + w * _perp(r), aP + al * _perp(r) - w * w * r
-
+        N, B = E.shape
+        zv = np.zeros((N, B), complex)
+        za = np.zeros((N, B), complex)
+        jp = {}
         for c in topo.order[1:]:
             p, j = topo.parent[c]
             jt = self.mech.joints[j]
-            P = origin[:, p] + rotate(theta[:, p], topo.attach(j, p))
-            vP, aP = carry(p, origin[:, p], v_o[:, p], a_o[:, p], P)
+            wp, ap = omega[:, p], alpha[:, p]
+            rp = E[:, p] * cplx(topo.attach(j, p))
+            P = O[:, p] + rp
+            vP = zv[:, p] + 1j * wp * rp
+            aP = za[:, p] + (1j * ap - wp * wp) * rp
             if not isinstance(jt, Revolute):
                 i = topo.n_groups + topo.slider_index[j]
                 gb = topo.body_names.index(jt.guide)
-                u = rotate(theta[:, gb], [math.cos(jt.direction), math.sin(jt.direction)])
-                sd, sdd = qd[:, i, None], qdd[:, i, None]
-                wg = omega[:, gb, None]
+                u = E[:, gb] * complex(math.cos(jt.direction), math.sin(jt.direction))
+                sd, sdd = qd[:, i], qdd[:, i]
                 rel_v = sd * u
-                rel_a = sdd * u + 2 * wg * sd * _perp(u)
+                rel_a = (sdd + 2j * omega[:, gb] * sd) * u  # sliding + Coriolis
                 if c == topo.body_names.index(jt.slider):
-                    # P is the guide's line origin; move along the guide to the slider point
-                    PS = origin[:, c] + rotate(theta[:, c], topo.attach(j, c))
-                    vG, aG = carry(p, P, vP, aP, PS)
-                    P, vP, aP = PS, vG + rel_v, aG + rel_a
+                    # P is the guide's line origin; the guide's material point under the
+                    # slider point moves rigidly with the guide, the slider slides on it
+                    PS = O[:, c] + E[:, c] * cplx(topo.attach(j, c))
+                    r = PS - P
+                    vP = vP + 1j * wp * r + rel_v
+                    aP = aP + (1j * ap - wp * wp) * r + rel_a
+                    P = PS
                 else:
                     # P is the slider point; the guide's material point there moves with
-                    # the slider's velocity less the relative sliding
+                    # the slider's velocity less the sliding
                     vP, aP = vP - rel_v, aP - rel_a
-            v_o[:, c], a_o[:, c] = carry(c, P, vP, aP, origin[:, c])
-        return v_o, a_o
+            jp[j] = P
+            wc, ac = omega[:, c], alpha[:, c]
+            rc = O[:, c] - P
+            zv[:, c] = vP + 1j * wc * rc
+            za[:, c] = aP + (1j * ac - wc * wc) * rc
+        for j in topo.chords:
+            bb = topo.body_names.index(self.mech.joints[j].body_b)
+            jp[j] = O[:, bb] + E[:, bb] * cplx(topo.attach(j, bb))
+        return zv, za, jp
 
     # convenience wrappers ----------------------------------------------------
     def forces(self, kin: Kinematics):

@@ -26,7 +26,7 @@ Sign conventions
 
 from __future__ import annotations
 
-import math
+import cmath
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +34,7 @@ import numpy as np
 from .errors import MissingMassError
 from .linalg import solve_small
 from .mechanism import Revolute
-from .positions import rotate
+from .positions import as_xy, cross
 from .tolerances import POWER_BALANCE
 
 
@@ -78,10 +78,6 @@ class Forces:
             raise AssertionError(f"power balance violated: {err:.3g} > {POWER_BALANCE}")
 
 
-def _cross(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
 def solve_forces(linkage, kin) -> Forces:
     """Solve the kinetostatic problem for every configuration of ``kin``.
 
@@ -97,54 +93,49 @@ def solve_forces(linkage, kin) -> Forces:
             f"forces need the mass and inertia of every moving body; missing for {missing} "
             "(give mass = 0 and inertia = 0 for a massless link)", mech.source)
     N, B = kin.theta.shape
-    g = np.asarray(mech.gravity, float)
-    f = np.zeros((N, B, 2))     # effective force = sum of joint reactions on the body
-    mo = np.zeros((N, B))       # their moment about the world origin
+    g = complex(*mech.gravity)
+    # Planar vectors are complex (x + iy); cross(a, b) = Im(conj(a) b).
+    f = np.zeros((N, B), complex)  # effective force = sum of joint reactions on the body
+    mo = np.zeros((N, B))          # their moment about the world origin
     ke_rate = np.zeros(N)
     load_pow = np.zeros(N)
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
             continue
-        rG, vG, aG = kin.com(b)
+        rG, vG, aG = kin.com_c(b)
         m, I = body.mass, body.inertia
-        f[:, b] = m * aG - m * g
+        f[:, b] = m * (aG - g)
         h = I * kin.alpha[:, b]
-        ke_rate += m * np.einsum("ni,ni->n", aG, vG) + I * kin.alpha[:, b] * kin.omega[:, b]
-        load_pow += m * (vG @ g)
+        ke_rate += (m * (aG.real * vG.real + aG.imag * vG.imag)
+                    + I * kin.alpha[:, b] * kin.omega[:, b])
+        load_pow += m * (vG.real * g.real + vG.imag * g.imag)
         for ld in mech.loads:
             if ld.body != body.name:
                 continue
-            F = np.asarray(ld.force, float)
-            if ld.point is not None:
-                rP, vP, _ = kin.point(body.name, ld.point)
-            else:
-                rP, vP = rG, vG
+            F = complex(*ld.force)
+            rP, vP = (kin.point_c(b, ld.point)[:2] if ld.point is not None else (rG, vG))
             f[:, b] -= F
-            h = h - ld.torque - _cross(rP - rG, F)
-            load_pow += vP @ F + ld.torque * kin.omega[:, b]
-        mo[:, b] = h + _cross(rG, f[:, b])
+            h = h - ld.torque - cross(rP - rG, F)
+            load_pow += vP.real * F.real + vP.imag * F.imag + ld.torque * kin.omega[:, b]
+        mo[:, b] = h + cross(rG, f[:, b])
 
     joints = mech.joints
     names = topo.body_names
     chords = topo.chords
     # unknown columns: 2 per chord, then the drive effort
     n_x = 2 * len(chords) + 1
-    Fc = np.zeros((N, n_x, 2))  # force of unit unknown on the chord's body_b
-    Mc = np.zeros((N, n_x))     # its moment about the world origin
+    Fc = np.zeros((N, n_x), complex)  # force of a unit unknown on the chord's body_b
+    Mc = np.zeros((N, n_x))           # its moment about the world origin
     for i, j in enumerate(chords):
         jt = joints[j]
-        bb = names.index(jt.body_b)
-        P = kin.origin[:, bb] + rotate(kin.theta[:, bb], topo.attach(j, bb))
+        P = kin.joint_point[j]
         if isinstance(jt, Revolute):
-            Fc[:, 2 * i, 0] = 1.0
-            Fc[:, 2 * i + 1, 1] = 1.0
-            Mc[:, 2 * i] = -P[:, 1]
-            Mc[:, 2 * i + 1] = P[:, 0]
+            Fc[:, 2 * i], Fc[:, 2 * i + 1] = 1.0, 1j
+            Mc[:, 2 * i], Mc[:, 2 * i + 1] = -P.imag, P.real
         else:
-            gb = names.index(jt.guide)
-            n = rotate(kin.theta[:, gb], [-math.sin(jt.direction), math.cos(jt.direction)])
+            n = kin.E[:, names.index(jt.guide)] * (1j * cmath.exp(1j * jt.direction))
             Fc[:, 2 * i] = n
-            Mc[:, 2 * i] = _cross(P, n)
+            Mc[:, 2 * i] = cross(P, n)
             Mc[:, 2 * i + 1] = 1.0
     eps = np.zeros((len(topo.tree), n_x))
     for t in range(len(topo.tree)):
@@ -154,26 +145,40 @@ def solve_forces(linkage, kin) -> Forces:
             e = (1.0 if S[b] and not S[a] else -1.0 if S[a] and not S[b] else 0.0)
             eps[t, 2 * i:2 * i + 2] = e
 
-    Sf = np.einsum("nbc,tb->ntc", f, topo.subtree.astype(float))  # (N, nt, 2)
-    Smo = mo @ topo.subtree.T.astype(float)                      # (N, nt)
-    A = np.zeros((N, len(topo.tree), n_x))
-    rhs = np.zeros((N, len(topo.tree)))
+    nt = len(topo.tree)
+    # net effective force of each subtree and its moment about the origin; explicit
+    # sums over the few members beat strided small matrix products
+    Sf = np.empty((N, nt), complex)
+    Smo = np.empty((N, nt))
+    for t in range(nt):
+        members = np.flatnonzero(topo.subtree[t])
+        Sf[:, t] = f[:, members[0]]
+        Smo[:, t] = mo[:, members[0]]
+        for b in members[1:]:
+            Sf[:, t] += f[:, b]
+            Smo[:, t] += mo[:, b]
+    A = np.zeros((N, nt, n_x))
+    rhs = np.zeros((N, nt))
     for t, j in enumerate(topo.tree):
         jt = joints[j]
         c = topo.tree_child[t]
-        P = kin.origin[:, c] + rotate(kin.theta[:, c], topo.attach(j, c))
-        sgn_drive = 1.0 if names[c] == jt.body_b else -1.0
         if isinstance(jt, Revolute):
-            A[:, t, :] = eps[t] * (Mc - _cross(P[:, None, :], Fc))
-            rhs[:, t] = Smo[:, t] - _cross(P, Sf[:, t])
+            P = kin.joint_point[j]
+            A[:, t, :] = eps[t] * (Mc - cross(P[:, None], Fc))
+            rhs[:, t] = Smo[:, t] - cross(P, Sf[:, t])
         else:
-            gb = names.index(jt.guide)
-            u = rotate(kin.theta[:, gb], [math.cos(jt.direction), math.sin(jt.direction)])
-            A[:, t, :] = eps[t] * np.einsum("nxc,nc->nx", Fc, u)
-            rhs[:, t] = np.einsum("nc,nc->n", Sf[:, t], u)
+            u = kin.E[:, names.index(jt.guide)] * cmath.exp(1j * jt.direction)
+            A[:, t, :] = eps[t] * (u.real[:, None] * Fc.real + u.imag[:, None] * Fc.imag)
+            rhs[:, t] = u.real * Sf[:, t].real + u.imag * Sf[:, t].imag
         if j == topo.driver_joint:
-            A[:, t, -1] = sgn_drive
-    x = solve_small(A, rhs)
+            td, sd = t, (1.0 if names[c] == jt.body_b else -1.0)
+    # The effort appears only in the driven joint's row: solve the other rows for the
+    # chord reactions, then that row for the effort.
+    rows = [t for t in range(nt) if t != td]
+    x = np.empty((N, n_x))
+    if n_x > 1:
+        x[:, :-1] = solve_small(A[:, rows, :-1], rhs[:, rows])
+    x[:, -1] = (rhs[:, td] - np.einsum("nx,nx->n", A[:, td, :-1], x[:, :-1])) / sd
 
     joint_force, normal, moment = {}, {}, {}
     for i, j in enumerate(chords):
@@ -183,24 +188,23 @@ def solve_forces(linkage, kin) -> Forces:
         else:
             normal[jt.name] = x[:, 2 * i]
             moment[jt.name] = x[:, 2 * i + 1]
-            joint_force[jt.name] = Fc[:, 2 * i] * x[:, 2 * i, None]
+            joint_force[jt.name] = as_xy(Fc[:, 2 * i] * x[:, 2 * i])
     for t, j in enumerate(topo.tree):
         jt = joints[j]
         c = topo.tree_child[t]
-        onchild = Sf[:, t] - np.einsum("x,nxc,nx->nc", eps[t], Fc, x)
+        onchild = Sf[:, t].copy()  # force from the parent on the subtree
+        for k in np.flatnonzero(eps[t]):
+            onchild -= eps[t, k] * x[:, k] * Fc[:, k]
         to_b = onchild if names[c] == jt.body_b else -onchild
         if isinstance(jt, Revolute):
-            joint_force[jt.name] = to_b
+            joint_force[jt.name] = as_xy(to_b)
         else:
-            gb = names.index(jt.guide)
-            n = rotate(kin.theta[:, gb], [-math.sin(jt.direction), math.cos(jt.direction)])
-            nn = np.einsum("nc,nc->n", to_b, n)
+            n = kin.E[:, names.index(jt.guide)] * (1j * cmath.exp(1j * jt.direction))
+            nn = n.real * to_b.real + n.imag * to_b.imag
             normal[jt.name] = nn
-            joint_force[jt.name] = n * nn[:, None]
-            sb = names.index(jt.slider)
-            P = kin.origin[:, sb] + rotate(kin.theta[:, sb], topo.attach(j, sb))
-            mom = Smo[:, t] - _cross(P, Sf[:, t]) - np.einsum(
-                "x,nx,nx->n", eps[t], Mc - _cross(P[:, None, :], Fc), x)
+            joint_force[jt.name] = as_xy(n * nn)
+            PS = kin.joint_point[j]
+            mom = Smo[:, t] - cross(PS, Sf[:, t]) - ((Mc - cross(PS[:, None], Fc)) * x) @ eps[t]
             moment[jt.name] = mom if names[c] == jt.body_b else -mom
     effort = x[:, -1]
     power = effort * kin.velocity

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .linalg import solve_small
+from .linalg import cmatmul, solve_small
 from .topology import Topology
 
 
@@ -49,45 +49,57 @@ class LoopEquations:
             if t.slider[k] >= 0:
                 self.Es[k, t.loop[k], self.ng + t.slider[k]] = t.sign[k]
         self.Eq = self.Eq.reshape(T, -1)
+        self.ebeta = np.exp(1j * self.beta)
+        self.unoff = np.exp(-1j * topo.offset[topo.group_leader]) if self.ng else np.ones(0)
         self.Es = self.Es.reshape(T, -1)
 
-    def _phi_m(self, q):
+    def terms(self, q: np.ndarray):
+        """The loop vectors' unit directions ``exp(i phi) (N, T)`` and lengths ``m``."""
         N = q.shape[0]
         z = np.zeros((N, 1))
         th = np.concatenate([q[:, :self.ng], z], axis=1)
         s = np.concatenate([q[:, self.ng:], z], axis=1)
         phi = th[:, self.gi] + self.beta
         m = self.r + self.sign * s[:, self.si]
-        return th, s, phi, m
+        return np.exp(1j * phi), m
 
-    def _interleave(self, x, y):
-        return np.stack([x, y], axis=2).reshape(x.shape[0], 2 * self.L, *x.shape[2:])
-
-    def residual(self, q: np.ndarray) -> np.ndarray:
-        """Loop closure residual ``(N, 2L)`` in m."""
-        _, _, phi, m = self._phi_m(q)
-        return self._interleave((m * np.cos(phi)) @ self.Lmat, (m * np.sin(phi)) @ self.Lmat)
-
-    def jacobian(self, q: np.ndarray, _pre=None) -> np.ndarray:
-        """``(N, 2L, nq)`` derivative of the residual with respect to ``q``."""
-        _, _, phi, m = _pre if _pre is not None else self._phi_m(q)
-        c, s = np.cos(phi), np.sin(phi)
+    def terms_from_poses(self, q: np.ndarray, E: np.ndarray):
+        """As :meth:`terms`, from the bodies' ``exp(i theta)`` (no trigonometry)."""
         N = q.shape[0]
-        jx = ((-m * s) @ self.Eq + c @ self.Es).reshape(N, self.L, self.nq)
-        jy = ((m * c) @ self.Eq + s @ self.Es).reshape(N, self.L, self.nq)
-        return self._interleave(jx, jy)
+        Eg = np.ones((N, self.ng + 1), complex)
+        topo = self.topo
+        for g, b in enumerate(topo.group_leader):
+            Eg[:, g] = E[:, b] * self.unoff[g]
+        s = np.concatenate([q[:, self.ng:], np.zeros((N, 1))], axis=1)
+        return Eg[:, self.gi] * self.ebeta, self.r + self.sign * s[:, self.si]
 
-    def gamma(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """``(N, 2L)`` velocity-product terms of the loop accelerations."""
-        _, _, phi, m = self._phi_m(q)
+    def _rows(self, z: np.ndarray) -> np.ndarray:
+        """Complex per-loop sums ``(N, L, ...)`` -> real rows ``(N, 2L, ...)`` (x, y)."""
+        N = z.shape[0]
+        out = np.stack([z.real, z.imag], axis=2)
+        return out.reshape(N, 2 * self.L, *z.shape[2:])
+
+    def residual(self, q: np.ndarray, pre=None) -> np.ndarray:
+        """Loop closure residual ``(N, 2L)`` in m: sum of ``m mu(phi)`` per loop."""
+        ez, m = pre if pre is not None else self.terms(q)
+        return self._rows(cmatmul(m * ez, self.Lmat))
+
+    def jacobian(self, q: np.ndarray, pre=None) -> np.ndarray:
+        """``(N, 2L, nq)``: column of a group angle ``sum m sigma(phi)``, of a slider
+        displacement ``sign mu(phi)`` (``sigma = i mu``)."""
+        ez, m = pre if pre is not None else self.terms(q)
+        N = q.shape[0]
+        cz = cmatmul((1j * m) * ez, self.Eq) + cmatmul(ez, self.Es)
+        return self._rows(cz.reshape(N, self.L, self.nq))
+
+    def gamma(self, q: np.ndarray, qd: np.ndarray, pre=None) -> np.ndarray:
+        """``(N, 2L)`` velocity-product terms: ``sum (2 m' phi' sigma - m phi'^2 mu)``."""
+        ez, m = pre if pre is not None else self.terms(q)
         N = q.shape[0]
         z = np.zeros((N, 1))
         w = np.concatenate([qd[:, :self.ng], z], axis=1)[:, self.gi]
         md = self.sign * np.concatenate([qd[:, self.ng:], z], axis=1)[:, self.si]
-        c, s = np.cos(phi), np.sin(phi)
-        gx = (-2 * md * w * s - m * w * w * c) @ self.Lmat
-        gy = (2 * md * w * c - m * w * w * s) @ self.Lmat
-        return self._interleave(gx, gy)
+        return self._rows(cmatmul((2j * md * w - m * w * w) * ez, self.Lmat))
 
     # -- the square system with the driver row -------------------------------
     def split(self, J: np.ndarray):

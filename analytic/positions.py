@@ -15,6 +15,7 @@ mechanism's size).
 
 from __future__ import annotations
 
+import cmath
 import itertools
 import math
 
@@ -35,8 +36,19 @@ def rotate(theta: np.ndarray, c) -> np.ndarray:
     return np.stack([ct * cx - st * cy, st * cx + ct * cy], axis=-1)
 
 
-def _cross(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+def as_xy(z: np.ndarray) -> np.ndarray:
+    """View a complex array ``(...)`` as real ``(..., 2)`` (x, y), without copying."""
+    z = np.ascontiguousarray(z)
+    return z.view(np.float64).reshape(*z.shape, 2)
+
+
+def cplx(v) -> complex:
+    return complex(float(v[0]), float(v[1]))
+
+
+def cross(a, b):
+    """z-component of the planar cross product of complex vectors: Im(conj(a) b)."""
+    return a.real * b.imag - a.imag * b.real
 
 
 def size_of(topo: Topology) -> float:
@@ -50,62 +62,77 @@ def size_of(topo: Topology) -> float:
 
 
 class ClosedForm:
-    """Evaluate the dyad plan for a batch of input values and fixed branch signs."""
+    """Evaluate the dyad plan for a batch of input values and fixed branch signs.
+
+    Planar vectors are complex numbers here (x + iy): a body frame's rotation is
+    ``E = exp(i theta)``, a body point is ``O + E c``.
+    """
 
     def __init__(self, topo: Topology):
         self.topo = topo
         self.mech = topo.mech
         self.plan = topo.plan
         self.n_branch = sum(1 for st in self.plan if st.kind in ("RRR", "RRP", "RPR"))
-
-    def _pt(self, theta, origin, b, c):
-        return origin[:, b] + rotate(theta[:, b], c)
+        self.at = {}  # (joint, body) -> complex attachment point, body frame
+        for j, jt in enumerate(self.mech.joints):
+            for bn in jt.bodies:
+                b = topo.body_names.index(bn)
+                self.at[j, b] = cplx(topo.attach(j, b))
 
     def run(self, values: np.ndarray, signs):
-        """Place every body.  Returns ``theta (N, B)``, ``origin (N, B, 2)``,
-        ``disc (N, n_steps)`` (the discriminants: negative where the dyad cannot
-        close) and ``internal`` (the dyads' data for transmission angles)."""
-        topo, joints = self.topo, self.mech.joints
+        """Place every body.
+
+        Returns ``theta (N, B)``, ``E = exp(i theta) (N, B)``, origins ``O (N, B)``
+        (complex), ``disc (N, n_steps)`` (the dyads' relative discriminants: negative
+        where a dyad cannot close) and the transmission data
+        ``[(joint name, vector 1, vector 2)]``.
+        """
+        topo, joints, at = self.topo, self.mech.joints, self.at
         N, B = len(values), len(topo.body_names)
         theta = np.zeros((N, B))
-        origin = np.zeros((N, B, 2))
+        E = np.ones((N, B), complex)
+        O = np.zeros((N, B), complex)
         discs = []
         trans = []
         si = iter(signs)
+
+        def pt(b, c):
+            return O[:, b] + E[:, b] * c
+
+        def place(b, th, e=None):
+            theta[:, b] = th
+            E[:, b] = np.exp(1j * th) if e is None else e
+
         for st in self.plan:
             if st.kind == "driven_revolute":
                 (x,), (j,) = st.bodies, st.joints
                 k = topo.other(j, x)
                 sgn = 1.0 if topo.body_names[x] == joints[j].body_b else -1.0
-                theta[:, x] = theta[:, k] + sgn * values
-                P = self._pt(theta, origin, k, topo.attach(j, k))
-                origin[:, x] = P - rotate(theta[:, x], topo.attach(j, x))
+                place(x, theta[:, k] + sgn * values)
+                O[:, x] = pt(k, at[j, k]) - E[:, x] * at[j, x]
             elif st.kind == "driven_prismatic":
                 (x,), (j,) = st.bodies, st.joints
                 jt = joints[j]
                 k = topo.other(j, x)
-                ul = np.array([math.cos(jt.direction), math.sin(jt.direction)])
+                ul = cmath.exp(1j * jt.direction)
                 if topo.body_names[x] == jt.slider:
-                    theta[:, x] = theta[:, k] + jt.angle
-                    Q = self._pt(theta, origin, k, topo.attach(j, k))
-                    PS = Q + values[:, None] * rotate(theta[:, k], ul)
-                    origin[:, x] = PS - rotate(theta[:, x], topo.attach(j, x))
+                    place(x, theta[:, k] + jt.angle, E[:, k] * cmath.exp(1j * jt.angle))
+                    PS = pt(k, at[j, k]) + values * (E[:, k] * ul)
+                    O[:, x] = PS - E[:, x] * at[j, x]
                 else:
-                    theta[:, x] = theta[:, k] - jt.angle
-                    PS = self._pt(theta, origin, k, topo.attach(j, k))
-                    Q = PS - values[:, None] * rotate(theta[:, x], ul)
-                    origin[:, x] = Q - rotate(theta[:, x], topo.attach(j, x))
+                    place(x, theta[:, k] - jt.angle, E[:, k] * cmath.exp(-1j * jt.angle))
+                    Q = pt(k, at[j, k]) - values * (E[:, x] * ul)
+                    O[:, x] = Q - E[:, x] * at[j, x]
             elif st.kind == "RRR":
                 x1, x2 = st.bodies
                 j1, j2, j3 = st.joints
                 k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
-                P1 = self._pt(theta, origin, k1, topo.attach(j1, k1))
-                P3 = self._pt(theta, origin, k3, topo.attach(j3, k3))
-                c1 = topo.attach(j2, x1) - topo.attach(j1, x1)
-                c2 = topo.attach(j3, x2) - topo.attach(j2, x2)
-                L1s, L2s = c1 @ c1, c2 @ c2
+                P1, P3 = pt(k1, at[j1, k1]), pt(k3, at[j3, k3])
+                c1 = at[j2, x1] - at[j1, x1]
+                c2 = at[j3, x2] - at[j2, x2]
+                L1s, L2s = abs(c1) ** 2, abs(c2) ** 2
                 d = P3 - P1
-                D2 = np.einsum("ni,ni->n", d, d)
+                D2 = d.real * d.real + d.imag * d.imag
                 D = np.sqrt(D2)
                 Dsafe = np.where(D > 0, D, 1.0)
                 a = (L1s - L2s + D2) / (2 * Dsafe)
@@ -114,49 +141,48 @@ class ClosedForm:
                 discs.append(disc)
                 h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
                 sg = next(si)
-                perp = np.stack([-d[:, 1], d[:, 0]], axis=1)
-                P2 = P1 + (a[:, None] * d + sg * h[:, None] * perp) / Dsafe[:, None]
+                P2 = P1 + d * (a + 1j * sg * h) / Dsafe
                 e1, e2 = P2 - P1, P3 - P2
-                theta[:, x1] = np.arctan2(e1[:, 1], e1[:, 0]) - math.atan2(c1[1], c1[0])
-                theta[:, x2] = np.arctan2(e2[:, 1], e2[:, 0]) - math.atan2(c2[1], c2[0])
-                origin[:, x1] = P1 - rotate(theta[:, x1], topo.attach(j1, x1))
-                origin[:, x2] = P2 - rotate(theta[:, x2], topo.attach(j2, x2))
+                # exp(i theta) of each link straight from geometry: no trigonometry
+                u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
+                u2 = e2 / np.abs(e2) * (c2 / abs(c2)).conjugate()
+                place(x1, np.angle(u1), u1)
+                place(x2, np.angle(u2), u2)
+                O[:, x1] = P1 - u1 * at[j1, x1]
+                O[:, x2] = P2 - u2 * at[j2, x2]
                 trans.append((joints[j2].name, -e1, e2))
             elif st.kind == "RRP":
                 x1, x2 = st.bodies
                 j1, j2, j3 = st.joints
                 jt = joints[j3]
                 k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
-                P1 = self._pt(theta, origin, k1, topo.attach(j1, k1))
-                c1 = topo.attach(j2, x1) - topo.attach(j1, x1)
-                L1s = c1 @ c1
-                ul = np.array([math.cos(jt.direction), math.sin(jt.direction)])
-                slider = topo.body_names[x2] == jt.slider
-                if slider:
-                    theta[:, x2] = theta[:, k3] + jt.angle
-                    u = rotate(theta[:, k3], ul)
-                    base = (self._pt(theta, origin, k3, topo.attach(j3, k3))
-                            + rotate(theta[:, x2], topo.attach(j2, x2) - topo.attach(j3, x2)))
+                P1 = pt(k1, at[j1, k1])
+                c1 = at[j2, x1] - at[j1, x1]
+                L1s = abs(c1) ** 2
+                ul = cmath.exp(1j * jt.direction)
+                if topo.body_names[x2] == jt.slider:
+                    place(x2, theta[:, k3] + jt.angle, E[:, k3] * cmath.exp(1j * jt.angle))
+                    u = E[:, k3] * ul
                     ud = u
                 else:
-                    theta[:, x2] = theta[:, k3] - jt.angle
-                    u = rotate(theta[:, x2], ul)
-                    base = (self._pt(theta, origin, k3, topo.attach(j3, k3))
-                            + rotate(theta[:, x2], topo.attach(j2, x2) - topo.attach(j3, x2)))
+                    place(x2, theta[:, k3] - jt.angle, E[:, k3] * cmath.exp(-1j * jt.angle))
+                    u = E[:, x2] * ul
                     ud = -u
+                base = pt(k3, at[j3, k3]) + E[:, x2] * (at[j2, x2] - at[j3, x2])
                 e = base - P1
-                eu = np.einsum("ni,ni->n", e, ud)
-                h2 = eu * eu - np.einsum("ni,ni->n", e, e) + L1s
+                eu = e.real * ud.real + e.imag * ud.imag
+                h2 = eu * eu - (e.real * e.real + e.imag * e.imag) + L1s
                 discs.append(h2 / L1s)
                 sg = next(si)
-                t = -eu + sg * np.where(h2 / L1s > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
-                P2 = base + t[:, None] * ud
+                t = -eu + sg * np.where(h2 / L1s > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)),
+                                        0.0)
+                P2 = base + t * ud
                 e1 = P2 - P1
-                theta[:, x1] = np.arctan2(e1[:, 1], e1[:, 0]) - math.atan2(c1[1], c1[0])
-                origin[:, x1] = P1 - rotate(theta[:, x1], topo.attach(j1, x1))
-                origin[:, x2] = P2 - rotate(theta[:, x2], topo.attach(j2, x2))
-                n = np.stack([-u[:, 1], u[:, 0]], axis=1)
-                trans.append((joints[j2].name, -e1, n))
+                u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
+                place(x1, np.angle(u1), u1)
+                O[:, x1] = P1 - u1 * at[j1, x1]
+                O[:, x2] = P2 - E[:, x2] * at[j2, x2]
+                trans.append((joints[j2].name, -e1, 1j * u))
             elif st.kind == "RPR":
                 x1, x2 = st.bodies
                 j1, j2, j3 = st.joints
@@ -165,27 +191,26 @@ class ClosedForm:
                 s_ = x2 if g == x1 else x1
                 jg, js = (j1, j3) if g == x1 else (j3, j1)
                 kg, ks = topo.other(jg, g), topo.other(js, s_)
-                PG = self._pt(theta, origin, kg, topo.attach(jg, kg))
-                PSr = self._pt(theta, origin, ks, topo.attach(js, ks))
-                aG, aS = topo.attach(jg, g), topo.attach(js, s_)
-                nl = np.array([-math.sin(jt.direction), math.cos(jt.direction)])
-                kconst = nl @ (_rot2(jt.angle) @ (topo.attach(j2, s_) - aS)
-                               - (topo.attach(j2, g) - aG))
+                PG, PSr = pt(kg, at[jg, kg]), pt(ks, at[js, ks])
+                aG, aS = at[jg, g], at[js, s_]
+                nl = 1j * cmath.exp(1j * jt.direction)
+                kconst = (nl.conjugate() * (cmath.exp(1j * jt.angle) * (at[j2, s_] - aS)
+                                            - (at[j2, g] - aG))).real
                 d = PSr - PG
-                D = np.hypot(d[:, 0], d[:, 1])
+                D = np.abs(d)
                 Dsafe = np.where(D > 0, D, 1.0)
                 ratio = -kconst / Dsafe
                 disc = np.where(D > 0, 1.0 - ratio * ratio, -1.0)
                 discs.append(disc)
                 sg = next(si)
-                psi = np.arctan2(d[:, 1], d[:, 0])
+                psi = np.angle(d)
                 acos = np.where(disc > TOGGLE_SNAP, np.arccos(np.clip(ratio, -1, 1)),
                                 np.where(ratio > 0, 0.0, math.pi))
                 th = psi - (jt.direction + math.pi / 2) + sg * acos
-                theta[:, g] = th
-                theta[:, s_] = th + jt.angle
-                origin[:, g] = PG - rotate(th, aG)
-                origin[:, s_] = PSr - rotate(theta[:, s_], aS)
+                place(g, th)
+                place(s_, th + jt.angle, E[:, g] * cmath.exp(1j * jt.angle))
+                O[:, g] = PG - E[:, g] * aG
+                O[:, s_] = PSr - E[:, s_] * aS
                 # no transmission angle: the slot's force is always normal to it
             elif st.kind == "PRP":
                 x1, x2 = st.bodies
@@ -194,82 +219,74 @@ class ClosedForm:
                 for x, j in ((x1, j1), (x2, j3)):
                     jt = joints[j]
                     k = topo.other(j, x)
-                    ul = np.array([math.cos(jt.direction), math.sin(jt.direction)])
+                    ul = cmath.exp(1j * jt.direction)
                     if topo.body_names[x] == jt.slider:
-                        theta[:, x] = theta[:, k] + jt.angle
-                        u = rotate(theta[:, k], ul)
+                        place(x, theta[:, k] + jt.angle, E[:, k] * cmath.exp(1j * jt.angle))
+                        u = E[:, k] * ul
                     else:
-                        theta[:, x] = theta[:, k] - jt.angle
-                        u = rotate(theta[:, x], ul)
-                    bases.append(self._pt(theta, origin, k, topo.attach(j, k))
-                                 + rotate(theta[:, x], topo.attach(j2, x) - topo.attach(j, x)))
+                        place(x, theta[:, k] - jt.angle, E[:, k] * cmath.exp(-1j * jt.angle))
+                        u = E[:, x] * ul
+                    bases.append(pt(k, at[j, k]) + E[:, x] * (at[j2, x] - at[j, x]))
                     dirs.append(u)
-                cr = _cross(dirs[0], dirs[1])
+                cr = cross(dirs[0], dirs[1])
                 discs.append(np.abs(cr) - 1e-12)
-                t1 = _cross(bases[1] - bases[0], dirs[1]) / np.where(cr != 0, cr, 1.0)
-                P2 = bases[0] + t1[:, None] * dirs[0]
-                origin[:, x1] = P2 - rotate(theta[:, x1], topo.attach(j2, x1))
-                origin[:, x2] = P2 - rotate(theta[:, x2], topo.attach(j2, x2))
+                t1 = cross(bases[1] - bases[0], dirs[1]) / np.where(cr != 0, cr, 1.0)
+                P2 = bases[0] + t1 * dirs[0]
+                O[:, x1] = P2 - E[:, x1] * at[j2, x1]
+                O[:, x2] = P2 - E[:, x2] * at[j2, x2]
         disc = np.stack(discs, axis=1) if discs else np.ones((N, 0))
-        return theta, origin, disc, trans
+        return theta, E, O, disc, trans
 
 
-def _rot2(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s], [s, c]])
-
-
-def q_from_poses(topo: Topology, theta: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """Vector-loop unknowns ``q (N, nq)`` from body poses."""
+def q_from_poses(topo: Topology, theta: np.ndarray, E: np.ndarray, O: np.ndarray) -> np.ndarray:
+    """Vector-loop unknowns ``q (N, nq)`` from body poses (``O``, ``E`` complex)."""
     N = theta.shape[0]
-    q = np.zeros((N, topo.nq))
-    for b in range(len(topo.body_names)):
-        g = topo.group_of[b]
-        if g >= 0:
-            q[:, g] = theta[:, b] - topo.offset[b]
+    q = np.empty((N, topo.nq))
+    for g, b in enumerate(topo.group_leader):
+        q[:, g] = theta[:, b] - topo.offset[b]
     for j, i in topo.slider_index.items():
         jt = topo.mech.joints[j]
         gb = topo.body_names.index(jt.guide)
         sb = topo.body_names.index(jt.slider)
-        Q = origin[:, gb] + rotate(theta[:, gb], topo.attach(j, gb))
-        P = origin[:, sb] + rotate(theta[:, sb], topo.attach(j, sb))
-        u = rotate(theta[:, gb], [math.cos(jt.direction), math.sin(jt.direction)])
-        q[:, topo.n_groups + i] = np.einsum("ni,ni->n", P - Q, u)
-    # keep group angles continuous in the sweep (no 2*pi jumps from arctan2)
+        dPQ = (O[:, sb] + E[:, sb] * cplx(topo.attach(j, sb))
+               - O[:, gb] - E[:, gb] * cplx(topo.attach(j, gb)))
+        u = E[:, gb] * cmath.exp(1j * jt.direction)
+        q[:, topo.n_groups + i] = dPQ.real * u.real + dPQ.imag * u.imag
+    # keep group angles continuous in the sweep (no 2*pi jumps from the arctan)
     if N > 1 and topo.n_groups:
-        q[:, :topo.n_groups] = np.unwrap(q[:, :topo.n_groups], axis=0)
+        th = q[:, :topo.n_groups]
+        turns = np.cumsum(np.round(np.diff(th, axis=0) * (0.5 / math.pi)), axis=0)
+        th[1:] -= (2 * math.pi) * turns
     return q
 
 
 def poses_from_q(topo: Topology, q: np.ndarray):
-    """Body angles ``(N, B)`` and frame origins ``(N, B, 2)`` from ``q``, walking the
-    spanning tree from ground (each tree joint places its child body)."""
+    """Body angles ``(N, B)``, ``E = exp(i theta)`` and frame origins ``O`` (complex,
+    ``(N, B)``) from ``q``, walking the spanning tree from ground (each tree joint
+    places its child body)."""
     N, B = q.shape[0], len(topo.body_names)
     theta = np.zeros((N, B))
     for b in range(B):
         g = topo.group_of[b]
         theta[:, b] = topo.offset[b] + (q[:, g] if g >= 0 else 0.0)
-    origin = np.zeros((N, B, 2))
+    E = np.exp(1j * theta)
+    O = np.zeros((N, B), complex)
     for c in topo.order[1:]:
         p, j = topo.parent[c]
         jt = topo.mech.joints[j]
+        cp, cc = cplx(topo.attach(j, p)), cplx(topo.attach(j, c))
         if isinstance(jt, Revolute):
-            P = origin[:, p] + rotate(theta[:, p], topo.attach(j, p))
-            origin[:, c] = P - rotate(theta[:, c], topo.attach(j, c))
+            O[:, c] = O[:, p] + E[:, p] * cp - E[:, c] * cc
         else:
             s = q[:, topo.n_groups + topo.slider_index[j]]
             gb = topo.body_names.index(jt.guide)
-            u = rotate(theta[:, gb], [math.cos(jt.direction), math.sin(jt.direction)])
-            if c == topo.body_names.index(jt.slider):
-                Q = origin[:, p] + rotate(theta[:, p], topo.attach(j, p))
-                origin[:, c] = Q + s[:, None] * u - rotate(theta[:, c], topo.attach(j, c))
-            else:
-                PS = origin[:, p] + rotate(theta[:, p], topo.attach(j, p))
-                origin[:, c] = PS - s[:, None] * u - rotate(theta[:, c], topo.attach(j, c))
-    return theta, origin
+            u = E[:, gb] * cmath.exp(1j * jt.direction)
+            sgn = 1.0 if c == topo.body_names.index(jt.slider) else -1.0
+            O[:, c] = O[:, p] + E[:, p] * cp + sgn * s * u - E[:, c] * cc
+    return theta, E, O
 
 
-def _hint_score(topo: Topology, theta, origin) -> float:
+def _hint_score(topo: Topology, theta, E, O) -> float:
     """Squared distance of a single pose to the assembly hints (m^2, rad^2 * size^2)."""
     hints = topo.mech.assembly
     scale = size_of(topo)
@@ -277,8 +294,8 @@ def _hint_score(topo: Topology, theta, origin) -> float:
     for key, xy in hints.points.items():
         bn, _, pn = key.partition(".")
         b = topo.body_names.index(bn)
-        P = origin[0, b] + rotate(theta[:1, b], topo.body_points[b][pn])[0]
-        score += float(np.sum((P - np.asarray(xy)) ** 2))
+        P = O[0, b] + E[0, b] * cplx(topo.body_points[b][pn])
+        score += abs(P - cplx(xy)) ** 2
     for bn, ang in hints.angles.items():
         b = topo.body_names.index(bn)
         dth = (theta[0, b] - ang + math.pi) % (2 * math.pi) - math.pi
@@ -293,10 +310,10 @@ def choose_branches(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, 
     """
     best, best_score = None, math.inf
     for signs in itertools.product((1, -1), repeat=cf.n_branch):
-        th, org, disc, _ = cf.run(np.array([value]), signs)
+        th, E, O, disc, _ = cf.run(np.array([value]), signs)
         if disc.size and np.any(disc < -TOGGLE_SNAP):
             continue
-        sc = _hint_score(topo, th, org)
+        sc = _hint_score(topo, th, E, O)
         if sc < best_score - 1e-15:
             best, best_score = signs, sc
     if best is None:
@@ -351,7 +368,7 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
     def ok(x):
         out = np.zeros(len(x), bool)
         for sg in combos:
-            _, _, disc, _ = cf.run(x, sg)
+            disc = cf.run(x, sg)[3]
             out |= np.all(disc >= -TOGGLE_SNAP, axis=1) if disc.size else True
         return out
 
@@ -448,32 +465,46 @@ class PositionSolver:
             self.q_ref = q
 
     def solve(self, values: np.ndarray):
-        """``q (N, nq)`` and the dyad transmission data for sorted or unsorted values.
+        """Positions for sorted or unsorted input values (SI).
+
+        Returns ``(q, theta, E, O, trans, pre)``: the loop unknowns ``(N, nq)``, body
+        angles ``(N, B)``, ``exp(i theta)`` and origins (complex ``(N, B)``), the
+        dyads' transmission data and the loop vectors (:meth:`LoopEquations.terms`).
 
         Raises
         ------
         AssemblyError
-            At the first value where a loop cannot close, with the feasible ranges.
+            At the first value where a loop cannot close, with the feasible ranges,
+            or when the loop residual exceeds the tolerance.
         """
         values = np.asarray(values, float)
         trans = []
         if self.cf is not None:
-            theta, origin, disc, trans = self.cf.run(values, self.signs)
+            theta, E, O, disc, trans = self.cf.run(values, self.signs)
             if disc.size:
                 bad = np.flatnonzero(np.any(disc < -TOGGLE_SNAP, axis=1))
                 if bad.size:
                     raise _infeasible(self.topo, float(values[bad[0]]))
-            q = q_from_poses(self.topo, theta, origin)
+            q = q_from_poses(self.topo, theta, E, O)
+            # body angles continuous over the batch, like the unwrapped q
+            for b, g in enumerate(self.topo.group_of):
+                if g >= 0:
+                    theta[:, b] = q[:, g] + self.topo.offset[b]
         else:
             q = self._continue(values)
-        res = np.max(np.abs(self.eqs.residual(q)), axis=1) if self.eqs.L else np.zeros(len(q))
-        worst = int(np.argmax(res)) if len(res) else 0
-        if len(res) and res[worst] > self.tol:
-            raise AssemblyError(
-                f"mechanism {self.topo.mech.name!r}: loop residual {res[worst]:.3g} m at "
-                f"driver = {_fmt_value(self.topo, float(values[worst]))} exceeds "
-                f"{self.tol:.3g} m", float(values[worst]))
-        return q, trans
+            theta, E, O = poses_from_q(self.topo, q)
+        pre = self.eqs.terms_from_poses(q, E)
+        if self.eqs.L and len(q):
+            # one flat reduction: a reduction along the short axis costs 20x more
+            res = np.abs(self.eqs.residual(q, pre))
+            k = int(np.argmax(res))
+            if not res.flat[k] <= self.tol:
+                worst = k // res.shape[1]
+                raise AssemblyError(
+                    f"mechanism {self.topo.mech.name!r}: loop residual {res.flat[k]:.3g} m "
+                    f"at driver = {_fmt_value(self.topo, float(values[worst]))} exceeds "
+                    f"{self.tol:.3g} m", float(values[worst]))
+        return q, theta, E, O, trans, pre
 
     def _continue(self, values):
         """Sequential Newton continuation from the reference pose, in input order

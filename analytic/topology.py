@@ -26,6 +26,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -92,6 +93,11 @@ class Topology:
     driven_var: int | None        # variable fixed by the driver when it is a unit row
     plan: list[DyadStep] | None   # closed-form position plan, None when not decomposable
     body_points: list[dict[str, np.ndarray]] = field(default_factory=list)
+
+    @cached_property
+    def group_leader(self) -> list[int]:
+        """One body index per moving rotation group, in group order."""
+        return [int(np.flatnonzero(self.group_of == g)[0]) for g in range(self.n_groups)]
 
     @property
     def nq(self) -> int:

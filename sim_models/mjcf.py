@@ -1,0 +1,285 @@
+"""MuJoCo model of a :class:`~analytic.mechanism.Mechanism`, built with typed ``MjSpec`` calls.
+
+No XML is written or parsed: every element comes from ``add_body`` /
+``add_joint`` / ``add_site`` / ``add_geom`` / ``add_equality`` on a
+:class:`mujoco.MjSpec` (``spec.to_xml()`` gives MJCF for the viewer if wanted).
+
+Model
+-----
+* Kinematic tree = :class:`sim_models.tree.SimTree` (the analytic spanning tree with
+  prismatic joints preferred); each body frame at its reference pose, so
+  ``qpos = 0`` is the assembled reference state; hinges about z at the joint
+  point, slides along the line direction.  Names: bodies and joints keep the
+  description's names; the world body is the ground.
+* Loops closed at each chord (a revolute joint) by an equality ``connect``
+  between site ``"<joint>@<body_b>"`` (body1) and ``"<joint>@<body_a>"``
+  (body2); its ``efc_force`` (3 rows, world axes) is the force **by body_a on
+  body_b**, the analytic convention.
+* Explicit inertials (``ipos`` = centre of mass, ``inertia = [I/2, I/2, I]``, a
+  plane lamina: only ``Izz`` acts in a planar motion and the perpendicular-axis
+  values satisfy MuJoCo's triangle inequality); massless bodies get
+  :data:`sim_models.tree.MASS_FLOOR` of the largest mass (see that module).
+* Contacts disabled (flag and ``contype = conaffinity = 0``), gravity
+  ``mech.gravity`` (0 unless the description asks), no limits, no actuators.
+  Visual capsules join each body's consecutive points (massless: the compiler
+  does not infer inertia from geoms).
+* Drive: a huge ``armature`` on the driven joint.  Then
+  ``(M + A) qacc = ... + qfrc_applied`` makes the driver follow
+  ``qacc = qfrc_applied / A`` to O(1/A), and the effort the driver exerts on
+  the mechanism is ``A (a_prescribed - qacc)`` (``qfrc_applied = A a_prescribed``
+  is set by :mod:`sim_models.engines`).  Auto-reset on bad accelerations is
+  disabled so a divergence shows as non-finite state and can be reported.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from analytic import Mechanism
+
+from .tree import SimModelError, SimTree
+
+#: Oldest MuJoCo accepted: before 3.7.0 connect/weld constraints lacked the
+#: Jdot*v term and loop accelerations came out near zero (ENGINE_NOTES.md).
+MIN_MUJOCO = (3, 7, 0)
+
+
+class EngineVersionError(SimModelError):
+    """The installed engine is too old (or missing) for these models."""
+
+
+def _version_tuple(v: str) -> tuple[int, ...]:
+    out = []
+    for part in v.split(".")[:3]:
+        num = "".join(ch for ch in part if ch.isdigit())
+        out.append(int(num) if num else 0)
+    return tuple(out)
+
+
+def require_mujoco():
+    """Import MuJoCo, refusing versions older than :data:`MIN_MUJOCO`."""
+    try:
+        import mujoco
+    except ImportError as e:  # pragma: no cover - environment problem
+        raise EngineVersionError(f"MuJoCo is not installed ({e}); pip install 'mujoco>=3.7'") \
+            from None
+    if _version_tuple(mujoco.__version__) < MIN_MUJOCO:
+        raise EngineVersionError(
+            f"MuJoCo {mujoco.__version__} is too old: need >= 3.7.0 (earlier versions omit the "
+            "Jdot*v term of connect constraints, so loop accelerations come out near zero)")
+    return mujoco
+
+
+def direct_solref(tau: float) -> tuple[float, float]:
+    """Critically damped direct-form solref ``(-1/tau^2, -2/tau)`` (stiffness, damping)."""
+    return (-1.0 / tau ** 2, -2.0 / tau)
+
+
+#: Near-hard impedance: 0.9999 is MuJoCo's cap (ENGINE_NOTES.md).
+HARD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
+@dataclass(frozen=True)
+class MujocoSettings:
+    """Solver settings of the MuJoCo models.
+
+    Parameters
+    ----------
+    timestep
+        Largest step, s.  :func:`sim_models.engines.run` shortens it so that a
+        revolution is a whole number of steps and every sample falls on a step.
+    integrator
+        ``"RK4"``, ``"implicitfast"``, ``"implicit"`` or ``"Euler"``.
+    solref
+        Loop constraint reference.  Negative pair = direct form
+        ``(-stiffness, -damping)``; default critically damped with time
+        constant 10 ms (:func:`direct_solref`).  With the near-hard
+        constraints that ``invweight_scale`` gives, the loop is a Baumgarte
+        stabilised hard constraint and a slow correction is the accurate one:
+        RK4 on the seed four-bar, worst error / peak of alpha, torque, pin
+        forces over the 2nd revolution: dt 1e-4 with tau 0.3 ms 1.5e-3,
+        0.5 ms 1.8e-4, 1 ms 1.1e-5, 3 ms 1.3e-7; dt 3e-4 with tau 10 ms
+        8e-8; dt 1e-3 with tau 30 ms 1.2e-7 (slider-crank at 200 rad/s:
+        2e-5).  Do not scale it with the timestep under RK4.
+    solimp
+        Loop constraint impedance; default the near-hard cap.
+    iterations, tolerance
+        Constraint solver iterations and tolerance.
+    armature
+        Added inertia on the driven joint (kg m^2 or kg): the drive.
+    diagexact
+        Enable ``mjENBL_DIAGEXACT`` (exact diagonal in the constraint
+        regularisation).  Off by default: with ``invweight_scale`` the
+        approximate diagonal is the better knob.
+    invweight_scale
+        Factor applied by :func:`compile_spec` to the compiled model's
+        ``body_invweight0`` and ``dof_invweight0``.  With ``diagexact`` off they
+        form MuJoCo's approximate constraint diagonal, and the regularisation
+        ``R = (1 - d) / d * diagApprox`` (d = solimp, capped at 0.9999) is what
+        makes the constraints soft: the constraint-force error is proportional
+        to R.  Measured with ``mj_forward`` at the analytic state (36 angles,
+        max error / peak): stock (1.0) 7.4e-5 seed-four-bar, 7.6e-4
+        seed-slider-crank, 2.7e-4 six-bar; 1e-2 gives 100x less; 1e-4 about
+        1e-7; 1e-6 is worse again (conditioning).  1.0 restores stock MuJoCo.
+    """
+
+    timestep: float = 2.5e-4
+    integrator: str = "RK4"
+    solref: tuple[float, float] = direct_solref(1e-2)
+    solimp: tuple[float, float, float, float, float] = HARD_SOLIMP
+    iterations: int = 100
+    tolerance: float = 1e-12
+    armature: float = 1e6
+    diagexact: bool = False
+    invweight_scale: float = 1e-3
+
+    def describe(self) -> str:
+        return (f"MuJoCo {self.integrator} dt<={self.timestep:g} s, solref={self.solref}, "
+                f"solimp={self.solimp}, iterations={self.iterations}, "
+                f"tolerance={self.tolerance:g}, armature={self.armature:g}, "
+                f"diagexact={self.diagexact}, invweight_scale={self.invweight_scale:g}")
+
+
+_INTEGRATORS = {"rk4": "mjINT_RK4", "implicitfast": "mjINT_IMPLICITFAST",
+                "implicit": "mjINT_IMPLICIT", "euler": "mjINT_EULER"}
+
+
+def _quat_z(a: float) -> list[float]:
+    return [math.cos(a / 2), 0.0, 0.0, math.sin(a / 2)]
+
+
+def site_name(joint: str, body: str) -> str:
+    return f"{joint}@{body}"
+
+
+def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
+               tree: SimTree | None = None):
+    """The MuJoCo model of ``mech`` as a :class:`mujoco.MjSpec` (not compiled).
+
+    Raises :class:`EngineVersionError` for MuJoCo < 3.7 and
+    :class:`~sim_models.tree.UnsupportedClosureError` when a loop cannot be
+    closed at a revolute joint.
+    """
+    mujoco = require_mujoco()
+    settings = settings or MujocoSettings()
+    st = tree or SimTree(mech)
+    key = settings.integrator.lower()
+    if key not in _INTEGRATORS:
+        raise SimModelError(f"unknown MuJoCo integrator {settings.integrator!r}; "
+                            f"use one of {sorted(_INTEGRATORS)}")
+
+    s = mujoco.MjSpec()
+    s.modelname = mech.name
+    s.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    s.compiler.autolimits = False
+    opt = s.option
+    opt.timestep = settings.timestep
+    opt.integrator = getattr(mujoco.mjtIntegrator, _INTEGRATORS[key])
+    opt.iterations = int(settings.iterations)
+    opt.tolerance = float(settings.tolerance)
+    gx, gy = mech.gravity
+    opt.gravity = [float(gx), float(gy), 0.0]
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    if settings.diagexact:
+        opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_DIAGEXACT)
+
+    radius = 0.01 * st.size
+    names = st.body_names
+
+    def visuals(body_spec, b: int):
+        pts = list(mech.bodies[b].points.values())
+        rgba = [0.2, 0.2, 0.2, 1.0] if b == st.ground else [0.2, 0.4, 0.8, 1.0]
+        if len(pts) == 1 or b == st.ground:
+            for p in pts:
+                body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                                   size=[1.5 * radius, 0, 0], pos=[p[0], p[1], 0.0],
+                                   contype=0, conaffinity=0, rgba=rgba)
+        else:
+            for p, q in zip(pts[:-1], pts[1:], strict=True):
+                if math.hypot(q[0] - p[0], q[1] - p[1]) < 1e-12:
+                    continue
+                body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[radius, 0, 0],
+                                   fromto=[p[0], p[1], 0.0, q[0], q[1], 0.0],
+                                   contype=0, conaffinity=0, rgba=rgba)
+
+    specs = {st.ground: s.worldbody}
+    visuals(s.worldbody, st.ground)
+    for tj in st.joints:
+        c = tj.child
+        parent = specs[tj.parent]
+        body = parent.add_body(name=names[c], pos=[tj.rel_pos[0], tj.rel_pos[1], 0.0],
+                               quat=_quat_z(tj.rel_angle))
+        body.explicitinertial = True
+        body.mass = float(st.mass[c])
+        body.ipos = [float(st.com[c][0]), float(st.com[c][1]), 0.0]
+        inertia = float(st.inertia[c])
+        body.inertia = [inertia / 2, inertia / 2, inertia]
+        if tj.kind == "hinge":
+            jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_HINGE,
+                                 axis=[0.0, 0.0, 1.0],
+                                 pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
+        else:
+            jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_SLIDE,
+                                 axis=[tj.axis_child[0], tj.axis_child[1], 0.0],
+                                 pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
+            # show the guide line on the guide
+            guide = tj.parent if tj.sigma > 0 else tj.child
+            gspec = specs[tj.parent] if tj.sigma > 0 else body
+            jt = mech.joints[tj.joint]
+            o = np.asarray(mech.bodies[guide].points[jt.origin], float)
+            u = np.array([math.cos(jt.direction), math.sin(jt.direction)])
+            a, b_ = o - 0.5 * st.size * u, o + 0.5 * st.size * u
+            gspec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.3 * radius, 0, 0],
+                           fromto=[a[0], a[1], 0.0, b_[0], b_[1], 0.0], contype=0,
+                           conaffinity=0, rgba=[0.6, 0.6, 0.6, 1.0])
+        jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+        if tj.joint == st.tree_joint_indices[st.driver_tree]:
+            jnt.armature = float(settings.armature)
+        specs[c] = body
+        visuals(body, c)
+
+    for ch in st.chords:
+        na, nb = names[ch.body_a], names[ch.body_b]
+        specs[ch.body_b].add_site(name=site_name(ch.name, nb),
+                                  pos=[ch.point_b[0], ch.point_b[1], 0.0])
+        specs[ch.body_a].add_site(name=site_name(ch.name, na),
+                                  pos=[ch.point_a[0], ch.point_a[1], 0.0])
+        s.add_equality(name=ch.name, type=mujoco.mjtEq.mjEQ_CONNECT,
+                       objtype=mujoco.mjtObj.mjOBJ_SITE,
+                       name1=site_name(ch.name, nb), name2=site_name(ch.name, na),
+                       solref=list(settings.solref), solimp=list(settings.solimp))
+    return s
+
+
+def compile_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
+                 tree: SimTree | None = None):
+    """Build and compile: ``(model, warnings)`` with ``settings.invweight_scale`` applied."""
+    settings = settings or MujocoSettings()
+    return compile_spec(build_mjcf(mech, settings, tree), settings)
+
+
+def compile_spec(spec, settings: MujocoSettings | None = None):
+    """Compile an ``MjSpec``; return ``(model, warnings)`` with MuJoCo's warning texts.
+
+    With ``settings``, its ``invweight_scale`` is applied to the compiled model.
+    """
+    mujoco = require_mujoco()
+    msgs: list[str] = []
+    old = mujoco.get_mju_user_warning() if hasattr(mujoco, "get_mju_user_warning") else None
+    mujoco.set_mju_user_warning(msgs.append)
+    try:
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            model = spec.compile()
+        msgs.extend(str(x.message) for x in w)
+    finally:
+        mujoco.set_mju_user_warning(old)
+    if settings is not None and settings.invweight_scale != 1.0:
+        model.body_invweight0[:] *= settings.invweight_scale
+        model.dof_invweight0[:] *= settings.invweight_scale
+    return model, msgs

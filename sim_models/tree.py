@@ -1,0 +1,368 @@
+"""The simulation tree shared by the MJCF and URDF builders and the engine drivers.
+
+Both engines need a kinematic *tree* rooted at the ground plus loop-closing
+constraints.  The tree is a spanning tree of the joint graph chosen like the
+analytic one (:func:`analytic.topology.build_topology`: the driver joint first,
+then the joints in description order, union-find, breadth-first from ground)
+with one change: **prismatic joints are taken before revolute ones**, so that
+every loop is closed at a revolute joint (a point-to-point constraint, which
+both engines support).  A prismatic joint can only end up a chord when a loop
+consists of the driver and prismatic joints alone, which Gruebler's count
+rules out for a one-dof linkage; :class:`UnsupportedClosureError` names it
+should it ever happen.
+
+Coordinates
+-----------
+Every body frame is placed at its pose in the *reference configuration* (the
+analytic solution at the driver's reference value), so all joint coordinates
+are 0 there.  Tree joint coordinates are relative:
+
+* hinge ``q = (theta_child - theta_parent) - (its reference value)``;
+* slide ``q = sigma (s - s_ref)`` with ``sigma = +1`` when the child is the
+  slider and ``-1`` when the child is the guide.
+
+The driver's coordinate is ``q_d = sigma_d (value - value_ref)`` with
+``sigma_d = +1`` when the tree child of the driver joint is ``body_b``
+(revolute) / the slider (prismatic).
+
+Mass properties
+---------------
+Engines cannot integrate massless moving bodies.  A body with ``mass = 0`` gets
+``MASS_FLOOR`` (1e-6) times the largest body mass and 1e-6 times the largest
+inertia, at its stated centre of mass.  The extra inertia loads it adds,
+``m_tiny |a_G|`` and ``I_tiny |alpha|``, are 1e-6 of those of a heavy body at the
+same acceleration (zero for the seed slider-crank's crank, whose centre of mass
+is on its fixed pivot and which turns at constant speed); they are below the
+1e-4 agreement asked of the engines.  When a description has no masses at all
+(kinematics-only cases), every moving body gets placeholder properties: 1 kg,
+centre of mass at the centroid of its points, the inertia of a uniform rod as
+long as the body's largest point distance (or of 1/10 of the mechanism's size
+for a single-point body); forces are then engine-internal and not comparable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from analytic import Linkage, Mechanism, Prismatic, Revolute
+from analytic.errors import LinkageError
+
+#: Mass of a massless body relative to the largest body mass (see module docstring).
+MASS_FLOOR = 1e-6
+
+
+class SimModelError(LinkageError):
+    """A mechanism cannot be turned into an engine model."""
+
+
+class UnsupportedClosureError(SimModelError):
+    """A loop would have to be closed at a joint type the builders cannot close."""
+
+
+def _rot(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s], [s, c]])
+
+
+def _perp(v: np.ndarray) -> np.ndarray:
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+
+
+def wrap(a):
+    """Angle(s) wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(a, float), 2 * np.pi)
+
+
+@dataclass(frozen=True)
+class TreeJoint:
+    """One joint of the simulation tree (all vectors in m, body frames)."""
+
+    joint: int                 # index in mech.joints
+    name: str
+    kind: str                  # "hinge" or "slide"
+    parent: int                # body index
+    child: int                 # body index
+    sigma: float               # +1: child is body_b / the slider, -1 otherwise
+    anchor_parent: np.ndarray  # joint point in the parent frame (revolute) / parent's point
+    anchor_child: np.ndarray   # joint point in the child frame
+    axis_child: np.ndarray     # slide: unit axis in the child frame; hinge: (0, 0)
+    rel_pos: np.ndarray        # child frame origin in the parent frame at the reference
+    rel_angle: float           # theta_child - theta_parent at the reference, rad
+    q_ref: float               # hinge: rel_angle; slide: s at the reference
+
+
+@dataclass(frozen=True)
+class Chord:
+    """A loop-closing revolute joint: its point on body_a and on body_b."""
+
+    joint: int
+    name: str
+    body_a: int
+    body_b: int
+    point_a: np.ndarray
+    point_b: np.ndarray
+
+
+class SimTree:
+    """Tree, chords, reference poses and engine mass properties of a mechanism.
+
+    Attributes
+    ----------
+    linkage : the analytic :class:`Linkage` (kinematics at the reference value)
+    order : bodies, ground first, parents before children
+    joints : :class:`TreeJoint` in ``order[1:]`` order (``joints[i].child == order[i+1]``)
+    chords : :class:`Chord` list
+    theta_ref, origin_ref : (B,), (B, 2) reference poses
+    mass, com, inertia : (B,) kg, (B, 2) m, (B,) kg m^2 as given to the engines
+    has_mass : whether the description gives masses (else placeholders)
+    driver_tree : index into ``joints`` of the driven joint
+    """
+
+    def __init__(self, mech: Mechanism, linkage: Linkage | None = None):
+        self.mech = mech
+        self.linkage = linkage or Linkage(mech)
+        names = [b.name for b in mech.bodies]
+        self.body_names = names
+        idx = {n: i for i, n in enumerate(names)}
+        g0 = idx[mech.ground]
+        self.ground = g0
+        B = len(names)
+        joints = mech.joints
+        dj = [j.name for j in joints].index(mech.driver.joint)
+
+        # --- spanning tree: driver, prismatic joints, revolute joints ------------
+        uf = list(range(B))
+
+        def root(b):
+            while uf[b] != b:
+                uf[b] = uf[uf[b]]
+                b = uf[b]
+            return b
+
+        rest = [k for k in range(len(joints)) if k != dj]
+        cand = [dj] + [k for k in rest if isinstance(joints[k], Prismatic)] + \
+            [k for k in rest if isinstance(joints[k], Revolute)]
+        tree, chords = [], []
+        for k in cand:
+            a, b = idx[joints[k].body_a], idx[joints[k].body_b]
+            ra, rb = root(a), root(b)
+            if ra == rb:
+                chords.append(k)
+            else:
+                uf[ra] = rb
+                tree.append(k)
+        for k in chords:
+            if isinstance(joints[k], Prismatic):
+                raise UnsupportedClosureError(
+                    f"mechanism {mech.name!r}: prismatic joint {joints[k].name!r} would close a "
+                    "loop; the engine builders close loops at revolute joints only", mech.source)
+        adj = {b: [] for b in range(B)}
+        for k in tree:
+            a, b = idx[joints[k].body_a], idx[joints[k].body_b]
+            adj[a].append((b, k))
+            adj[b].append((a, k))
+        parent, order, queue = {}, [g0], [g0]
+        while queue:
+            p = queue.pop(0)
+            for c, k in sorted(adj[p], key=lambda x: cand.index(x[1])):
+                if c not in parent and c != g0:
+                    parent[c] = (p, k)
+                    order.append(c)
+                    queue.append(c)
+        self.order = order
+        self.parent = parent
+        self.tree_joint_indices = [parent[c][1] for c in order[1:]]
+        self.chord_indices = chords
+
+        # --- reference poses -----------------------------------------------------
+        kin = self.linkage.kinematics()
+        self.kin_ref = kin
+        th = kin.theta[0].copy()
+        org = kin.origin[0].copy()
+        self.theta_ref, self.origin_ref = th, org
+        topo = self.linkage.topo
+        pts = topo.body_points
+
+        self.joints: list[TreeJoint] = []
+        for c in order[1:]:
+            p, k = parent[c]
+            jt = joints[k]
+            a_c = np.array(topo.attach(k, c), float)
+            a_p = np.array(topo.attach(k, p), float)
+            rel_pos = _rot(th[p]).T @ (org[c] - org[p])
+            rel_angle = float(wrap(th[c] - th[p]))
+            if isinstance(jt, Revolute):
+                sigma = 1.0 if names[c] == jt.body_b else -1.0
+                self.joints.append(TreeJoint(k, jt.name, "hinge", p, c, sigma, a_p, a_c,
+                                             np.zeros(2), rel_pos, rel_angle, rel_angle))
+            else:
+                gb = idx[jt.guide]
+                sigma = 1.0 if c == idx[jt.slider] else -1.0
+                u_world = _rot(th[gb]) @ np.array([math.cos(jt.direction),
+                                                   math.sin(jt.direction)])
+                axis_c = _rot(th[c]).T @ u_world
+                s_ref = float(kin.slider(jt.name)[0][0])
+                self.joints.append(TreeJoint(k, jt.name, "slide", p, c, sigma, a_p, a_c,
+                                             axis_c, rel_pos, rel_angle, s_ref))
+        self.chords: list[Chord] = []
+        for k in chords:
+            jt = joints[k]
+            a, b = idx[jt.body_a], idx[jt.body_b]
+            self.chords.append(Chord(k, jt.name, a, b, pts[a][jt.point_a].copy(),
+                                     pts[b][jt.point_b].copy()))
+        self.driver_tree = self.tree_joint_indices.index(dj)
+        self.driver_sigma = self.joints[self.driver_tree].sigma
+        self.prismatic = [k for k, j in enumerate(joints) if isinstance(j, Prismatic)]
+
+        # --- mass properties -----------------------------------------------------
+        self.has_mass = mech.has_mass
+        self.size = self._size()
+        mass = np.zeros(B)
+        com = np.zeros((B, 2))
+        inertia = np.zeros(B)
+        if self.has_mass:
+            mmax = max(b.mass for b in mech.moving_bodies)
+            imax = max(b.inertia for b in mech.moving_bodies)
+            if mmax <= 0:
+                mmax, imax = 1.0, 1e-3 * self.size ** 2
+            for i, b in enumerate(mech.bodies):
+                if i == g0:
+                    continue
+                mass[i] = b.mass if b.mass > 0 else MASS_FLOOR * mmax
+                inertia[i] = b.inertia if b.inertia > 0 else MASS_FLOOR * imax
+                com[i] = b.com
+        else:
+            for i, b in enumerate(mech.bodies):
+                if i == g0:
+                    continue
+                P = np.array(list(b.points.values()), float)
+                c = P.mean(axis=0)
+                L = max((np.linalg.norm(x - y) for x in P for y in P), default=0.0)
+                if L <= 0:
+                    L = 0.1 * self.size
+                mass[i], com[i], inertia[i] = 1.0, c, L * L / 12
+        self.mass, self.com, self.inertia = mass, com, inertia
+        # ancestor hinge matrix: absolute theta_b = theta_ref_b + sum of hinge q on its path
+        nt = len(self.joints)
+        self.path = np.zeros((B, nt))
+        pos_in_tree = {c: i for i, c in enumerate(order[1:])}
+        for b in range(B):
+            x = b
+            while x != g0:
+                i = pos_in_tree[x]
+                if self.joints[i].kind == "hinge":
+                    self.path[b, i] = 1.0
+                x = parent[x][0]
+
+    def _size(self) -> float:
+        s = 0.0
+        for b in self.mech.bodies:
+            P = np.array(list(b.points.values()), float)
+            if len(P) > 1:
+                s = max(s, float(np.max(np.linalg.norm(P[:, None] - P[None], axis=-1))))
+        return s if s > 0 else 1.0
+
+    # ------------------------------------------------------------------------
+    @property
+    def tree_names(self) -> list[str]:
+        return [j.name for j in self.joints]
+
+    def analytic_chords(self) -> list[str]:
+        """Loop-closing joints of the analytic tree (for the report)."""
+        topo = self.linkage.topo
+        return [topo.joint_names[k] for k in topo.chords]
+
+    def coords(self, kin, order: int = 2):
+        """Tree coordinates ``q, qd, qdd`` (N, nt) of an analytic :class:`Kinematics`."""
+        N = kin.n
+        nt = len(self.joints)
+        q, qd, qdd = np.zeros((N, nt)), np.zeros((N, nt)), np.zeros((N, nt))
+        for i, tj in enumerate(self.joints):
+            p, c = tj.parent, tj.child
+            if tj.kind == "hinge":
+                if i == self.driver_tree:
+                    q[:, i] = tj.sigma * (kin.value - self.mech.driver.value)
+                else:
+                    q[:, i] = wrap(kin.theta[:, c] - kin.theta[:, p] - tj.rel_angle)
+                qd[:, i] = kin.omega[:, c] - kin.omega[:, p]
+                qdd[:, i] = kin.alpha[:, c] - kin.alpha[:, p]
+            else:
+                s, sd, sdd = kin.slider(tj.name)
+                q[:, i] = tj.sigma * (s - tj.q_ref)
+                qd[:, i] = tj.sigma * sd
+                qdd[:, i] = tj.sigma * sdd
+        return q, qd, qdd
+
+    def propagate(self, q, qd, qdd):
+        """Body poses, rates and frame-origin accelerations from tree coordinates.
+
+        Arrays ``(N, nt)`` in; ``theta, omega, alpha`` (N, B) and ``origin, v, a``
+        (N, B, 2) out (world frame).
+        """
+        q, qd, qdd = (np.atleast_2d(np.asarray(x, float)) for x in (q, qd, qdd))
+        N = q.shape[0]
+        B = len(self.body_names)
+        th = np.zeros((N, B))
+        om = np.zeros((N, B))
+        al = np.zeros((N, B))
+        org = np.zeros((N, B, 2))
+        v = np.zeros((N, B, 2))
+        a = np.zeros((N, B, 2))
+        g = self.ground
+        th[:, g] = self.theta_ref[g]
+        org[:, g] = self.origin_ref[g]
+
+        def rot(t, x):
+            c, s = np.cos(t)[:, None], np.sin(t)[:, None]
+            x = np.broadcast_to(x, (len(t), 2))
+            return np.stack([c[:, 0] * x[:, 0] - s[:, 0] * x[:, 1],
+                             s[:, 0] * x[:, 0] + c[:, 0] * x[:, 1]], axis=-1)
+
+        for i, tj in enumerate(self.joints):
+            p, c = tj.parent, tj.child
+            wp, ap = om[:, p, None], al[:, p, None]
+            if tj.kind == "hinge":
+                th[:, c] = th[:, p] + tj.rel_angle + q[:, i]
+                om[:, c] = om[:, p] + qd[:, i]
+                al[:, c] = al[:, p] + qdd[:, i]
+                r = rot(th[:, p], tj.anchor_parent)
+                P, vP, aP = org[:, p] + r, v[:, p] + wp * _perp(r), \
+                    a[:, p] + ap * _perp(r) - wp * wp * r
+                rc = -rot(th[:, c], tj.anchor_child)
+                wc, ac = om[:, c, None], al[:, c, None]
+                org[:, c] = P + rc
+                v[:, c] = vP + wc * _perp(rc)
+                a[:, c] = aP + ac * _perp(rc) - wc * wc * rc
+            else:
+                th[:, c] = th[:, p] + tj.rel_angle
+                om[:, c] = om[:, p]
+                al[:, c] = al[:, p]
+                u = rot(th[:, c], tj.axis_child)
+                r = rot(th[:, p], tj.rel_pos) + q[:, i, None] * u
+                sd, sdd = qd[:, i, None], qdd[:, i, None]
+                org[:, c] = org[:, p] + r
+                v[:, c] = v[:, p] + wp * _perp(r) + sd * u
+                a[:, c] = a[:, p] + ap * _perp(r) - wp * wp * r + sdd * u \
+                    + 2 * wp * sd * _perp(u)
+        return th, om, al, org, v, a
+
+    def point_world(self, theta, origin, b: int, c):
+        """World position (N, 2) of body-frame point ``c`` of body ``b``."""
+        t = theta[:, b]
+        cs, sn = np.cos(t), np.sin(t)
+        c = np.asarray(c, float)
+        return origin[:, b] + np.stack([cs * c[0] - sn * c[1], sn * c[0] + cs * c[1]], -1)
+
+    def driver_value(self, q_driver):
+        """Driver value (rad or m) from the driver's tree coordinate."""
+        return self.mech.driver.value + self.driver_sigma * np.asarray(q_driver)
+
+    def driver_path(self, t):
+        """Prescribed driver value, velocity, acceleration at times t (s)."""
+        d = self.mech.driver
+        t = np.asarray(t, float)
+        return (d.value + d.velocity * t + 0.5 * d.acceleration * t * t,
+                d.velocity + d.acceleration * t, np.full_like(t, d.acceleration))
