@@ -192,13 +192,16 @@ def _step_schedule(times: np.ndarray, dt_max: float):
     """Step sizes so that every finite sample time is a step boundary."""
     order = np.argsort(np.where(np.isfinite(times), times, np.inf))
     stops = [0.0]
+    steps = []  # (dt, n) per interval between consecutive stops; n = 0 for a sample at t = 0
+    if np.any(np.asarray(times)[np.isfinite(times)] <= 1e-15):
+        stops.append(0.0)
+        steps.append((dt_max, 0))
     for i in order:
         if np.isfinite(times[i]) and times[i] > stops[-1] + 1e-15:
-            stops.append(float(times[i]))
-    steps = []  # (dt, n)
-    for a, b in zip(stops[:-1], stops[1:], strict=True):
-        n = max(1, math.ceil((b - a) / dt_max - 1e-9))
-        steps.append(((b - a) / n, n))
+            a, b = stops[-1], float(times[i])
+            n = max(1, math.ceil((b - a) / dt_max - 1e-9))
+            steps.append(((b - a) / n, n))
+            stops.append(b)
     return order, stops, steps
 
 
@@ -422,7 +425,8 @@ def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violatio
     sample_at = {}
     for i in order:
         if np.isfinite(plan.times[i]):
-            sample_at.setdefault(float(plan.times[i]), []).append(int(i))
+            sample_at.setdefault(max(float(plan.times[i]), 0.0) if plan.times[i] > 1e-15
+                                 else 0.0, []).append(int(i))
     reason = fail = None
     t = 0.0
     dt_used = max((s[0] for s in steps), default=settings.timestep)
@@ -459,8 +463,6 @@ def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violatio
     step, drive_dof = mj.mj_step, sim.drive_dof
     t0 = time.perf_counter()
     mj.mj_forward(m, d)
-    if 0.0 in sample_at:
-        sample(0.0)
     for (h, n), t_stop in zip(steps, stops[1:], strict=True):
         m.opt.timestep = h
         for _ in range(n):

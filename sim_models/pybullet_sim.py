@@ -229,7 +229,8 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
     sample_at: dict[float, list[int]] = {}
     for i in order:
         if np.isfinite(plan.times[i]):
-            sample_at.setdefault(float(plan.times[i]), []).append(int(i))
+            sample_at.setdefault(float(plan.times[i]) if plan.times[i] > 1e-15 else 0.0,
+                                 []).append(int(i))
     vmax = max_violation * st.size
     accel = dmech.acceleration != 0.0
     moving = bool(sim.loads)
@@ -241,6 +242,7 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
     h_cur = settings.timestep
     dt_used = max((s[0] for s in steps), default=settings.timestep)
     prev_cf = prev_tau = None
+    stepped = False
 
     def one_step(h, t_now):
         if accel:
@@ -250,32 +252,38 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
         sim.step()
 
     t0 = time.perf_counter()
-    for (h, n), t_stop in zip(steps, stops[1:], strict=True):
+    carried = 0  # steps of the current interval already taken (the post-sample step)
+    for m_int, ((h, n), t_stop) in enumerate(zip(steps, stops[1:], strict=True)):
         if h != h_cur:
             p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=sim.cid)
             h_cur = h
-        for _ in range(n - 1):
+        for _ in range(n - carried):
             one_step(h, t)
+            stepped = True
             t += h
-        # the last step before the sample: keep its impulse readings for averaging
-        one_step(h, t)
         t = t_stop
-        prev_cf = sim.constraint_forces()
-        prev_tau = sim.states()[3]
+        carried = 0
+        # impulse readings of the step that ends at the sample (for averaging)
+        prev_cf = sim.constraint_forces() if stepped else None
+        prev_tau = sim.states()[3] if stepped else None
         idx = sample_at.get(t_stop, [])
-        # sample: state at the start of the next step, then one step for the differences
-        q, v, rf, tau_dummy = sim.states()
+        # sample: the state at the start of the next step, then that step for the differences
+        q, v, _, _ = sim.states()
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             reason = "non-finite state (simulation diverged)"
         else:
-            h_next = h
+            h_next = steps[m_int + 1][0] if m_int + 1 < len(steps) else h
+            if h_next != h_cur:
+                p.setPhysicsEngineParameter(fixedTimeStep=h_next, physicsClientId=sim.cid)
+                h_cur = h_next
             one_step(h_next, t)
+            carried = 1
             q1, v1, rf1, tau1 = sim.states()
             cf1 = sim.constraint_forces()
             qdd = (v1 - v) / h_next
-            # restore the stepping position: we have advanced one step past the sample
             th, om, al, org, _, a_org = st.propagate(q[None], v[None], qdd[None])
-            if settings.average_impulses:
+            stepped = True
+            if settings.average_impulses and prev_cf is not None:
                 cf = 0.5 * (prev_cf + cf1)
                 tau = 0.5 * (prev_tau + tau1)
             else:
@@ -287,6 +295,7 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
                 viol = max(viol, float(np.linalg.norm(pa - pb)))
             _, vel_now, acc_now = st.driver_path(t)
             rate = st.driver_sigma * v[st.driver_tree]
+            jnames = [j.name for j in st.mech.joints]
             for i in idx:
                 rec.theta[i], rec.omega[i], rec.alpha[i] = th[0], om[0], al[0]
                 rec.measured[i] = st.driver_value(q[st.driver_tree])
@@ -294,7 +303,7 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
                 rec.speed[i] = rate - float(vel_now)
                 F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf[None])
                 for name, val in F.items():
-                    rec.force[i, [j.name for j in st.mech.joints].index(name)] = val[0]
+                    rec.force[i, jnames.index(name)] = val[0]
                 for pi, k in enumerate(st.prismatic):
                     name = st.mech.joints[k].name
                     rec.normal[i, pi] = Nn[name][0]
@@ -304,11 +313,9 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
                 rec.effort[i] = eff[0]
                 rec.effort_engine[i] = st.driver_sigma * tau
                 for t_idx, tj in enumerate(st.joints):
-                    rec.force_engine[i, tj.joint] = sig[t_idx] * rf[t_idx] if False else \
-                        sig[t_idx] * rf1[t_idx]
+                    rec.force_engine[i, tj.joint] = sig[t_idx] * rf1[t_idx]
                 for ci, ch in enumerate(st.chords):
                     rec.force_engine[i, ch.joint] = cf1[ci]
-            prev_cf, prev_tau = cf1, tau1
             t += h_next
             if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(v1))):
                 reason = "non-finite state (simulation diverged)"
