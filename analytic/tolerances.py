@@ -50,3 +50,16 @@ FINITE_DIFFERENCE = 1e-6
 #: Agreement with the exact values in REFERENCE.md, which are printed to 5-6
 #: significant figures: half a unit in the 6th figure.
 REFERENCE_RELATIVE = 5e-6
+
+# --- engine comparisons (MuJoCo, PyBullet against the analytic solution) -----------
+
+#: Engine accelerations, joint forces and drive torque at the recommended settings,
+#: relative to each quantity's peak over the cycle.  Both engines reach this on the
+#: 200 rad/s slider-crank per ENGINE_NOTES.md (MuJoCo RK4 with a critically damped
+#: loop, PyBullet dt 1e-5); 1e-3 is what issue 3 asks of a validation run.
+ENGINE_RELATIVE = 1e-3
+
+#: MuJoCo's instantaneous mode (mj_forward at the exact analytic state) on the S4
+#: four-bar: only the constraint regularisation separates it from the exact answer;
+#: measured 1.5e-5 of peak for alpha4 with solimp 0.9999, so 1e-4 holds with margin.
+MUJOCO_INSTANTANEOUS = 1e-4
