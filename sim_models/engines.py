@@ -48,7 +48,7 @@ from analytic import Linkage, Mechanism, Prismatic, Revolute
 from analytic.sweep import input_values
 
 from .mjcf import MujocoSettings, build_mjcf, compile_spec, require_mujoco, site_name
-from .tree import SimModelError, SimTree, _perp
+from .tree import SimModelError, SimTree
 
 
 @dataclass(frozen=True)
@@ -198,10 +198,24 @@ def _step_schedule(times: np.ndarray, dt_max: float):
         steps.append((dt_max, 0))
     for i in order:
         if np.isfinite(times[i]) and times[i] > stops[-1] + 1e-15:
-            a, b = stops[-1], float(times[i])
+            stops.append(float(times[i]))
+    lengths = np.diff(stops[len(steps):]) if len(stops) > len(steps) + 1 else np.array([])
+    # one common step when every interval is a whole multiple of it (constant-speed
+    # drivers: the samples are evenly spaced in time); PyBullet's finite differences
+    # need equal steps on both sides of a sample
+    h_common = None
+    if len(lengths):
+        lmin = float(np.min(lengths))
+        h = lmin / max(1, math.ceil(lmin / dt_max - 1e-9))
+        k = lengths / h
+        if np.all(np.abs(k - np.round(k)) < 1e-6 * np.maximum(k, 1.0)):
+            h_common = h
+    for a, b in zip(stops[len(steps):-1], stops[len(steps) + 1:], strict=True):
+        if h_common is not None:
+            n = max(1, int(round((b - a) / h_common)))
+        else:
             n = max(1, math.ceil((b - a) / dt_max - 1e-9))
-            steps.append(((b - a) / n, n))
-            stops.append(b)
+        steps.append(((b - a) / n, n))
     return order, stops, steps
 
 
@@ -382,7 +396,7 @@ class _MujocoSim:
 
 
 def mujoco_instantaneous(mech: Mechanism, settings: MujocoSettings | None = None,
-                         values=None) -> EngineRun:
+                         values=None, chords: str = "moving") -> EngineRun:
     """``mj_forward`` at the analytic state for each driver value (SI).
 
     Positions and velocities (and the driver's prescribed acceleration) come
@@ -390,7 +404,7 @@ def mujoco_instantaneous(mech: Mechanism, settings: MujocoSettings | None = None
     forces.  ``values`` default: the description's reference value.
     """
     settings = settings or MujocoSettings()
-    st = SimTree(mech)
+    st = SimTree(mech, chords=chords)
     sim = _MujocoSim(st, settings)
     lk = st.linkage
     vals = np.atleast_1d(np.asarray(mech.driver.value if values is None else values, float))
@@ -412,8 +426,28 @@ def mujoco_instantaneous(mech: Mechanism, settings: MujocoSettings | None = None
                    wall, 0.0, notes=tuple(sim.compile_warnings))
 
 
+#: Velocities above this (MuJoCo's own "huge value" threshold) count as divergence.
+HUGE = 1e10
+
+
 def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violation: float,
                 max_speed_error: float) -> EngineRun:
+    mujoco = require_mujoco()
+    msgs: list[str] = []
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(msgs.append)  # no stderr noise, no MUJOCO_LOG.TXT
+    try:
+        r = _run_mujoco_inner(st, settings, plan, max_violation, max_speed_error)
+    finally:
+        mujoco.set_mju_user_warning(old)
+    if msgs:
+        from dataclasses import replace
+        r = replace(r, notes=r.notes + tuple(f"MuJoCo warning: {x.strip()}" for x in msgs))
+    return r
+
+
+def _run_mujoco_inner(st: SimTree, settings: MujocoSettings, plan: _Plan,
+                      max_violation: float, max_speed_error: float) -> EngineRun:
     sim = _MujocoSim(st, settings)
     mj, m, d = sim.mj, sim.model, sim.data
     rec = _Recorder(st, plan)
@@ -460,26 +494,28 @@ def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violatio
     sim.set_drive(float(dmech.acceleration))
     moving_loads = sim.loads_move()
     sim.apply_loads()
-    step, drive_dof = mj.mj_step, sim.drive_dof
+    step = mj.mj_step
     t0 = time.perf_counter()
     mj.mj_forward(m, d)
     for (h, n), t_stop in zip(steps, stops[1:], strict=True):
         m.opt.timestep = h
+        qvel, qacc = d.qvel, d.qacc
         for _ in range(n):
             if moving_loads:
                 sim.apply_loads()
             step(m, d)
-            if not math.isfinite(d.qvel[drive_dof]):
-                reason = "non-finite state (simulation diverged)"
+            t += h
+            if not (abs(qvel.sum()) < HUGE and abs(qacc.sum()) < HUGE):  # NaN, inf, huge
+                reason = "non-finite or huge velocities (simulation diverged)"
                 break
-        t += h * n
         if reason is None:
-            t = t_stop
+            t = t_stop  # remove the rounding of the summed steps
             vel = sample(t_stop)
             reason = check(t_stop, vel)
         if reason is not None:
-            fail = sim.driver_value() if math.isfinite(d.qpos[sim.qadr[st.driver_tree]]) \
-                else float(st.driver_path(t)[0])
+            # the prescribed driver value at the time of failure (the engine's own may
+            # be anywhere once it has diverged)
+            fail = float(st.driver_path(t)[0])
             # invalidate samples at or after the failure
             for i in range(len(plan.times)):
                 if plan.times[i] >= t_stop - 1e-15:
@@ -496,7 +532,8 @@ def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violatio
 
 # ----------------------------------------------------------------------------- front door
 def run(mech: Mechanism, engine: str, settings=None, revolutions: int = 2, samples: int = 36,
-        max_violation: float = 1e-3, max_speed_error: float = 1e-2) -> EngineRun:
+        max_violation: float = 1e-3, max_speed_error: float = 1e-2,
+        chords: str = "moving") -> EngineRun:
     """Simulate ``mech`` and sample it at the analytic sweep's input values.
 
     Parameters
@@ -514,8 +551,13 @@ def run(mech: Mechanism, engine: str, settings=None, revolutions: int = 2, sampl
         Largest loop-closure gap tolerated, relative to the mechanism's size.
     max_speed_error
         Largest driver-rate error tolerated, relative to the driver's speed.
+    chords
+        Where loops are closed (:class:`sim_models.tree.SimTree`): ``"moving"``
+        (default; revolute joints between two moving bodies where possible,
+        PyBullet's loop forces then converge with dt^2) or ``"analytic"`` (the
+        analytic tree's order, prismatic joints still kept in the tree).
     """
-    st = SimTree(mech)
+    st = SimTree(mech, chords=chords)
     plan = _plan(st, revolutions, samples)
     eng = engine.lower()
     if eng == "mujoco":
@@ -576,6 +618,15 @@ def compare(run_: EngineRun, mech: Mechanism | None = None,
             out[f"force.{name}"] = float(err / pk) if pk > 0 else float(err)
             worst = max(worst, out[f"force.{name}"])
         out["joint_force"] = worst
+        if run_.joint_force_engine is not None:
+            worst = 0.0
+            for j, name in enumerate(run_.joint_names):
+                ref = frc.joint_force[name]
+                pk = np.max(np.linalg.norm(ref[ok], axis=1))
+                err = np.max(np.linalg.norm(run_.joint_force_engine[ok, j] - ref[ok], axis=1))
+                out[f"force_engine.{name}"] = float(err / pk) if pk > 0 else float(err)
+                worst = max(worst, out[f"force_engine.{name}"])
+            out["joint_force_engine"] = worst
         if run_.drive_effort_engine is not None:
             out["drive_effort_engine"] = rel(run_.drive_effort_engine, frc.effort)
     out["loop_violation"] = float(np.nanmax(run_.loop_violation[ok]))
@@ -585,4 +636,3 @@ def compare(run_: EngineRun, mech: Mechanism | None = None,
 
 
 __all__ = ["EngineRun", "MujocoSettings", "compare", "mujoco_instantaneous", "run"]
-_ = _perp  # re-exported helper used by the PyBullet driver

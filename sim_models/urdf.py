@@ -13,10 +13,11 @@ loop-closing revolute joint, to be added at run time as PyBullet
   slider point, or the guide's line origin), with the body's orientation; at
   ``q = 0`` every body is at its reference pose (tree joint coordinates as in
   :mod:`sim_models.tree`).
-* ``continuous`` joints about z, ``prismatic`` joints along the line (no
-  limits: ``lower = upper = 0`` with ``effort``/``velocity`` set large are
-  not used; PyBullet ignores limits when ``lower > upper``, so they are
-  written as ``lower=1 upper=-1``).
+* ``continuous`` joints about z, ``prismatic`` joints along the line.  URDF
+  requires a ``<limit>`` on a prismatic joint; it is written with
+  ``lower="1" upper="-1"``, which PyBullet reads as "no limit" (checked: the
+  sliders of every built-in case travel freely and match the analytic
+  accelerations).
 * ``<inertial>`` blocks (load with ``URDF_USE_INERTIA_FROM_FILE``) with
   ``ixx = iyy = I/2, izz = I`` (a plane lamina); massless bodies get the
   mass floor of :mod:`sim_models.tree`.  No ``<collision>``; thin ``box``
