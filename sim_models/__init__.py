@@ -8,7 +8,7 @@ Front door::
 Neither engine is imported until a model is built.
 """
 
-from .engines import EngineRun, compare, mujoco_instantaneous, run
+from .engines import EngineRun, mujoco_instantaneous, run
 from .mjcf import EngineVersionError, MujocoSettings, build_mjcf, compile_mjcf
 from .tree import SimModelError, SimTree, UnsupportedClosureError
 from .urdf import Closure, build_urdf
@@ -23,4 +23,4 @@ def __getattr__(name):  # PybulletSettings without importing pybullet eagerly
 
 __all__ = ["Closure", "EngineRun", "EngineVersionError", "MujocoSettings", "PybulletSettings",
            "SimModelError", "SimTree", "UnsupportedClosureError", "build_mjcf", "build_urdf",
-           "compare", "compile_mjcf", "mujoco_instantaneous", "run"]
+           "compile_mjcf", "mujoco_instantaneous", "run"]

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic import Linkage, Mechanism, Prismatic, Revolute
+from analytic import Mechanism, Prismatic, Revolute
 from analytic.sweep import input_values
 
 from .mjcf import MujocoSettings, build_mjcf, compile_spec, require_mujoco, site_name
@@ -571,68 +571,4 @@ def run(mech: Mechanism, engine: str, settings=None, revolutions: int = 2, sampl
 
 
 # ----------------------------------------------------------------------------- comparison
-def compare(run_: EngineRun, mech: Mechanism | None = None,
-            max_condition: float = 100.0) -> dict[str, float]:
-    """Largest |engine - analytic| over the samples, relative to the analytic peak.
-
-    Keys: ``alpha`` (all bodies, by the largest body peak), ``slider_acc``,
-    ``drive_effort``, ``joint_force`` (each joint by its own peak magnitude;
-    the max over joints), ``loop_violation`` (m, absolute) and
-    ``speed_deviation`` (relative to |driver velocity|).  Forces are skipped
-    when the description has no masses.  NaN samples (failed runs) are ignored,
-    and so are samples where the analytic loop Jacobian's condition number
-    exceeds ``max_condition`` (the ends of a limited-range sweep sit 1e-6 of
-    the range from a limit position, where accelerations reach 1e9); ``skipped``
-    counts them.
-    """
-    from analytic import load_case
-    mech = mech or load_case(run_.case)
-    lk = Linkage(mech)
-    vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
-                   mech.driver.velocity)
-    kin = lk.kinematics(run_.values, vel, run_.driver_acceleration, on_singular="flag")
-    ok = np.isfinite(run_.alpha).all(axis=1) & (kin.condition <= max_condition)
-    out: dict[str, float] = {"skipped": float(np.sum(~ok))}
-    if not ok.any():
-        out["alpha"] = math.nan
-        return out
-
-    def rel(a, b, peak=None):
-        a, b = np.asarray(a)[ok], np.asarray(b)[ok]
-        pk = np.max(np.abs(b)) if peak is None else peak
-        return float(np.max(np.abs(a - b)) / pk) if pk > 0 else float(np.max(np.abs(a - b)))
-
-    moving = [i for i, n in enumerate(run_.body_names) if n != mech.ground]
-    out["alpha"] = rel(run_.alpha[:, moving], kin.alpha[:, moving])
-    if run_.prismatic_names:
-        sa = np.stack([kin.slider(n)[2] for n in run_.prismatic_names], axis=1)
-        out["slider_acc"] = rel(run_.slider_acc, sa)
-    if run_.has_forces:
-        frc = lk.forces(kin)
-        out["drive_effort"] = rel(run_.drive_effort, frc.effort)
-        worst = 0.0
-        for j, name in enumerate(run_.joint_names):
-            ref = frc.joint_force[name]
-            pk = np.max(np.linalg.norm(ref[ok], axis=1))
-            err = np.max(np.linalg.norm(run_.joint_force[ok, j] - ref[ok], axis=1))
-            out[f"force.{name}"] = float(err / pk) if pk > 0 else float(err)
-            worst = max(worst, out[f"force.{name}"])
-        out["joint_force"] = worst
-        if run_.joint_force_engine is not None:
-            worst = 0.0
-            for j, name in enumerate(run_.joint_names):
-                ref = frc.joint_force[name]
-                pk = np.max(np.linalg.norm(ref[ok], axis=1))
-                err = np.max(np.linalg.norm(run_.joint_force_engine[ok, j] - ref[ok], axis=1))
-                out[f"force_engine.{name}"] = float(err / pk) if pk > 0 else float(err)
-                worst = max(worst, out[f"force_engine.{name}"])
-            out["joint_force_engine"] = worst
-        if run_.drive_effort_engine is not None:
-            out["drive_effort_engine"] = rel(run_.drive_effort_engine, frc.effort)
-    out["loop_violation"] = float(np.nanmax(run_.loop_violation[ok]))
-    out["speed_deviation"] = float(np.nanmax(np.abs(run_.speed_deviation[ok])
-                                             / np.maximum(np.abs(vel[ok]), 1e-300)))
-    return out
-
-
-__all__ = ["EngineRun", "MujocoSettings", "compare", "mujoco_instantaneous", "run"]
+__all__ = ["EngineRun", "MujocoSettings", "mujoco_instantaneous", "run"]

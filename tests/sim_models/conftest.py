@@ -12,11 +12,21 @@ ENGINE_RELATIVE = getattr(tolerances, "ENGINE_RELATIVE", 1e-3)
 MUJOCO_INSTANTANEOUS = getattr(tolerances, "MUJOCO_INSTANTANEOUS", 1e-4)
 
 
-def assert_within(errors: dict, keys, tol, what=""):
-    bad = {k: errors[k] for k in keys if k in errors and not errors[k] <= tol}
-    every = ", ".join(f"{k}={v:.2g}" for k, v in errors.items())
-    assert not bad, f"{what}: errors above {tol:g} of peak: " + ", ".join(
-        f"{k}={v:.3g}" for k, v in bad.items()) + f" (all: {every})"
+def assert_run_within(run_, mech, tol, what=""):
+    """Every quantity this project computes from the run within ``tol`` of its peak
+    (the engines' own readings, flagged ``[engine]``, are reported separately)."""
+    from reports.compare import compare_run
+    comps = [c for c in compare_run(run_, mech, tol) if not c.quantity.endswith("[engine]")]
+    assert comps, f"{what}: nothing compared"
+    bad = [str(c) for c in comps if not c.passed]
+    assert not bad, f"{what}: " + "; ".join(bad)
+    return comps
+
+
+def engine_reading(run_, mech, quantity):
+    """The comparison of one of the engine's own readings, e.g. ``O4.force[engine]``."""
+    from reports.compare import compare_run
+    return next(c for c in compare_run(run_, mech) if c.quantity == quantity)
 
 
 @pytest.fixture(autouse=True)
