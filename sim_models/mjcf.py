@@ -15,9 +15,10 @@ Model
   between site ``"<joint>@<body_b>"`` (body1) and ``"<joint>@<body_a>"``
   (body2); its ``efc_force`` (3 rows, world axes) is the force **by body_a on
   body_b**, the analytic convention.
-* Explicit inertials (``ipos`` = centre of mass, ``inertia = [I/2, I/2, I]``, a
-  plane lamina: only ``Izz`` acts in a planar motion and the perpendicular-axis
-  values satisfy MuJoCo's triangle inequality); massless bodies get
+* Explicit inertials (``ipos`` = centre of mass, ``inertia = [0.6 I, 0.6 I, I]``:
+  only ``Izz`` acts in a planar motion; the in-plane values are 20% above the
+  lamina's ``I/2`` so that MuJoCo's triangle inequality ``A + B >= C`` still holds
+  after ``to_xml`` prints them to 6 digits); massless bodies get
   :data:`sim_models.tree.MASS_FLOOR` of the largest mass (see that module).
 * Contacts disabled (flag and ``contype = conaffinity = 0``), gravity
   ``mech.gravity`` (0 unless the description asks), no limits, no actuators.
@@ -218,7 +219,7 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
         body.mass = float(st.mass[c])
         body.ipos = [float(st.com[c][0]), float(st.com[c][1]), 0.0]
         inertia = float(st.inertia[c])
-        body.inertia = [inertia / 2, inertia / 2, inertia]
+        body.inertia = [0.6 * inertia, 0.6 * inertia, inertia]
         if tj.kind == "hinge":
             jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_HINGE,
                                  axis=[0.0, 0.0, 1.0],

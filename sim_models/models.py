@@ -1,0 +1,48 @@
+"""The generated model files of the built-in cases (``sim_models/models/``).
+
+For each case ``<case>.xml`` (MJCF written by ``MjSpec.to_xml`` from
+:func:`sim_models.mjcf.build_mjcf`), ``<case>.urdf`` and ``<case>.closures.json``
+(the loop-closing point-to-point constraints PyBullet needs; pivots in the links'
+centre-of-mass frames).  The files are generated, never edited: ``xval models``
+rewrites them and a test fails when the committed ones are stale.
+
+The MJCF carries the recommended solver settings except ``invweight_scale``, which
+scales the compiled model's ``body_invweight0``/``dof_invweight0`` and cannot be
+expressed in MJCF: a model opened from the file (e.g. in MuJoCo's viewer) has stock,
+softer loop constraints.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+from analytic import case_names, load_case
+
+from .mjcf import MujocoSettings, build_mjcf
+from .urdf import build_urdf
+
+MODELS_DIR = Path(__file__).parent / "models"
+
+
+def model_texts(case: str) -> dict[str, str]:
+    """File name -> text of the generated models of one built-in case."""
+    mech = load_case(case)
+    xml = build_mjcf(mech, MujocoSettings()).to_xml()
+    urdf, closures = build_urdf(mech)
+    return {f"{case}.xml": xml, f"{case}.urdf": urdf,
+            f"{case}.closures.json": json.dumps([asdict(c) for c in closures], indent=2) + "\n"}
+
+
+def write_models(out: str | Path = MODELS_DIR, cases: list[str] | None = None) -> list[Path]:
+    """Write every built-in case's model files into ``out``; returns the paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for case in cases or case_names():
+        for name, text in model_texts(case).items():
+            p = out / name
+            p.write_text(text)
+            paths.append(p)
+    return paths
