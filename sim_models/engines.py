@@ -102,6 +102,8 @@ class EngineRun:
         revolute = not self.extra.get("prismatic_driver", False)
         cols = {"input": np.degrees(self.values) if revolute else self.values}
         for b, name in enumerate(self.body_names):
+            cols[f"{name}.angle_deg"] = 180.0 - np.mod(180.0 - np.degrees(self.theta[:, b]),
+                                                       360.0)
             cols[f"{name}.omega"] = self.omega[:, b]
             cols[f"{name}.alpha"] = self.alpha[:, b]
         for p, name in enumerate(self.prismatic_names):

@@ -1,0 +1,94 @@
+"""The validation report: written whole even when an engine fails, and its HTML is sound."""
+
+from __future__ import annotations
+
+import base64
+import io
+from html.parser import HTMLParser
+
+import pandas as pd
+import pytest
+
+from reports.report import ReportConfig, build_report
+
+
+class _Images(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.srcs, self.tables = [], 0
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "img":
+            self.srcs.append(dict(attrs)["src"])
+        if tag == "table":
+            self.tables += 1
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory):
+    """A small real report: one case, MuJoCo made to diverge (Euler with a 5 ms step and a
+    stiff loop), PyBullet at its recommended settings; no studies."""
+    out = tmp_path_factory.mktemp("report")
+    cfg = ReportConfig(out=out, quick=True, cases=("seed-slider-crank",), samples=12,
+                       studies=False, workers=2,
+                       settings={"mujoco": {"integrator": "Euler", "timestep": 5e-3,
+                                            "solref": (-1e8, -2e4)}})
+    build_report(cfg)
+    return out
+
+
+def test_outputs_exist(report_dir):
+    for name in ("index.html", "report.md", "verdicts.csv", "verdict_summary.csv",
+                 "seed_comparison.csv", "run_metadata.csv", "instantaneous_floors.csv"):
+        assert (report_dir / name).is_file(), name
+
+
+def test_diverging_engine_is_a_failed_row(report_dir):
+    s = pd.read_csv(report_dir / "verdict_summary.csv")
+    mj = s[s.engine == "mujoco"].iloc[0]
+    pb = s[s.engine == "pybullet"].iloc[0]
+    assert mj.verdict == "FAIL" and "diverged" in mj.note
+    assert pb.verdict == "pass"
+
+
+def test_html_images_decode(report_dir):
+    from PIL import Image
+    p = _Images()
+    p.feed((report_dir / "index.html").read_text())
+    assert p.tables >= 4 and len(p.srcs) >= 5
+    for src in p.srcs:
+        assert src.startswith("data:image/png;base64,")
+        img = Image.open(io.BytesIO(base64.b64decode(src.split(",", 1)[1])))
+        img.verify()
+        assert img.size[0] > 100
+
+
+def test_markdown_links_its_images(report_dir):
+    md = (report_dir / "report.md").read_text()
+    for line in md.splitlines():
+        if line.startswith("!["):
+            rel = line.split("(", 1)[1].rstrip(")")
+            assert (report_dir / rel).is_file(), rel
+
+
+def test_missing_engine_still_reports(tmp_path, monkeypatch):
+    """An engine that cannot be imported becomes a failed row, not a crash."""
+    import reports.report as rep
+
+    real = rep.engine_task
+
+    def fake(case, engine, overrides, revolutions, samples, mode="run"):
+        if engine == "pybullet":
+            import sim_models.pybullet_sim as pbs
+            monkeypatch.setattr(pbs, "_require_pybullet", lambda: (_ for _ in ()).throw(
+                pbs.SimModelError("PyBullet is not installed (test)")))
+        return real(case, engine, overrides, revolutions, samples, mode)
+
+    monkeypatch.setattr(rep, "engine_task", fake)
+    cfg = ReportConfig(out=tmp_path, quick=True, cases=("seed-four-bar",), samples=8,
+                       studies=False, engines=("pybullet",), workers=1)
+    from concurrent.futures import ThreadPoolExecutor
+    monkeypatch.setattr(rep, "make_executor", lambda cfg: ThreadPoolExecutor(1))
+    build_report(cfg)
+    s = pd.read_csv(tmp_path / "verdict_summary.csv")
+    assert s.iloc[0].verdict == "FAIL" and "not installed" in s.iloc[0].note
