@@ -41,12 +41,16 @@ def check_finite_differences(lk, values):
     x(t) = x0 + v t + a t^2 / 2, v(t) = v + a t."""
     d = lk.mech.driver
     v, a = d.velocity, d.acceleration
-    # step: the time the input takes to move 1e-5 rad (or 1e-5 of the mechanism's
-    # size): truncation ~ (1e-5)^2 x (harmonic content) stays below 1e-8 relative even
-    # for a crank/rod ratio of 1/1.2, rounding ~ eps / 1e-5 ~ 1e-11.
+    # step: 1e-5 of the input's fastest time scale, the time it takes to move 1 rad (or
+    # one mechanism size) at speed v or from rest at acceleration a: truncation
+    # ~ (1e-5)^2 x (harmonic content) stays below 1e-8 relative even for a crank/rod
+    # ratio of 1/1.2, rounding ~ eps / 1e-5 ~ 1e-11.
     from analytic.positions import size_of
     scale = 1.0 if lk.driver_is_revolute else size_of(lk.topo)
-    h = 1e-5 * scale / abs(v)
+    tau = scale / abs(v)
+    if a:
+        tau = min(tau, math.sqrt(scale / abs(a)))
+    h = 1e-5 * tau
     r0, p0, s0 = _state(lk, values, v, a)
     rp, pp, sp = _state(lk, values + v * h + a * h * h / 2, v + a * h, a)
     rm, pm, sm = _state(lk, values - v * h + a * h * h / 2, v - a * h, a)
