@@ -90,3 +90,34 @@ def test_malformed_file_error(capsys, tmp_path):
     p.write_text("name = \n")
     code, _, err = run(capsys, "solve", str(p))
     assert code == 2 and "bad.toml" in err and "malformed TOML" in err
+
+
+def test_compare_json_instantaneous(capsys):
+    """MuJoCo instantaneous mode on the S4 four-bar within 1e-4 of peak (issue 3)."""
+    code, out, _ = run(capsys, "compare", "seed-four-bar", "--engine", "mujoco", "--mode",
+                       "instantaneous", "--samples", "12", "--json")
+    d = json.loads(out)
+    assert code == 0 and d[0]["verdict"] == "pass"
+    q = {c["quantity"]: c for c in d[0]["comparisons"]}
+    assert q["rocker.alpha"]["normalised"] <= 1e-4 and q["B.force"]["passed"]
+
+
+def test_compare_table_and_failing_exit_code(capsys):
+    code, out, _ = run(capsys, "compare", "seed-slider-crank", "--engine", "mujoco",
+                       "--timestep", "5e-3", "--samples", "12")
+    # RK4 at 5 ms is too coarse for a 200 rad/s crank (6 steps a revolution): the
+    # verdict fails and the command says so with exit status 1
+    assert code == 1 and "FAIL" in out
+
+
+def test_compare_pybullet_has_no_instantaneous_mode(capsys):
+    code, _, err = run(capsys, "compare", "seed-four-bar", "--engine", "pybullet", "--mode",
+                       "instantaneous")
+    assert code == 2 and "MuJoCo only" in err
+
+
+def test_models_writes_every_case(capsys, tmp_path):
+    code, out, _ = run(capsys, "models", "--out", str(tmp_path))
+    assert code == 0
+    assert len(list(tmp_path.glob("*.xml"))) == len(case_names())
+    assert len(list(tmp_path.glob("*.urdf"))) == len(case_names())
