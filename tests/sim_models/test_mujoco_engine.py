@@ -73,10 +73,9 @@ def test_short_run_matches_analytic(case):
 @pytest.mark.parametrize("case", [c for c in case_names()
                                   if c not in ("seed-four-bar", "seed-slider-crank")])
 def test_every_case_runs(case):
-    """Coarser settings, one revolution: every built-in case runs and agrees."""
+    """The recommended settings, two revolutions: every built-in case runs and agrees."""
     mech = load_case(case)
-    s = MujocoSettings(timestep=1e-3, solref=direct_solref(3e-2))
-    r = run(mech, "mujoco", s, revolutions=1, samples=24)
+    r = run(mech, "mujoco", MujocoSettings(), revolutions=2, samples=24)
     assert r.ok, r.reason
     assert_run_within(r, mech, ENGINE_RELATIVE, case)
 
