@@ -119,7 +119,10 @@ def make_executor(cfg: ReportConfig) -> Executor:
             from analytic import LinkageError
             raise LinkageError("--dask needs the 'distributed' package "
                                "(pip install 'dask[distributed]')") from None
-        return Client(cfg.dask).get_executor()
+        client = Client(cfg.dask)
+        ex = client.get_executor()
+        ex.client_to_close = client
+        return ex
     return ProcessPoolExecutor(max_workers=cfg.workers or os.cpu_count() or 2)
 
 
@@ -486,8 +489,9 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
                 progress("engine runs", len(results), len(futs))
         studies = {k: _result_or_error(f) for k, f in study_futs.items()}
     finally:
-        if not cfg.dask:
-            ex.shutdown()
+        ex.shutdown()
+        if hasattr(ex, "client_to_close"):
+            ex.client_to_close.close()
     if progress:
         progress("figures", 0, 1)
 

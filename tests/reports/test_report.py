@@ -92,3 +92,17 @@ def test_missing_engine_still_reports(tmp_path, monkeypatch):
     build_report(cfg)
     s = pd.read_csv(tmp_path / "verdict_summary.csv")
     assert s.iloc[0].verdict == "FAIL" and "not installed" in s.iloc[0].note
+
+
+def test_dask_local_cluster(tmp_path):
+    """--dask SCHEDULER_ADDRESS: the same tasks on a Dask distributed cluster."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        cfg = ReportConfig(out=tmp_path, quick=True, cases=("seed-four-bar",), samples=8,
+                           studies=False, engines=("mujoco",), dask=cluster.scheduler_address)
+        build_report(cfg)
+    s = pd.read_csv(tmp_path / "verdict_summary.csv")
+    assert s.iloc[0].verdict == "pass"
+    meta = pd.read_csv(tmp_path / "run_metadata.csv").set_index("key")["value"]
+    assert meta["executor"].startswith("dask tcp://")

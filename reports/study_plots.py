@@ -1,0 +1,138 @@
+"""Figures of the speed/accuracy studies (:mod:`reports.studies`); PNG bytes out.
+
+Same conventions as :mod:`reports.plots` (Agg backend, one function per figure,
+arrays or DataFrames in, PNG bytes out), whose ``ENGINE_STYLE`` colours are reused.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .plots import ENGINE_STYLE, _png, plt
+
+_MARKERS = {"Euler": "s", "implicitfast": "^", "implicit": "v", "RK4": "o"}
+_TOLERANCES = (1e-2, 1e-3, 1e-4)
+
+
+def _frontier(t: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Indices of the Pareto-optimal points (no other point both faster and more
+    accurate), ordered by time."""
+    order = np.argsort(t, kind="stable")
+    keep, best = [], math.inf
+    for i in order:
+        if e[i] < best:
+            keep.append(i)
+            best = e[i]
+    return np.array(keep, int)
+
+
+def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
+                         floor: float = 1e-9) -> bytes:
+    """Speed against error of a settings grid (:func:`reports.studies.speed_error_grid`).
+
+    One colour per engine and settings family, MuJoCo integrators by marker; each
+    engine's Pareto frontier as a step line with its points labelled; failed runs
+    as crosses on the top edge; tolerance lines; the analytic solver's time per
+    revolution as a vertical line.
+    """
+    fig, ax = plt.subplots(figsize=(7.2, 4.6))
+    ok = grid[grid["ok"] & np.isfinite(grid["error"].astype(float))]
+    bad = grid[~(grid["ok"] & np.isfinite(grid["error"].astype(float)))]
+    groups = ok.groupby(["engine", "family"], sort=True)
+    cmap = plt.get_cmap("tab20")
+    for gi, ((engine, family), g) in enumerate(groups):
+        for integ, gg in g.groupby("integrator", sort=True):
+            ax.loglog(gg["seconds_per_rev"], np.maximum(gg["error"].astype(float), floor),
+                      _MARKERS.get(integ, "D" if engine == "pybullet" else "o"),
+                      color=cmap(gi % 20), ms=4.5, alpha=0.85,
+                      label=f"{engine} {integ} {family}".replace("  ", " ").strip())
+    for engine, g in ok.groupby("engine"):
+        t = g["seconds_per_rev"].to_numpy(float)
+        e = np.maximum(g["error"].to_numpy(float), floor)
+        idx = _frontier(t, e)
+        if len(idx):
+            st = ENGINE_STYLE.get(engine, {})
+            ax.step(t[idx], e[idx], where="post", color=st.get("color", "k"), lw=0.9,
+                    alpha=0.7)
+            for i in idx:
+                ax.annotate(g["label"].iloc[i], (t[i], e[i]), fontsize=5.5, alpha=0.8,
+                            xytext=(3, 2), textcoords="offset points")
+    ymax = max(1.0, float(np.nanmax(ok["error"])) if len(ok) else 1.0)
+    if len(bad):
+        tb = bad["seconds_per_rev"].to_numpy(float)
+        tb = np.where(np.isfinite(tb) & (tb > 0), tb, np.nan)
+        if np.isfinite(tb).any():
+            ax.loglog(tb, np.full(len(tb), 2 * ymax), "x", color="red", ms=5,
+                      label=f"failed / diverged ({len(bad)})")
+    for tol in _TOLERANCES:
+        ax.axhline(tol, color="grey", lw=0.6, ls=":")
+    if analytic_time:
+        ax.axvline(analytic_time, color="black", lw=0.9)
+        ax.annotate("analytic solver", (analytic_time, floor * 3), fontsize=7, rotation=90,
+                    va="bottom", ha="right")
+    ax.set_xlabel("wall-clock seconds per simulated revolution")
+    ax.set_ylabel("max normalised error (accelerations, forces)")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6, ncol=2, loc="lower left")
+    return _png(fig)
+
+
+def branch_plot(x_deg, analytic: dict[str, np.ndarray], engines: dict[str, np.ndarray],
+                singular: list[float], title: str, ylabel: str = "rocker angle (deg)") -> bytes:
+    """Output angle against the (unwrapped) input angle: the analytic assembly modes as
+    lines, each engine as markers, singular positions as vertical lines."""
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for (name, y), ls in zip(analytic.items(), ("-", "--", "-.", ":"), strict=False):
+        ax.plot(x_deg, y, ls, color="black", lw=1.0, label=f"analytic: {name}")
+    markers = ("o", "s", "^", "v", "D")
+    for k, (name, y) in enumerate(engines.items()):
+        eng = name.split()[0]
+        st = ENGINE_STYLE.get(eng, {})
+        ax.plot(x_deg, y, markers[k % len(markers)], ms=3, mfc="none",
+                color=st.get("color"), label=name)
+    for s in singular:
+        ax.axvline(s, color="red", lw=0.7, alpha=0.6)
+    ax.set_xlabel("input angle, unwrapped (deg)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6.5, ncol=2)
+    return _png(fig)
+
+
+def long_run_plot(frame, title: str) -> bytes:
+    """Long-run diagnostics per revolution (:func:`reports.studies.hard_cases`): four
+    panels (loop violation, crank-speed deviation and phase drift, energy and power
+    balance, acceleration and drive-effort error), one colour per engine."""
+    fig, axes = plt.subplots(2, 2, figsize=(9.0, 5.6), sharex=True)
+    panels = [
+        (axes[0, 0], [("loop_violation", "-")], "max loop gap / size"),
+        (axes[0, 1], [("speed_deviation", "-"), ("phase_drift", "--")],
+         "|crank rate error| / omega (-)\n|phase drift| rad (--)"),
+        (axes[1, 0], [("energy_balance", "-"), ("power_residual", "--")],
+         "|work - dKE| / work per rev (-)\n|power residual| / peak (--)"),
+        (axes[1, 1], [("alpha_error", "-"), ("effort_error", "--")],
+         "alpha error (-), effort error (--)\n/ peak"),
+    ]
+    for engine, g in frame.groupby("engine"):
+        st = ENGINE_STYLE.get(engine, {})
+        for ax, cols, ylabel in panels:
+            for col, ls in cols:
+                if col in g:
+                    y = np.maximum(np.abs(g[col].to_numpy(float)), 1e-18)
+                    ax.semilogy(g["revolution"], y, ls, color=st.get("color"), lw=0.9,
+                                label=f"{engine} {col}")
+            ax.set_ylabel(ylabel, fontsize=7)
+    for ax, _, _ in panels:
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=6)
+    for ax in axes[1]:
+        ax.set_xlabel("revolution")
+    fig.suptitle(title, fontsize=10)
+    return _png(fig)
+
+
+__all__ = ["branch_plot", "long_run_plot", "pareto_frontier_plot"]
