@@ -13,6 +13,10 @@ import numpy as np
 from .plots import ENGINE_STYLE, _png, plt
 
 _MARKERS = {"Euler": "s", "implicitfast": "^", "implicit": "v", "RK4": "o"}
+#: Colours of the settings families: blues for MuJoCo, oranges/reds for PyBullet.
+_FAMILY_COLOURS = {("mujoco", "stock"): "#9ecae1", ("mujoco", "hard"): "#08519c",
+                   ("mujoco", "deadbeat"): "#6a51a3"}
+_PYBULLET_COLOURS = ["#fdae6b", "#e6550d", "#a63603", "#d62728", "#7f2704"]
 _TOLERANCES = (1e-2, 1e-3, 1e-4)
 
 
@@ -38,15 +42,23 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
     revolution as a vertical line.
     """
     fig, ax = plt.subplots(figsize=(7.2, 4.6))
+    grid = grid.assign(integrator=grid["integrator"].fillna("").astype(str),
+                       family=grid["family"].fillna("").astype(str),
+                       ok=grid["ok"].astype(bool))
     ok = grid[grid["ok"] & np.isfinite(grid["error"].astype(float))]
     bad = grid[~(grid["ok"] & np.isfinite(grid["error"].astype(float)))]
     groups = ok.groupby(["engine", "family"], sort=True)
-    cmap = plt.get_cmap("tab20")
+    pb = sorted({f for e, f in zip(grid["engine"], grid["family"], strict=True)
+                 if e != "mujoco"})
+    cmap = plt.get_cmap("tab10")
     for gi, ((engine, family), g) in enumerate(groups):
+        colour = _FAMILY_COLOURS.get((engine, family))
+        if colour is None and family in pb:
+            colour = _PYBULLET_COLOURS[pb.index(family) % len(_PYBULLET_COLOURS)]
         for integ, gg in g.groupby("integrator", sort=True):
             ax.loglog(gg["seconds_per_rev"], np.maximum(gg["error"].astype(float), floor),
                       _MARKERS.get(integ, "D" if engine == "pybullet" else "o"),
-                      color=cmap(gi % 20), ms=4.5, alpha=0.85,
+                      color=colour or cmap(gi % 10), ms=4.5, alpha=0.9,
                       label=f"{engine} {integ} {family}".replace("  ", " ").strip())
     for engine, g in ok.groupby("engine"):
         t = g["seconds_per_rev"].to_numpy(float)
@@ -70,8 +82,9 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
         ax.axhline(tol, color="grey", lw=0.6, ls=":")
     if analytic_time:
         ax.axvline(analytic_time, color="black", lw=0.9)
-        ax.annotate("analytic solver", (analytic_time, floor * 3), fontsize=7, rotation=90,
-                    va="bottom", ha="right")
+        ax.annotate("analytic solver (3600 points)", (analytic_time, 0.97),
+                    xycoords=("data", "axes fraction"), fontsize=7, rotation=90, va="top",
+                    ha="right")
     ax.set_xlabel("wall-clock seconds per simulated revolution")
     ax.set_ylabel("max normalised error (accelerations, forces)")
     ax.set_title(title, fontsize=10)
