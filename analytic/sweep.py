@@ -71,18 +71,29 @@ def input_values(linkage: Linkage, points: int) -> tuple[np.ndarray, bool, list]
 
 
 def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool) -> list[float]:
-    """Input values where ``y`` changes sign, linearly interpolated."""
-    out = []
+    """Input values where ``y`` changes sign, linearly interpolated.
+
+    Samples within 1e-9 of the series' peak of zero are round-off, not sign: a stretch
+    of them (a parallelogram's translating coupler) yields at most one crossing, between
+    the significant samples on either side.
+    """
     n = len(y)
-    last = n if periodic else n - 1
-    for i in range(last):
-        k = (i + 1) % n
+    peak = float(np.max(np.abs(y))) if n else 0.0
+    sig = np.flatnonzero(np.abs(y) > 1e-9 * peak) if peak > 0 else np.array([], int)
+    out = []
+    if len(sig) < 2:
+        return out
+    pairs = list(zip(sig[:-1], sig[1:], strict=True))
+    if periodic:
+        pairs.append((sig[-1], sig[0]))
+    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
+    for i, k in pairs:
         y0, y1 = y[i], y[k]
-        if y0 == 0.0:
-            out.append(float(x[i]))
-        elif y0 * y1 < 0:
-            x1 = x[k] if k > i else x[k] + (x[-1] - x[0]) + (x[1] - x[0])
-            out.append(float(x[i] + (x1 - x[i]) * y0 / (y0 - y1)))
+        if y0 * y1 < 0:
+            x1 = x[k] if k > i else x[k] + period
+            v = x[i] + (x1 - x[i]) * y0 / (y0 - y1)
+            out.append(float(v - period if periodic and v > x[-1] + (x[1] - x[0]) / 2
+                             else v))
     return out
 
 

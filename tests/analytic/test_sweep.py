@@ -1,0 +1,73 @@
+"""Sweeps: cycle coverage, events against closed forms, Grashof classification."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from analytic import Linkage, load_case
+
+from .conftest_helpers import four_bar, slider_crank
+
+
+def test_slider_crank_dead_centres_closed_form():
+    """Offset slider-crank (r, L, e): the dead centres are where crank and rod are
+    collinear, theta = asin(e / (L + r)) and pi + asin(e / (L - r))."""
+    r, L, e = 0.05, 0.2, 0.02
+    lk = Linkage(slider_crank(r, L, offset=e, theta=0.1, omega=10.0, masses=None))
+    res = lk.sweep(3600)
+    ev = res.events[(res.events.kind == "limit") & (res.events["where"] == "slide")]
+    got = sorted(np.mod(ev["input"].to_numpy(), 360))
+    want = sorted(np.mod(np.degrees([math.asin(e / (L + r)), math.pi + math.asin(e / (L - r))]),
+                         360))
+    np.testing.assert_allclose(got, want, atol=1e-3)
+
+
+def test_four_bar_rocker_limits_closed_form():
+    """Crank-rocker limit positions: crank and coupler collinear, |O4 B| = rocker with
+    |O2 B| = coupler +- crank (law of cosines for theta2)."""
+    a, b, c, d = 0.1, 0.3, 0.25, 0.4
+    lk = Linkage(four_bar(d, a, b, c, masses=None))
+    res = lk.sweep(3600)
+    ev = res.events[(res.events.kind == "limit") & (res.events["where"] == "rocker")]
+    got = sorted(np.mod(ev["input"].to_numpy(), 360))
+    want = []
+    for r_ in (b + a, b - a):  # extended / folded: O2B = r_, along the crank (or opposite)
+        phi = math.acos((r_ ** 2 + d ** 2 - c ** 2) / (2 * r_ * d))  # angle of O2B
+        want.append(math.degrees(phi if r_ == b + a else phi + math.pi) % 360)
+    np.testing.assert_allclose(got, sorted(want), atol=1e-3)
+
+
+def test_grashof_classes():
+    assert Linkage(four_bar(0.4, 0.1, 0.3, 0.25)).sweep(36).grashof == "Grashof crank-rocker"
+    assert Linkage(four_bar(0.1, 0.3, 0.35, 0.3, masses=None)).sweep(36).grashof == \
+        "Grashof double-crank"
+    assert Linkage(four_bar(0.32, 0.25, 0.2, 0.15, theta=0.5, masses=None)).sweep(36).grashof \
+        == "non-Grashof triple-rocker"
+    para = Linkage(four_bar(0.4, 0.1, 0.4, 0.1, theta=0.5, masses=None))
+    assert para.sweep(36).grashof == "change point"
+
+
+def test_limited_range_sweep_reports_its_range():
+    lk = Linkage(four_bar(0.32, 0.25, 0.2, 0.15, theta=math.radians(30), masses=None))
+    res = lk.sweep(100)
+    assert not res.full_cycle and res.notes and "feasible range" in res.notes[0]
+    limit = math.degrees(math.acos((0.25 ** 2 + 0.32 ** 2 - 0.35 ** 2) / (2 * 0.25 * 0.32)))
+    assert res.frame["input"].max() == pytest.approx(limit, abs=1e-3)
+
+
+def test_change_point_is_flagged_singular_without_noise():
+    """The parallelogram passes flat configurations at 0 and 180 deg: singular events
+    there.  Holding its dyad sign, the analytic solution turns into the
+    anti-parallelogram past each, so the coupler alternates between translating
+    (omega = 0 to round-off) and turning: its round-off must not make limit events
+    (before the fix: about 100)."""
+    lk = Linkage(four_bar(0.4, 0.1, 0.4, 0.1, theta=math.radians(30), masses=None))
+    res = lk.sweep(360)
+    sing = np.mod(res.events[res.events.kind == "singular"]["input"].to_numpy(), 360)
+    assert len(sing) >= 2
+    assert np.all(np.minimum(np.abs(sing - 180), np.minimum(sing, 360 - sing)) < 1.5)
+    coupler = (res.events.kind == "limit") & (res.events["where"] == "coupler")
+    assert coupler.sum() <= 4
