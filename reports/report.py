@@ -311,14 +311,17 @@ def case_figures(case: str, results: list[dict]) -> dict[str, bytes]:
             series[jt.name] = s
         figs["forces"] = plots.cycle_plot(x, series, "|F| (N)",
                                           f"{case}: joint force magnitudes", xl)
-    # error against input, with the transmission angle (or Jacobian condition)
+    # error against input, with the transmission angle (or Jacobian condition); samples a
+    # limited-range run did not reach are NaN and stay gaps in the plot
     for e, r in runs.items():
+        if not np.isfinite(r.alpha).any():
+            continue
         _, kin_e, frc_e = analytic_at(r, mech)
         xe = engine_x(r)
         errs = {}
         pk = np.nanmax(np.abs(kin_e.alpha[:, moving])) or 1.0
-        errs["alpha (max body)"] = np.nanmax(np.abs(r.alpha[:, moving] - kin_e.alpha[:, moving]),
-                                             axis=1) / pk
+        errs["alpha (max body)"] = np.max(np.abs(r.alpha[:, moving] - kin_e.alpha[:, moving]),
+                                          axis=1) / pk
         if frc_e is not None and r.has_forces:
             pk = np.nanmax(np.abs(frc_e.effort)) or 1.0
             errs["drive effort"] = np.abs(r.drive_effort - frc_e.effort) / pk
@@ -372,8 +375,13 @@ class Document:
     def p(self, text: str):
         self.parts.append(("p", text))
 
-    def table(self, df: pd.DataFrame, name: str, caption: str = ""):
+    def table(self, df: pd.DataFrame, name: str, caption: str = "", max_rows: int = 80):
+        """Write the CSV; show the table inline unless it is longer than ``max_rows``
+        (a per-revolution log), in which case the document links the CSV only."""
         df.to_csv(self.out / f"{name}.csv", index=False)
+        if len(df) > max_rows:
+            self.parts.append(("p", f"{caption or name}: {len(df)} rows, in {name}.csv"))
+            return
         self.parts.append(("table", (df, name, caption)))
 
     def image(self, png: bytes, name: str, caption: str = ""):
@@ -547,6 +555,8 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
         for name, png in figs.items():
             doc.image(png, f"{case}-{name}", f"{case}: {name}")
 
+    if progress:
+        progress("figures", len(cases), len(cases))
     meta["wall_seconds"] = round(time.perf_counter() - t_start, 1)
     doc.h(1, "Run")
     doc.table(pd.DataFrame([{"key": k, "value": str(v)} for k, v in meta.items()]),
