@@ -52,7 +52,7 @@ def test_instantaneous_all_cases_with_masses(case):
 @pytest.mark.parametrize("case", ["seed-four-bar", "seed-slider-crank"])
 def test_short_run_matches_analytic(case):
     """Two revolutions with the default settings (RK4, dt <= 2.5e-4 s, near-hard loops
-    with a 10 ms critically damped correction, armature 1e6); the 2nd is sampled."""
+    with a 10 ms critically damped correction, armature 1e8); the 2nd is sampled."""
     mech = load_case(case)
     r = run(mech, "mujoco", MujocoSettings(), revolutions=2, samples=36)
     assert isinstance(r, EngineRun) and r.ok, r.reason
