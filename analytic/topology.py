@@ -125,6 +125,52 @@ def _rot(angle: float) -> np.ndarray:
     return np.array([[c, -s], [s, c]])
 
 
+def spanning_tree(mech: Mechanism, priority: list[int]):
+    """A spanning tree of the joint graph, taking joints in ``priority`` order
+    (Kruskal): the joints that would close a cycle are the chords.
+
+    Returns ``(tree, chords, parent, order)``: tree and chord joint indices, ``parent``
+    mapping each moving body to ``(parent body, tree joint)`` and ``order`` the bodies
+    breadth-first from ground (children in ``priority`` order).
+    """
+    names = [b.name for b in mech.bodies]
+    idx = {n: i for i, n in enumerate(names)}
+    g0 = idx[mech.ground]
+    joints = mech.joints
+    uf = list(range(len(names)))
+
+    def root(b):
+        while uf[b] != b:
+            uf[b] = uf[uf[b]]
+            b = uf[b]
+        return b
+
+    tree, chords = [], []
+    for k in priority:
+        a, b = idx[joints[k].body_a], idx[joints[k].body_b]
+        ra, rb = root(a), root(b)
+        if ra == rb:
+            chords.append(k)
+        else:
+            uf[ra] = rb
+            tree.append(k)
+    rank = {k: i for i, k in enumerate(priority)}
+    adj = {b: [] for b in range(len(names))}
+    for k in sorted(tree, key=rank.get):
+        a, b = idx[joints[k].body_a], idx[joints[k].body_b]
+        adj[a].append((b, k))
+        adj[b].append((a, k))
+    parent, order, queue = {}, [g0], [g0]
+    while queue:
+        p = queue.pop(0)
+        for c, k in adj[p]:
+            if c not in parent and c != g0:
+                parent[c] = (p, k)
+                order.append(c)
+                queue.append(c)
+    return tree, chords, parent, order
+
+
 def build_topology(mech: Mechanism) -> Topology:
     """Derive groups, unknowns, spanning tree, loops and the dyad plan."""
     names = [b.name for b in mech.bodies]
@@ -178,36 +224,8 @@ def build_topology(mech: Mechanism) -> Topology:
 
     # --- spanning tree (driver joint first) ------------------------------
     dj = jidx[mech.driver.joint]
-    uf = list(range(B))
-
-    def root(b):
-        while uf[b] != b:
-            uf[b] = uf[uf[b]]
-            b = uf[b]
-        return b
-
-    tree, chords = [], []
-    for k in [dj] + [k for k in range(len(joints)) if k != dj]:
-        a, b = idx[joints[k].body_a], idx[joints[k].body_b]
-        ra, rb = root(a), root(b)
-        if ra == rb:
-            chords.append(k)
-        else:
-            uf[ra] = rb
-            tree.append(k)
-    adj = {b: [] for b in range(B)}
-    for k in tree:
-        a, b = idx[joints[k].body_a], idx[joints[k].body_b]
-        adj[a].append((b, k))
-        adj[b].append((a, k))
-    parent, order, stack = {}, [g0], [g0]
-    while stack:
-        p = stack.pop(0)
-        for c, k in adj[p]:
-            if c not in parent and c != g0:
-                parent[c] = (p, k)
-                order.append(c)
-                stack.append(c)
+    tree, chords, parent, order = spanning_tree(
+        mech, [dj] + [k for k in range(len(joints)) if k != dj])
     tree = [parent[b][1] for b in order[1:]]  # tree joints in tree order
     tree_child = order[1:]
     subtree = np.zeros((len(tree), B), bool)

@@ -58,6 +58,7 @@ import numpy as np
 
 from analytic import Linkage, Mechanism, Prismatic, Revolute
 from analytic.errors import LinkageError
+from analytic.topology import spanning_tree
 
 #: Mass of a massless body relative to the largest body mass (see module docstring).
 MASS_FLOOR = 1e-6
@@ -144,14 +145,6 @@ class SimTree:
         dj = [j.name for j in joints].index(mech.driver.joint)
 
         # --- spanning tree: driver, prismatic joints, revolute joints ------------
-        uf = list(range(B))
-
-        def root(b):
-            while uf[b] != b:
-                uf[b] = uf[uf[b]]
-                b = uf[b]
-            return b
-
         rest = [k for k in range(len(joints)) if k != dj]
         rev = [k for k in rest if isinstance(joints[k], Revolute)]
         if chords == "moving":
@@ -160,33 +153,12 @@ class SimTree:
         elif chords != "analytic":
             raise ValueError(f"chords must be 'moving' or 'analytic', got {chords!r}")
         cand = [dj] + [k for k in rest if isinstance(joints[k], Prismatic)] + rev
-        tree, chords = [], []
-        for k in cand:
-            a, b = idx[joints[k].body_a], idx[joints[k].body_b]
-            ra, rb = root(a), root(b)
-            if ra == rb:
-                chords.append(k)
-            else:
-                uf[ra] = rb
-                tree.append(k)
+        _, chords, parent, order = spanning_tree(mech, cand)
         for k in chords:
             if isinstance(joints[k], Prismatic):
                 raise UnsupportedClosureError(
                     f"mechanism {mech.name!r}: prismatic joint {joints[k].name!r} would close a "
                     "loop; the engine builders close loops at revolute joints only", mech.source)
-        adj = {b: [] for b in range(B)}
-        for k in tree:
-            a, b = idx[joints[k].body_a], idx[joints[k].body_b]
-            adj[a].append((b, k))
-            adj[b].append((a, k))
-        parent, order, queue = {}, [g0], [g0]
-        while queue:
-            p = queue.pop(0)
-            for c, k in sorted(adj[p], key=lambda x: cand.index(x[1])):
-                if c not in parent and c != g0:
-                    parent[c] = (p, k)
-                    order.append(c)
-                    queue.append(c)
         self.order = order
         self.parent = parent
         self.tree_joint_indices = [parent[c][1] for c in order[1:]]
