@@ -242,6 +242,18 @@ class _Recorder:
         self.viol = np.full(N, nan)
         self.speed = np.full(N, nan)
         self.measured = np.full(N, nan)
+        self.times = plan.times
+
+    def fail(self, st: SimTree, t_stop: float, reason: str) -> tuple[str, float]:
+        """End a run at ``t_stop``: samples at or after it become NaN.  Returns the
+        reason naming the driver value there (the prescribed one: the engine's own may
+        be anywhere once it has diverged) and that value."""
+        fail = float(st.driver_path(t_stop)[0])
+        late = np.asarray(self.times) >= t_stop - 1e-15
+        for arr in (self.theta, self.omega, self.alpha, self.slider_acc, self.effort,
+                    self.force, self.normal, self.moment, self.viol, self.speed):
+            arr[late] = np.nan
+        return f"{reason} at driver {st.mech.driver.joint!r} = {_fmt_value(st, fail)}", fail
 
 
 def _finish(st: SimTree, plan: _Plan, rec: _Recorder, engine: str, settings: str,
@@ -515,16 +527,7 @@ def _run_mujoco_inner(st: SimTree, settings: MujocoSettings, plan: _Plan,
             vel = sample(t_stop)
             reason = check(t_stop, vel)
         if reason is not None:
-            # the prescribed driver value at the time of failure (the engine's own may
-            # be anywhere once it has diverged)
-            fail = float(st.driver_path(t)[0])
-            # invalidate samples at or after the failure
-            for i in range(len(plan.times)):
-                if plan.times[i] >= t_stop - 1e-15:
-                    for arr in (rec.theta, rec.omega, rec.alpha, rec.slider_acc, rec.effort,
-                                rec.force, rec.normal, rec.moment, rec.viol, rec.speed):
-                        arr[i] = np.nan
-            reason = f"{reason} at driver {st.mech.driver.joint!r} = {_fmt_value(st, fail)}"
+            reason, fail = rec.fail(st, t_stop, reason)
             break
     wall = time.perf_counter() - t0
     m.opt.timestep = settings.timestep

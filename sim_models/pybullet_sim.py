@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .engines import EngineRun, _finish, _fmt_value, _Plan, _Recorder, _step_schedule
+from .engines import EngineRun, _finish, _Plan, _Recorder, _step_schedule
 from .newton_euler import reconstruct
 from .tree import SimModelError, SimTree
 from .urdf import build_urdf
@@ -365,13 +365,7 @@ def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
                 reason = (f"driver rate off by {abs(rate - vel_now):.3g} "
                           f"(> {max_speed_error:g} relative)")
         if reason is not None:
-            fail = float(st.driver_path(t_stop)[0])
-            for i in range(len(plan.times)):
-                if plan.times[i] >= t_stop - 1e-15:
-                    for arr in (rec.theta, rec.omega, rec.alpha, rec.slider_acc, rec.effort,
-                                rec.force, rec.normal, rec.moment, rec.viol, rec.speed):
-                        arr[i] = np.nan
-            reason = f"{reason} at driver {st.mech.driver.joint!r} = {_fmt_value(st, fail)}"
+            reason, fail = rec.fail(st, t_stop, reason)
             break
     wall = time.perf_counter() - t0
     notes = ("tree-joint forces and drive effort reconstructed by Newton-Euler from PyBullet's "

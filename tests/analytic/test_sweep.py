@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from analytic import Linkage, load_case
+from analytic import Linkage
 
 from .conftest_helpers import four_bar, slider_crank
 
