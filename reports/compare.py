@@ -134,7 +134,8 @@ def compare_run(run_, mech=None, tolerance: float | None = None,
         # behind it are NaN by design (counted in ``skipped_samples``), not failures
         keep &= np.all(np.isfinite(run_.alpha), axis=1)
     x = run_.values
-    at = (np.mod(np.degrees(x), 360.0) if lk.driver_is_revolute else x)[keep]
+    # degrees in [0, 360): rounded first so that 360 - 1 ulp reads 0, not 5.7e-14
+    at = (np.mod(np.round(np.degrees(x), 9), 360.0) if lk.driver_is_revolute else x)[keep]
     out = []
     moving = [b for b, n in enumerate(run_.body_names) if n != mech.ground]
     alpha_peak = float(np.max(np.abs(kin.alpha[keep][:, moving]))) if moving else 0.0
