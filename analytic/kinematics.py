@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -65,12 +66,28 @@ class Kinematics:
     zO: np.ndarray      # origins, complex (N, B)
     zv: np.ndarray      # their velocities
     za: np.ndarray      # their accelerations
-    condition: np.ndarray
+    jacobian: np.ndarray        # (N, n, n) loop Jacobian in the unknowns
     determinant: np.ndarray
-    transmission: dict[str, np.ndarray] = field(default_factory=dict)
+    transmission_vectors: list = field(default_factory=list)
     joint_point: dict[int, np.ndarray] = field(default_factory=dict)
     # joint index -> world position (complex) of its point on body_b (the slider point
     # for a prismatic joint)
+
+    @cached_property
+    def condition(self) -> np.ndarray:
+        """2-norm condition number of the loop Jacobian in the unknowns (computed on
+        first use: it is a diagnostic, not on the solver's path)."""
+        A = self.jacobian
+        return condition(A) if A.shape[-1] else np.ones(self.n)
+
+    @cached_property
+    def transmission(self) -> dict[str, np.ndarray]:
+        """Transmission angle (deg, 0..180) at each dyad's inner joint."""
+        tr = {}
+        for name, e1, e2 in self.transmission_vectors:
+            c = (e1.conjugate() * e2).real / (np.abs(e1) * np.abs(e2))
+            tr[name] = np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+        return tr
 
     @property
     def origin(self) -> np.ndarray:
@@ -186,34 +203,40 @@ class Linkage:
         L2 = 2 * eqs.L
         J = eqs.jacobian(q, pre)
         A, _ = eqs.split(J)
-        if A.shape[-1]:
-            cond = condition(A)
-            n = A.shape[-1]
+        n = A.shape[-1]
+        if n:
             colnorm = np.ones(N)
-            for c in range(n):  # product of column norms, short axes unrolled
-                colnorm *= np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
+            cmax, cmin = np.zeros(N), np.full(N, np.inf)
+            for c in range(n):  # column norms, short axes unrolled
+                cn = np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
+                colnorm *= cn
+                cmax, cmin = np.maximum(cmax, cn), np.minimum(cmin, cn)
             det = det_small(A) / np.where(colnorm > 0, colnorm, 1.0)
+            # cond(A) <= n^(n/2) / |det of the column-normalised A| * (max/min column
+            # norm): only where that bound reaches the threshold is the exact
+            # condition number worth computing
+            with np.errstate(divide="ignore", invalid="ignore"):
+                bound = n ** (n / 2) / np.abs(det) * (cmax / cmin)
+            suspect = np.flatnonzero(~(bound < SINGULAR_CONDITION))
+            cond_s = condition(A[suspect]) if suspect.size else np.zeros(0)
+            bad = suspect[~(cond_s < SINGULAR_CONDITION)]
         else:
-            cond, det = np.ones(N), np.ones(N)
-        bad = np.flatnonzero(~(cond < SINGULAR_CONDITION))
+            det, bad = np.ones(N), np.zeros(0, int)
         if bad.size and on_singular == "raise":
             v = float(values[bad[0]])
             vs = f"{math.degrees(v):.6g} deg" if self.driver_is_revolute else f"{v:.6g} m"
+            c0 = float(cond_s[np.flatnonzero(suspect == bad[0])[0]])
             raise SingularConfigurationError(
                 f"mechanism {self.mech.name!r}: singular configuration (dead centre or change "
                 f"point) at driver {d.joint!r} = {vs}: loop Jacobian condition number "
-                f"{cond[bad[0]]:.3g}; velocities are not determined by the input there", v)
+                f"{c0:.3g}; velocities are not determined by the input there", v)
         with np.errstate(all="ignore"):
             qd = eqs.solve_rates(J, np.zeros((N, L2)), vel)
             qdd = eqs.solve_rates(J, -eqs.gamma(q, qd, pre), acc)
         omega, alpha = self._group_rates(qd), self._group_rates(qdd)
         zv, za, jp = self._propagate(qd, qdd, E, O, omega, alpha)
-        tr = {}
-        for name, e1, e2 in trans:
-            c = (e1.conjugate() * e2).real / (np.abs(e1) * np.abs(e2))
-            tr[name] = np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
         return Kinematics(self, values, vel, acc, q, qd, qdd, theta, omega, alpha,
-                          E, O, zv, za, cond, det, tr, jp)
+                          E, O, zv, za, A, det, trans, jp)
 
     def _group_rates(self, x: np.ndarray) -> np.ndarray:
         g = self.topo.group_of
