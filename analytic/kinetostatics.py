@@ -162,13 +162,16 @@ def solve_forces(linkage, kin) -> Forces:
     for t, j in enumerate(topo.tree):
         jt = joints[j]
         c = topo.tree_child[t]
+        acting = np.flatnonzero(eps[t])  # chord unknowns acting across this subtree
         if isinstance(jt, Revolute):
             P = kin.joint_point[j]
-            A[:, t, :] = eps[t] * (Mc - cross(P[:, None], Fc))
+            for k in acting:
+                A[:, t, k] = eps[t, k] * (Mc[:, k] - cross(P, Fc[:, k]))
             rhs[:, t] = Smo[:, t] - cross(P, Sf[:, t])
         else:
             u = kin.E[:, names.index(jt.guide)] * cmath.exp(1j * jt.direction)
-            A[:, t, :] = eps[t] * (u.real[:, None] * Fc.real + u.imag[:, None] * Fc.imag)
+            for k in acting:
+                A[:, t, k] = eps[t, k] * (u.real * Fc[:, k].real + u.imag * Fc[:, k].imag)
             rhs[:, t] = u.real * Sf[:, t].real + u.imag * Sf[:, t].imag
         if j == topo.driver_joint:
             td, sd = t, (1.0 if names[c] == jt.body_b else -1.0)
