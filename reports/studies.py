@@ -570,6 +570,15 @@ def _loop_args(mech: Mechanism, dt_max: float, per_rev: int):
     return T, n, interval / n
 
 
+def _long_run_buffers(revolutions: int, per_rev: int, T: float, nt: int):
+    """Sample count, sample times and NaN-filled q, q', q'' (per tree joint) and drive
+    effort buffers of a long run sampled ``per_rev`` times a revolution of period T."""
+    N = revolutions * per_rev + 1
+    nan = np.nan
+    return (N, np.arange(N) * T / per_rev, np.full((N, nt), nan), np.full((N, nt), nan),
+            np.full((N, nt), nan), np.full(N, nan))
+
+
 def trace_mujoco(mech: Mechanism, settings_dict: dict, revolutions: int,
                  per_rev: int = LONG_RUN_SAMPLES, max_violation: float = 1e-3,
                  max_speed_error: float = 1e-2) -> Trace:
@@ -591,12 +600,7 @@ def trace_mujoco(mech: Mechanism, settings_dict: dict, revolutions: int,
         d.qpos[qadr] = 0.0
         d.qvel[dadr] = qd0[0]
         A, sig = float(s.armature), st.driver_sigma
-        N = revolutions * per_rev + 1
-        nt = len(st.joints)
-        t = np.arange(N) * T / per_rev
-        q, qd, qdd = np.full((N, nt), np.nan), np.full((N, nt), np.nan), \
-            np.full((N, nt), np.nan)
-        eff = np.full(N, np.nan)
+        N, t, q, qd, qdd, eff = _long_run_buffers(revolutions, per_rev, T, len(st.joints))
         w = mech.driver.velocity
         vmax = max_violation * st.size
         reason, steps = None, 0
@@ -663,12 +667,7 @@ def trace_pybullet(mech: Mechanism, settings_dict: dict, revolutions: int,
         step = p.stepSimulation
         for _ in range(n_pre):
             step(physicsClientId=cid)
-        N = revolutions * per_rev + 1
-        nt = len(st.joints)
-        t = np.arange(N) * T / per_rev
-        q, qd, qdd = np.full((N, nt), np.nan), np.full((N, nt), np.nan), \
-            np.full((N, nt), np.nan)
-        eff = np.full(N, np.nan)
+        N, t, q, qd, qdd, eff = _long_run_buffers(revolutions, per_rev, T, len(st.joints))
         sig = st.driver_sigma
         vmax = max_violation * st.size
         reason, steps = None, n_pre
