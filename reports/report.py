@@ -375,14 +375,17 @@ class Document:
     def p(self, text: str):
         self.parts.append(("p", text))
 
-    def table(self, df: pd.DataFrame, name: str, caption: str = "", max_rows: int = 80):
-        """Write the CSV; show the table inline unless it is longer than ``max_rows``
-        (a per-revolution log), in which case the document links the CSV only."""
+    def table(self, df: pd.DataFrame, name: str, caption: str = "", max_rows: int = 80,
+              columns: list[str] | None = None, digits: int = 4):
+        """Write the whole table as CSV; show it inline (only ``columns``, numbers to
+        ``digits`` significant figures) unless it is longer than ``max_rows`` (a
+        per-revolution log), in which case the document links the CSV only."""
         df.to_csv(self.out / f"{name}.csv", index=False)
         if len(df) > max_rows:
             self.parts.append(("p", f"{caption or name}: {len(df)} rows, in {name}.csv"))
             return
-        self.parts.append(("table", (df, name, caption)))
+        shown = df[[c for c in columns if c in df.columns]] if columns else df
+        self.parts.append(("table", (shown, name, caption, digits)))
 
     def image(self, png: bytes, name: str, caption: str = ""):
         (self.out / "img").mkdir(exist_ok=True)
@@ -390,11 +393,11 @@ class Document:
         self.parts.append(("img", (png, name, caption)))
 
     @staticmethod
-    def _fmt(v):
+    def _fmt(v, digits: int = 4):
         if isinstance(v, float | np.floating):
             if not np.isfinite(v):
                 return "inf" if v == np.inf else ("" if np.isnan(v) else str(v))
-            return f"{v:.4g}"
+            return f"{v:.{digits}g}"
         return str(v)
 
     def html(self, title: str) -> str:
@@ -412,13 +415,13 @@ class Document:
             elif kind == "p":
                 out.append(f"<p>{html.escape(data)}</p>")
             elif kind == "table":
-                df, name, cap = data
+                df, name, cap, digits = data
                 head = "".join(f"<th>{html.escape(str(c))}</th>" for c in df.columns)
                 body = []
                 for _, row in df.iterrows():
                     cells = []
                     for v in row:
-                        s = self._fmt(v)
+                        s = self._fmt(v, digits)
                         cells.append(f"<td class='{html.escape(s)}'>{html.escape(s)}</td>")
                     body.append("<tr>" + "".join(cells) + "</tr>")
                 cap_html = f"<caption>{html.escape(cap)}</caption>" if cap else ""
@@ -442,14 +445,14 @@ class Document:
             elif kind == "p":
                 out += [data, ""]
             elif kind == "table":
-                df, name, cap = data
+                df, name, cap, digits = data
                 if cap:
                     out += [f"*{cap}*", ""]
                 out.append("| " + " | ".join(str(c) for c in df.columns) + " |")
                 out.append("|" + "---|" * len(df.columns))
                 for _, row in df.iterrows():
-                    out.append("| " + " | ".join(self._fmt(v).replace("|", "/") for v in row)
-                               + " |")
+                    out.append("| " + " | ".join(self._fmt(v, digits).replace("|", "/")
+                                                 for v in row) + " |")
                 out += ["", f"([{name}.csv]({name}.csv))", ""]
             elif kind == "img":
                 _, name, cap = data
@@ -537,7 +540,7 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
     doc.h(1, "Seed comparison (course notes)")
     doc.p("The notes' numbers, SolidWorks Motion's (where the notes give them), the exact "
           "analytic value and each engine's, at the notes' crank angle.")
-    doc.table(seeds, "seed_comparison")
+    doc.table(seeds, "seed_comparison", digits=7)
 
     if cfg.studies:
         _render_studies(doc, studies, cases)
@@ -624,9 +627,15 @@ def _render_studies(doc: Document, studies: dict, cases) -> None:
             continue
         g = res["grid"]
         doc.table(g, f"speed_error_{case}", "each engine setting: wall-clock time per "
-                  "simulated revolution against the largest normalised error")
+                  "simulated revolution against the largest normalised error (all columns, "
+                  "with the full settings, in the CSV)",
+                  columns=["engine", "label", "timestep", "steps_per_rev", "steps_per_second",
+                           "seconds_per_rev", "accel_error", "force_error", "error",
+                           "worst_quantity", "ok", "reason"])
         doc.table(res["cheapest"], f"cheapest_{case}",
-                  "cheapest setting meeting each tolerance")
+                  "cheapest setting meeting each tolerance",
+                  columns=["engine", "tolerance", "label", "steps_per_rev", "seconds_per_rev",
+                           "error", "accel_error", "force_error"])
         rows = g.to_dict("records")
         doc.image(plots.pareto_plot(rows, f"{case}: speed against error",
                                     res["analytic_s_per_rev"]), f"pareto-{case}",

@@ -106,3 +106,24 @@ def test_dask_local_cluster(tmp_path):
     assert s.iloc[0].verdict == "pass"
     meta = pd.read_csv(tmp_path / "run_metadata.csv").set_index("key")["value"]
     assert meta["executor"].startswith("dask tcp://")
+
+
+def test_html_renders_in_headless_chromium(report_dir, tmp_path):
+    """Where Chromium is installed (Debian's package), the page renders to a screenshot."""
+    import shutil
+    import subprocess
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    shot = tmp_path / "page.png"
+    subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                    "--no-first-run", "--disable-background-networking",
+                    "--disable-component-update", "--disable-sync",
+                    f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,1600",
+                    f"--screenshot={shot}", (report_dir / "index.html").as_uri()],
+                   check=True, timeout=60, capture_output=True)
+    from PIL import Image
+    img = Image.open(shot)
+    assert img.size == (1200, 1600)
+    # not a blank page: the tables and plots put many distinct colours on it
+    assert len(img.convert("RGB").getcolors(maxcolors=1 << 20) or []) > 50
