@@ -1347,36 +1347,6 @@ def scene_hook(variant: str, mech: Mechanism):
     raise ValueError(f"unknown scene variant {variant!r}")
 
 
-@contextlib.contextmanager
-def _patched_builder(hook):
-    """Run :func:`sim_models.engines.run` on a post-processed ``MjSpec``.
-
-    ``run`` builds its model through the module-level name ``build_mjcf`` of
-    :mod:`sim_models.engines`; it is wrapped for the duration of the block.  (A
-    ``spec_hook`` option on ``run``/``MujocoSettings`` would make this unnecessary.)"""
-    import sim_models.engines as eng
-    if hook is None:
-        yield
-        return
-    if not hasattr(eng, "build_mjcf"):
-        raise RuntimeError("sim_models.engines no longer builds through build_mjcf; "
-                           "the scene-economy hook cannot be applied")
-    orig = eng.build_mjcf
-
-    def build(mech, settings=None, tree=None):
-        from sim_models.tree import SimTree
-        st = tree or SimTree(mech)
-        spec = orig(mech, settings, tree=st)
-        hook(spec, st)
-        return spec
-
-    eng.build_mjcf = build
-    try:
-        yield
-    finally:
-        eng.build_mjcf = orig
-
-
 SCENE_VARIANTS = {
     "minimal": "the project's scene: contacts off, no gravity, one capsule per link",
     "contacts": "contacts on, link capsules collidable in stacked z layers, pin pairs "
@@ -1404,8 +1374,7 @@ def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: 
             mech = replace(mech0, gravity=(0.0, -9.81))
         s = _mujoco_settings(settings_dict)
         hook = scene_hook(variant, mech)
-        with _patched_builder(hook):
-            r = run(mech, "mujoco", s, revolutions=2, samples=36)
+        r = run(mech, "mujoco", s, revolutions=2, samples=36, spec_hook=hook)
         e = run_errors(r, mech)
         notes = [SCENE_VARIANTS[variant]]
         if mech is not mech0 and r.ok:

@@ -295,12 +295,14 @@ def _fmt_value(st: SimTree, v: float) -> str:
 class _MujocoSim:
     """A compiled MuJoCo model plus index tables and the analytic-convention readout."""
 
-    def __init__(self, st: SimTree, settings: MujocoSettings):
+    def __init__(self, st: SimTree, settings: MujocoSettings, spec_hook=None):
         mujoco = require_mujoco()
         self.mj = mujoco
         self.st = st
         self.settings = settings
         spec = build_mjcf(st.mech, settings, tree=st)
+        if spec_hook is not None:
+            spec_hook(spec, st)
         self.model, self.compile_warnings = compile_spec(spec, settings)
         m = self.model
         self.data = mujoco.MjData(m)
@@ -445,13 +447,13 @@ HUGE = 1e10
 
 
 def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violation: float,
-                max_speed_error: float) -> EngineRun:
+                max_speed_error: float, spec_hook=None) -> EngineRun:
     mujoco = require_mujoco()
     msgs: list[str] = []
     old = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(msgs.append)  # no stderr noise, no MUJOCO_LOG.TXT
     try:
-        r = _run_mujoco_inner(st, settings, plan, max_violation, max_speed_error)
+        r = _run_mujoco_inner(st, settings, plan, max_violation, max_speed_error, spec_hook)
     finally:
         mujoco.set_mju_user_warning(old)
     if msgs:
@@ -461,8 +463,9 @@ def _run_mujoco(st: SimTree, settings: MujocoSettings, plan: _Plan, max_violatio
 
 
 def _run_mujoco_inner(st: SimTree, settings: MujocoSettings, plan: _Plan,
-                      max_violation: float, max_speed_error: float) -> EngineRun:
-    sim = _MujocoSim(st, settings)
+                      max_violation: float, max_speed_error: float,
+                      spec_hook=None) -> EngineRun:
+    sim = _MujocoSim(st, settings, spec_hook)
     mj, m, d = sim.mj, sim.model, sim.data
     rec = _Recorder(st, plan)
     kin0 = st.kin_ref
@@ -538,7 +541,7 @@ def _run_mujoco_inner(st: SimTree, settings: MujocoSettings, plan: _Plan,
 # ----------------------------------------------------------------------------- front door
 def run(mech: Mechanism, engine: str, settings=None, revolutions: int = 2, samples: int = 36,
         max_violation: float = 1e-3, max_speed_error: float = 1e-2,
-        chords: str = "moving") -> EngineRun:
+        chords: str = "moving", spec_hook=None) -> EngineRun:
     """Simulate ``mech`` and sample it at the analytic sweep's input values.
 
     Parameters
@@ -561,13 +564,18 @@ def run(mech: Mechanism, engine: str, settings=None, revolutions: int = 2, sampl
         (default; revolute joints between two moving bodies where possible,
         PyBullet's loop forces then converge with dt^2) or ``"analytic"`` (the
         analytic tree's order, prismatic joints still kept in the tree).
+    spec_hook
+        MuJoCo only: ``hook(spec, sim_tree)`` edits the ``MjSpec`` after it is built
+        and before it is compiled (e.g. to add contacts or geometry for a study).
     """
     st = SimTree(mech, chords=chords)
+    if spec_hook is not None and engine.lower() != "mujoco":
+        raise SimModelError("spec_hook edits an MjSpec: it applies to engine 'mujoco' only")
     plan = _plan(st, revolutions, samples)
     eng = engine.lower()
     if eng == "mujoco":
         return _run_mujoco(st, settings or MujocoSettings(), plan, max_violation,
-                           max_speed_error)
+                           max_speed_error, spec_hook)
     if eng == "pybullet":
         from .pybullet_sim import PybulletSettings, run_pybullet
         return run_pybullet(st, settings or PybulletSettings(), plan, max_violation,
