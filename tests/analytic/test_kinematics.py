@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from analytic import Linkage, LinkageError, SingularConfigurationError, case_names, load_case
@@ -186,12 +186,14 @@ lengths = st.floats(0.05, 1.0)
 
 @st.composite
 def grashof_crank_rockers(draw):
-    """Crank the shortest link and s + l < p + q with a margin (away from change points)."""
+    """Crank the shortest link s, the longest l and the others p, q with
+    s + l <= 0.97 (p + q): Grashof with a margin (away from change points)."""
     crank = draw(st.floats(0.02, 0.2))
-    others = [draw(st.floats(crank * 1.5, 1.0)) for _ in range(3)]
-    l_, p, q = sorted(others)[2], sorted(others)[0], sorted(others)[1]
-    if crank + l_ > 0.97 * (p + q):
-        l_ = 0.97 * (p + q) - crank
+    p = draw(st.floats(crank * 1.5, 1.0))
+    q = draw(st.floats(crank * 1.5, 1.0))
+    l_max = 0.97 * (p + q) - crank
+    assume(l_max >= max(p, q))
+    l_ = draw(st.floats(max(p, q), l_max))
     ground, coupler, rocker = draw(st.permutations([l_, p, q]))
     omega = draw(st.floats(-50, 50).filter(lambda w: abs(w) > 0.1))
     return ground, crank, coupler, rocker, draw(st.booleans()), omega
