@@ -49,8 +49,11 @@ class LoopEquations:
             if t.slider[k] >= 0:
                 self.Es[k, t.loop[k], self.ng + t.slider[k]] = t.sign[k]
         self.Eq = self.Eq.reshape(T, -1)
-        self.ebeta = np.exp(1j * self.beta)
-        self.unoff = np.exp(-1j * topo.offset[topo.group_leader]) if self.ng else np.ones(0)
+        # term direction = E of one body of its group (the ground for the ground group)
+        # times exp(i (beta - that body's offset from its group angle))
+        lead = topo.group_leader
+        self.term_body = np.array([lead[g] if g >= 0 else topo.ground for g in t.group], int)
+        self.term_rot = np.exp(1j * (self.beta - topo.offset[self.term_body]))
         self.Es = self.Es.reshape(T, -1)
 
     def terms(self, q: np.ndarray):
@@ -64,14 +67,13 @@ class LoopEquations:
         return np.exp(1j * phi), m
 
     def terms_from_poses(self, q: np.ndarray, E: np.ndarray):
-        """As :meth:`terms`, from the bodies' ``exp(i theta)`` (no trigonometry)."""
-        N = q.shape[0]
-        Eg = np.ones((N, self.ng + 1), complex)
-        topo = self.topo
-        for g, b in enumerate(topo.group_leader):
-            Eg[:, g] = E[:, b] * self.unoff[g]
-        s = np.concatenate([q[:, self.ng:], np.zeros((N, 1))], axis=1)
-        return Eg[:, self.gi] * self.ebeta, self.r + self.sign * s[:, self.si]
+        """As :meth:`terms`, from the bodies' ``exp(i theta)``: each term's direction is
+        one body's ``E`` times a constant (the ground's ``E`` is 1), no trigonometry."""
+        ez = E[:, self.term_body] * self.term_rot
+        if not self.ns:
+            return ez, self.r
+        return ez, self.r + self.sign * np.concatenate(
+            [q[:, self.ng:], np.zeros((q.shape[0], 1))], axis=1)[:, self.si]
 
     def _rows(self, z: np.ndarray) -> np.ndarray:
         """Complex per-loop sums ``(N, L, ...)`` -> real rows ``(N, 2L, ...)`` (x, y)."""
@@ -98,6 +100,8 @@ class LoopEquations:
         N = q.shape[0]
         z = np.zeros((N, 1))
         w = np.concatenate([qd[:, :self.ng], z], axis=1)[:, self.gi]
+        if not self.ns:
+            return self._rows(cmatmul((-m * w * w) * ez, self.Lmat))
         md = self.sign * np.concatenate([qd[:, self.ng:], z], axis=1)[:, self.si]
         return self._rows(cmatmul((2j * md * w - m * w * w) * ez, self.Lmat))
 
