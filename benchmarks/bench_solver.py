@@ -64,18 +64,27 @@ def main(argv=None):
     x = np.linspace(0, 2 * np.pi, n, endpoint=False)
     out = {"points": n, "machine": platform.processor() or platform.machine(),
            "python": platform.python_version(), "numpy": np.__version__}
-    t_hand = best(lambda: hand_four_bar(x), args.repeat)
-    out["hand_closed_form_four_bar_kinematics"] = n / t_hand
-    for case in ("seed-four-bar", "six-bar"):
-        lk = Linkage(load_case(case))
-        t_kin = best(lambda lk=lk: lk.kinematics(x), args.repeat)
-        t_all = best(lambda lk=lk: lk.forces(lk.kinematics(x)), args.repeat)
-        out[f"{case}_kinematics"] = n / t_kin
-        out[f"{case}_kinematics_and_forces"] = n / t_all
+    from analytic.perf import tune_allocator
+
+    def measure(suffix):
+        t_hand = best(lambda: hand_four_bar(x), args.repeat)
+        out[f"hand_closed_form_four_bar_kinematics{suffix}"] = n / t_hand
+        for case in ("seed-four-bar", "six-bar"):
+            lk = Linkage(load_case(case))
+            t_kin = best(lambda lk=lk: lk.kinematics(x), args.repeat)
+            t_all = best(lambda lk=lk: lk.forces(lk.kinematics(x)), args.repeat)
+            out[f"{case}_kinematics{suffix}"] = n / t_kin
+            out[f"{case}_kinematics_and_forces{suffix}"] = n / t_all
+
+    # the same process, first with glibc's default allocator, then tuned
+    # (analytic.perf.tune_allocator, as the xval command runs)
+    measure("_default_allocator")
+    out["allocator_tuned"] = tune_allocator()
+    measure("")
     print(f"{n}-point sweeps, best of {args.repeat} (configurations per second):")
     for k, v in out.items():
         if isinstance(v, float):
-            print(f"  {k:45s} {v / 1e6:8.3f} M/s")
+            print(f"  {k:63s} {v / 1e6:8.3f} M/s")
     ratio = (out["seed-four-bar_kinematics_and_forces"]
              / out["hand_closed_form_four_bar_kinematics"])
     out["ratio_four_bar_with_forces_to_hand_kinematics"] = ratio

@@ -224,6 +224,8 @@ def _register_more(sub) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from analytic.perf import tune_allocator
+    tune_allocator()  # large temporaries recycled, not re-mapped (see analytic/perf.py)
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
