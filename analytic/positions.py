@@ -28,14 +28,6 @@ from .tolerances import LOOP_RESIDUAL, NEWTON_MAX_ITER, TOGGLE_SNAP
 from .topology import Topology
 
 
-def rotate(theta: np.ndarray, c) -> np.ndarray:
-    """``R(theta) c`` for a batch of angles ``(N,)`` and one or N vectors -> ``(N, 2)``."""
-    c = np.asarray(c, float)
-    ct, st = np.cos(theta), np.sin(theta)
-    cx, cy = c[..., 0], c[..., 1]
-    return np.stack([ct * cx - st * cy, st * cx + ct * cy], axis=-1)
-
-
 def as_xy(z: np.ndarray) -> np.ndarray:
     """View a complex array ``(...)`` as real ``(..., 2)`` (x, y), without copying."""
     z = np.ascontiguousarray(z)
