@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import io
+import os
 from html.parser import HTMLParser
 
 import pandas as pd
@@ -114,6 +115,8 @@ def test_html_renders_in_headless_chromium(report_dir, tmp_path):
     import subprocess
     exe = shutil.which("chromium") or shutil.which("chromium-browser")
     if exe is None:
+        if os.environ.get("CI"):  # .ci/run installs it: under CI a missing browser is a failure
+            pytest.fail("CI=true but no Chromium: .ci/run should have installed it")
         pytest.skip("no Chromium on this machine (apt-get install chromium)")
     shot = tmp_path / "page.png"
     subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
