@@ -28,6 +28,10 @@ class DescriptionError(LinkageError):
         super().__init__(f"{where}: {message}" if where else message)
 
 
+class OutputError(LinkageError):
+    """An output file or folder the user named cannot be written."""
+
+
 class MissingMassError(DescriptionError):
     """Forces were requested but a moving body has no mass properties."""
 

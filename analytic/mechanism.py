@@ -43,6 +43,41 @@ from .errors import DescriptionError
 
 Vec2 = tuple[float, float]
 
+# --- accepted ranges (SI) ------------------------------------------------------
+# Every number of a description, and every input value given on the command line,
+# must lie in these ranges.  They are far beyond any physical linkage, and narrow
+# enough that no product the solver forms (m L^2 omega^3, amplified by a Jacobian
+# condition up to 1e10) comes near the overflow of a double (1e308).
+
+#: Largest |coordinate| (points, centres of mass, hints, a slider's value), m.
+#: The largest planar linkages (draglines, bridge spans) are ~1e2 m.
+MAX_LENGTH = 1e4
+#: Smallest mechanism size (the longest distance between two points of one
+#: body), m: a picometre, below atomic scale.  Squared lengths (1e-24 m^2) stay
+#: far from the underflow of a double.
+MIN_SIZE = 1e-12
+#: A link shorter than this fraction of the mechanism's size is a zero-length
+#: link: 1000 times the loop residual accepted from the solver
+#: (:data:`analytic.tolerances.LOOP_RESIDUAL`, 1e-12 of the size), so the
+#: solved length of any accepted link is good to 1e-3 of itself.
+ZERO_LENGTH = 1e-9
+#: Largest mass, kg (a million tonnes).
+MAX_MASS = 1e9
+#: Largest moment of inertia, kg m^2 (10 x MAX_MASS x MAX_LENGTH^2 / 12 and more).
+MAX_INERTIA = 1e18
+#: Largest |angle| (driver value, slider line direction and angle, angle hints),
+#: rad: 1000 turns.  Beyond it the spacing of doubles exceeds 1e-12 rad.
+MAX_ANGLE = 2000 * math.pi
+#: Largest |input velocity|, rad/s or m/s: ten million rpm, 30 times the fastest
+#: rotors built.
+MAX_RATE = 1e6
+#: Largest |input acceleration|, rad/s^2 or m/s^2.
+MAX_ACCEL = 1e12
+#: Largest |load force| (N) and |load torque| (N m).
+MAX_LOAD = 1e12
+#: Largest |gravity| component, m/s^2 (1000 g).
+MAX_GRAVITY = 1e4
+
 
 @dataclass(frozen=True)
 class Body:
@@ -260,6 +295,36 @@ def _finite(x, what: str, where: str) -> None:
             raise DescriptionError(f"{what} must be a finite number, got {x!r}", where)
 
 
+def check_range(x, limit: float, what: str, where: str | None, unit: str = "",
+                scale: float = 1.0, lo: float | None = None) -> None:
+    """Raise :class:`DescriptionError` unless every value of ``x`` is finite and in range.
+
+    ``limit`` (and ``lo``) are SI; ``scale`` is the size of one displayed ``unit`` in
+    SI, so the message states the value and the accepted range in the user's units.
+    Without ``lo`` the range is ``|x| <= limit``; with it, ``lo <= x <= limit``.
+    """
+    _finite(x, what, where)
+    u = f" {unit}" if unit else ""
+    for v in (x if isinstance(x, tuple | list) else (x,)):
+        if (abs(v) <= limit) if lo is None else (lo <= v <= limit):
+            continue
+        rng = (f"|{what}| <= {limit / scale:g}{u}" if lo is None
+               else f"{lo / scale:g} to {limit / scale:g}{u}")
+        raise DescriptionError(f"{what} = {v / scale:g}{u} is out of range: the accepted "
+                               f"range is {rng}", where)
+
+
+def mechanism_size(bodies) -> float:
+    """The longest distance between two points of one body, m (0 when none)."""
+    s = 0.0
+    for b in bodies:
+        pts = list(b.points.values())
+        for i, p in enumerate(pts):
+            for q in pts[i + 1:]:
+                s = max(s, math.hypot(p[0] - q[0], p[1] - q[1]))
+    return s
+
+
 def validate(mech: Mechanism) -> None:
     """Check a description for consistency; raise :class:`DescriptionError`.
 
@@ -284,13 +349,14 @@ def validate(mech: Mechanism) -> None:
             if len(p) != 2:
                 raise DescriptionError(f"point {pname!r} must have 2 coordinates, got {p!r}",
                                        bw)
-            _finite(tuple(p), f"point {pname!r}", bw)
+            check_range(tuple(p), MAX_LENGTH, f"point {pname!r}", bw, "m")
         if b.name == mech.ground:
             continue
         if b.mass is not None:
             _finite(b.mass, "mass", bw)
             if b.mass < 0:
                 raise DescriptionError(f"mass must be >= 0 kg, got {b.mass}", bw)
+            check_range(b.mass, MAX_MASS, "mass", bw, "kg", lo=0.0)
             if b.inertia is None:
                 raise DescriptionError("a body with a mass needs an inertia about its "
                                        "centre of mass (kg m^2)", bw)
@@ -298,9 +364,10 @@ def validate(mech: Mechanism) -> None:
             if b.inertia < 0 or (b.mass > 0 and b.inertia == 0):
                 raise DescriptionError(f"inertia about the centre of mass must be > 0 "
                                        f"kg m^2 for a body with mass, got {b.inertia}", bw)
+            check_range(b.inertia, MAX_INERTIA, "inertia", bw, "kg m^2", lo=0.0)
             if b.mass == 0 and b.inertia != 0:
                 raise DescriptionError("a massless body cannot have an inertia", bw)
-            _finite(tuple(b.com), "com", bw)
+            check_range(tuple(b.com), MAX_LENGTH, "com", bw, "m")
         elif b.inertia is not None:
             raise DescriptionError("inertia given without a mass", bw)
 
@@ -320,10 +387,16 @@ def validate(mech: Mechanism) -> None:
                 raise DescriptionError(f"body {bn!r} has no point {pn!r}; it has "
                                        f"{sorted(bodies[bn].points)}", jw)
         if isinstance(j, Prismatic):
-            _finite(j.direction, "direction", jw)
-            _finite(j.angle, "angle", jw)
+            check_range(j.direction, MAX_ANGLE, "direction", jw, "deg", math.pi / 180)
+            check_range(j.angle, MAX_ANGLE, "angle", jw, "deg", math.pi / 180)
 
-    # Zero-length links: two joints of one body at the same point.
+    # Size, and zero-length links (two joints of one body at one point), relative
+    # to it, so that a linkage is valid or not whatever its scale.
+    size = mechanism_size(mech.bodies)
+    if size < MIN_SIZE:
+        raise DescriptionError(f"the mechanism's size (the longest distance between two "
+                               f"points of one body) is {size:g} m; it must be at least "
+                               f"{MIN_SIZE:g} m", where)
     for b in mech.bodies:
         if b.name == mech.ground:
             continue
@@ -333,18 +406,25 @@ def validate(mech: Mechanism) -> None:
             for k in range(i + 1, len(attach)):
                 p = b.points[attach[i][1]]
                 q = b.points[attach[k][1]]
-                if math.hypot(p[0] - q[0], p[1] - q[1]) < 1e-12:
+                if math.hypot(p[0] - q[0], p[1] - q[1]) < ZERO_LENGTH * size:
                     raise DescriptionError(
                         f"joints {attach[i][0]!r} and {attach[k][0]!r} are at the same point "
-                        f"(zero link length)", _where(mech, f"body {b.name!r}"))
+                        f"(zero link length): closer than {ZERO_LENGTH:g} of the mechanism's "
+                        f"size {size:g} m", _where(mech, f"body {b.name!r}"))
 
     d = mech.driver
     dw = _where(mech, "driver")
     if d.joint not in jnames:
         raise DescriptionError(f"driver joint {d.joint!r} is not a joint; joints are {jnames}",
                                dw)
-    for k in ("value", "velocity", "acceleration"):
-        _finite(getattr(d, k), k, dw)
+    rev = isinstance(mech.joint(d.joint), Revolute)
+    if rev:
+        check_range(d.value, MAX_ANGLE, "value", dw, "deg", math.pi / 180)
+    else:
+        check_range(d.value, MAX_LENGTH, "value", dw, "m")
+    check_range(d.velocity, MAX_RATE, "velocity", dw, "rad/s" if rev else "m/s")
+    check_range(d.acceleration, MAX_ACCEL, "acceleration", dw,
+                "rad/s^2" if rev else "m/s^2")
 
     for i, ld in enumerate(mech.loads):
         lw = _where(mech, f"load {i} on body {ld.body!r}")
@@ -352,19 +432,23 @@ def validate(mech: Mechanism) -> None:
             raise DescriptionError(f"unknown body {ld.body!r}", lw)
         if ld.point is not None and ld.point not in bodies[ld.body].points:
             raise DescriptionError(f"body {ld.body!r} has no point {ld.point!r}", lw)
-        _finite(tuple(ld.force), "force", lw)
-        _finite(ld.torque, "torque", lw)
-    _finite(tuple(mech.gravity), "gravity", _where(mech, "gravity"))
+        check_range(tuple(ld.force), MAX_LOAD, "force", lw, "N")
+        check_range(ld.torque, MAX_LOAD, "torque", lw, "N m")
+    check_range(tuple(mech.gravity), MAX_GRAVITY, "gravity", _where(mech, "gravity"), "m/s^2")
 
-    for key in mech.assembly.points:
-        bn, _, pn = key.partition(".")
+    aw = _where(mech, "assembly")
+    for key, xy in mech.assembly.points.items():
+        bn, _, pn = str(key).partition(".")
         if bn not in bodies or pn not in bodies[bn].points:
             raise DescriptionError(f"assembly hint names unknown point {key!r} "
-                                   "(expected 'body.point')", _where(mech, "assembly"))
-    for bn in mech.assembly.angles:
+                                   "(expected 'body.point')", aw)
+        if not isinstance(xy, tuple | list) or len(xy) != 2:
+            raise DescriptionError(f"hint {key!r} must be a pair [x, y], got {xy!r}", aw)
+        check_range(tuple(xy), MAX_LENGTH, f"hint {key!r}", aw, "m")
+    for bn, ang in mech.assembly.angles.items():
         if bn not in bodies:
-            raise DescriptionError(f"assembly hint names unknown body {bn!r}",
-                                   _where(mech, "assembly"))
+            raise DescriptionError(f"assembly hint names unknown body {bn!r}", aw)
+        check_range(ang, MAX_ANGLE, f"hint {bn!r}", aw, "deg", math.pi / 180)
 
     # Connectivity: every body reachable from ground.
     adj: dict[str, set[str]] = {n: set() for n in names}
@@ -388,3 +472,71 @@ def validate(mech: Mechanism) -> None:
             f"the linkage has {dof} degrees of freedom by Gruebler's count "
             f"(3*(bodies-1) - 2*joints = 3*{len(names) - 1} - 2*{len(mech.joints)}); "
             "exactly 1 is needed for one driver", where)
+    if mech.loops is not None:
+        _check_loops(mech)
+
+
+def _check_loops(mech: Mechanism) -> None:
+    """A user's loops: as many as the joint graph's independent cycles, each a closed
+    walk through distinct bodies (consecutive joints share a body, the last joint
+    joins the first, no body twice), and independent of each other."""
+    where = _where(mech, "loops")
+    joints = {j.name: j for j in mech.joints}
+    n_indep = len(mech.joints) - len(mech.bodies) + 1
+    if len(mech.loops) != n_indep:
+        raise DescriptionError(f"{len(mech.loops)} loops given but the joint graph has "
+                               f"{n_indep} independent loops (joints - bodies + 1)", where)
+    rows = []
+    for i, lp in enumerate(mech.loops, 1):
+        lw = _where(mech, f"loops entry {i} {list(lp)}")
+        for n in lp:
+            if n not in joints:
+                raise DescriptionError(f"unknown joint {n!r}; joints are {list(joints)}", lw)
+        if len(set(lp)) != len(lp):
+            dup = sorted({n for n in lp if list(lp).count(n) > 1})
+            raise DescriptionError(f"{NOT_A_CYCLE}: joints {dup} appear more than once", lw)
+        if len(lp) < 3:
+            raise DescriptionError(f"{NOT_A_CYCLE}: {len(lp)} joints cannot close a loop "
+                                   "through distinct bodies (3 at least)", lw)
+        rows.append(_walk_loop([joints[n] for n in lp], joints, lw))
+    import numpy as np  # only here: the description module needs no numpy otherwise
+    if np.linalg.matrix_rank(np.array(rows, float)) < len(rows):
+        raise DescriptionError("the loops are not independent: one is a combination of the "
+                               "others, so they do not determine the positions", where)
+
+
+NOT_A_CYCLE = "not a closed cycle of distinct bodies"
+
+
+def _walk_loop(js: list, joints: dict, where: str) -> list[int]:
+    """Walk a loop from the body its last and first joints share; return the signed
+    joint incidence (+1 crossing a joint from body_a to body_b, -1 back)."""
+    first, last = js[0], js[-1]
+    starts = [b for b in first.bodies if b in last.bodies]
+    if not starts:
+        raise DescriptionError(f"{NOT_A_CYCLE}: the last joint {last.name!r} "
+                               f"{list(last.bodies)} and the first joint {first.name!r} "
+                               f"{list(first.bodies)} share no body", where)
+    err = None
+    for start in starts:  # two only for parallel joints between the same two bodies
+        body, seen, row = start, [start], dict.fromkeys(joints, 0)
+        for k, j in enumerate(js):
+            if body not in j.bodies:
+                came = f" through joint {js[k - 1].name!r}" if k else ""
+                err = (f"{NOT_A_CYCLE}: joints {js[k - 1].name!r} and {j.name!r} do not "
+                       f"share exactly one body (the walk reached body {body!r}{came}; "
+                       f"{j.name!r} joins {list(j.bodies)})")
+                break
+            row[j.name] = 1 if body == j.body_a else -1
+            body = j.body_b if body == j.body_a else j.body_a
+            if body in seen and not (k == len(js) - 1 and body == start):
+                err = f"{NOT_A_CYCLE}: the walk visits body {body!r} twice (after joint " \
+                      f"{j.name!r})"
+                break
+            seen.append(body)
+        else:
+            if body == start:
+                return list(row.values())
+            err = (f"{NOT_A_CYCLE}: the walk ends on body {body!r}, not on {start!r} "
+                   "where it began")
+    raise DescriptionError(err, where)

@@ -22,9 +22,27 @@ from pathlib import Path
 from typing import Any
 
 from .errors import DescriptionError
-from .mechanism import Assembly, Body, Driver, Load, Mechanism, Prismatic, Revolute
+from .mechanism import (
+    MAX_ACCEL,
+    MAX_ANGLE,
+    MAX_GRAVITY,
+    MAX_INERTIA,
+    MAX_LENGTH,
+    MAX_LOAD,
+    MAX_MASS,
+    MAX_RATE,
+    Assembly,
+    Body,
+    Driver,
+    Load,
+    Mechanism,
+    Prismatic,
+    Revolute,
+    check_range,
+)
 
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+DEG = math.pi / 180.0
 
 _TOP_KEYS = {"name", "description", "ground", "units", "gravity", "bodies", "joints",
              "driver", "loads", "assembly", "loops"}
@@ -35,25 +53,50 @@ _DRV_KEYS = {"joint", "value", "velocity", "acceleration"}
 _LOAD_KEYS = {"body", "point", "force", "torque"}
 
 
-def _check_keys(table: dict, allowed: set[str], where: str) -> None:
+def _check_keys(table: Any, allowed: set[str], where: str) -> dict:
     if not isinstance(table, dict):
-        raise DescriptionError(f"expected a table, got {type(table).__name__}", where)
+        raise DescriptionError(f"expected a table, got {_kind(table)}", where)
     extra = set(table) - allowed
     if extra:
         raise DescriptionError(f"unknown keys {sorted(extra)}; allowed are {sorted(allowed)}",
                                where)
+    return table
 
 
-def _num(v: Any, what: str, where: str) -> float:
+def _kind(v: Any) -> str:
+    """The TOML name of a value's type, for messages."""
+    return {dict: "a table", list: "an array", str: "a string", bool: "a boolean",
+            int: "an integer", float: "a float"}.get(type(v), type(v).__name__)
+
+
+def _num(v: Any, what: str, where: str, limit: float | None = None, unit: str = "",
+         scale: float = 1.0, lo: float | None = None) -> float:
+    """A finite number; with ``limit`` (SI) also in range, stated in the file's unit."""
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
         raise DescriptionError(f"{what} must be a finite number, got {v!r}", where)
-    return float(v)
+    if limit is not None:
+        check_range(float(v) * scale, limit, what, where, unit, scale, lo)
+    return float(v) * scale
 
 
-def _vec(v: Any, what: str, where: str, scale: float = 1.0) -> tuple[float, float]:
+def _vec(v: Any, what: str, where: str, scale: float = 1.0, limit: float | None = None,
+         unit: str = "") -> tuple[float, float]:
     if not isinstance(v, list | tuple) or len(v) != 2:
         raise DescriptionError(f"{what} must be a pair [x, y], got {v!r}", where)
-    return (_num(v[0], what, where) * scale, _num(v[1], what, where) * scale)
+    return (_num(v[0], what, where, limit, unit, scale),
+            _num(v[1], what, where, limit, unit, scale))
+
+
+def _str(v: Any, what: str, where: str) -> str:
+    if not isinstance(v, str) or not v:
+        raise DescriptionError(f"{what} must be a non-empty string, got {v!r}", where)
+    return v
+
+
+def _table(v: Any, what: str, where: str) -> dict:
+    if not isinstance(v, dict):
+        raise DescriptionError(f"{what} must be a table, got {_kind(v)} {v!r}", where)
+    return v
 
 
 def _req(table: dict, key: str, where: str) -> Any:
@@ -62,18 +105,17 @@ def _req(table: dict, key: str, where: str) -> Any:
     return table[key]
 
 
-def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
-    """Build a :class:`Mechanism` from a parsed TOML document (file units)."""
-    _check_keys(doc, _TOP_KEYS, source)
-    units = doc.get("units", {})
-    _check_keys(units, {"length"}, f"{source}: [units]")
+def _length_unit(doc: dict, source: str) -> tuple[float, str]:
+    uw = f"{source}: [units]"
+    units = _check_keys(doc.get("units", {}), {"length"}, uw)
     lu = units.get("length", "m")
-    if lu not in LENGTH_UNITS:
+    if not isinstance(lu, str) or lu not in LENGTH_UNITS:
         raise DescriptionError(f"unknown length unit {lu!r}; use one of {sorted(LENGTH_UNITS)}",
-                               f"{source}: [units]")
-    L = LENGTH_UNITS[lu]
-    deg = math.pi / 180.0
+                               uw)
+    return LENGTH_UNITS[lu], lu
 
+
+def _bodies(doc: dict, source: str, L: float, lu: str) -> list[Body]:
     bodies_doc = _req(doc, "bodies", source)
     if not isinstance(bodies_doc, dict) or not bodies_doc:
         raise DescriptionError("[bodies] must be a non-empty table", source)
@@ -84,21 +126,27 @@ def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
         pts = bd.get("points", {})
         if not isinstance(pts, dict):
             raise DescriptionError("points must be a table name = [x, y]", bw)
-        points = {pn: _vec(pv, f"point {pn!r}", bw, L) for pn, pv in pts.items()}
-        mass = _num(bd["mass"], "mass", bw) if "mass" in bd else None
-        inertia = _num(bd["inertia"], "inertia", bw) if "inertia" in bd else None
-        com = _vec(bd["com"], "com", bw, L) if "com" in bd else (0.0, 0.0)
+        points = {pn: _vec(pv, f"point {pn!r}", bw, L, MAX_LENGTH, lu)
+                  for pn, pv in pts.items()}
+        mass = (_num(bd["mass"], "mass", bw, MAX_MASS, "kg", lo=0.0) if "mass" in bd
+                else None)
+        inertia = (_num(bd["inertia"], "inertia", bw, MAX_INERTIA, "kg m^2", lo=0.0)
+                   if "inertia" in bd else None)
+        com = _vec(bd["com"], "com", bw, L, MAX_LENGTH, lu) if "com" in bd else (0.0, 0.0)
         bodies.append(Body(bname, points, mass, com, inertia))
+    return bodies
 
+
+def _joints(doc: dict, source: str) -> list:
     joints = []
     jdocs = _req(doc, "joints", source)
     if not isinstance(jdocs, list):
         raise DescriptionError("joints must be an array of tables [[joints]]", source)
     for i, jd in enumerate(jdocs):
-        jw = f"{source}: joint {jd.get('name', i)!r}" if isinstance(jd, dict) else source
         if not isinstance(jd, dict):
-            raise DescriptionError(f"joint {i} must be a table", source)
-        name = str(_req(jd, "name", jw))
+            raise DescriptionError(f"joint {i} must be a table, got {_kind(jd)}", source)
+        jw = f"{source}: joint {jd.get('name', i)!r}"
+        name = _str(_req(jd, "name", jw), "name", jw)
         jtype = _req(jd, "type", jw)
         if jtype == "revolute":
             _check_keys(jd, _REV_KEYS, jw)
@@ -107,62 +155,124 @@ def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
                     and len(ps) == 2):
                 raise DescriptionError("a revolute joint needs bodies = [a, b] and "
                                        "points = [pa, pb]", jw)
-            joints.append(Revolute(name, str(bs[0]), str(ps[0]), str(bs[1]), str(ps[1])))
+            joints.append(Revolute(name, _str(bs[0], "bodies[0]", jw),
+                                   _str(ps[0], "points[0]", jw), _str(bs[1], "bodies[1]", jw),
+                                   _str(ps[1], "points[1]", jw)))
         elif jtype == "prismatic":
             _check_keys(jd, _PRI_KEYS, jw)
             joints.append(Prismatic(
-                name, str(_req(jd, "guide", jw)), str(_req(jd, "origin", jw)),
-                _num(_req(jd, "direction", jw), "direction", jw) * deg,
-                str(_req(jd, "slider", jw)), str(_req(jd, "point", jw)),
-                _num(jd.get("angle", 0.0), "angle", jw) * deg))
+                name, _str(_req(jd, "guide", jw), "guide", jw),
+                _str(_req(jd, "origin", jw), "origin", jw),
+                _num(_req(jd, "direction", jw), "direction", jw, MAX_ANGLE, "deg", DEG),
+                _str(_req(jd, "slider", jw), "slider", jw),
+                _str(_req(jd, "point", jw), "point", jw),
+                _num(jd.get("angle", 0.0), "angle", jw, MAX_ANGLE, "deg", DEG)))
         else:
             raise DescriptionError(f"unknown joint type {jtype!r}; use 'revolute' or "
                                    "'prismatic'", jw)
+    return joints
 
-    dd = _req(doc, "driver", source)
+
+def _driver(doc: dict, source: str, joints: list, L: float, lu: str) -> Driver:
     dw = f"{source}: [driver]"
-    _check_keys(dd, _DRV_KEYS, dw)
-    djoint = str(_req(dd, "joint", dw))
+    dd = _check_keys(_req(doc, "driver", source), _DRV_KEYS, dw)
+    djoint = _str(_req(dd, "joint", dw), "joint", dw)
     jtypes = {j.name: j for j in joints}
     if djoint not in jtypes:
         raise DescriptionError(f"driver joint {djoint!r} is not a joint; joints are "
                                f"{list(jtypes)}", dw)
-    revolute = isinstance(jtypes[djoint], Revolute)
-    vscale = deg if revolute else L
-    rscale = 1.0 if revolute else L
-    driver = Driver(djoint, _num(_req(dd, "value", dw), "value", dw) * vscale,
-                    _num(_req(dd, "velocity", dw), "velocity", dw) * rscale,
-                    _num(dd.get("acceleration", 0.0), "acceleration", dw) * rscale)
+    if isinstance(jtypes[djoint], Revolute):
+        value = _num(_req(dd, "value", dw), "value", dw, MAX_ANGLE, "deg", DEG)
+        rate = ("rad/s", "rad/s^2", 1.0)
+    else:
+        value = _num(_req(dd, "value", dw), "value", dw, MAX_LENGTH, lu, L)
+        rate = (f"{lu}/s", f"{lu}/s^2", L)
+    return Driver(djoint, value,
+                  _num(_req(dd, "velocity", dw), "velocity", dw, MAX_RATE, rate[0], rate[2]),
+                  _num(dd.get("acceleration", 0.0), "acceleration", dw, MAX_ACCEL, rate[1],
+                       rate[2]))
 
+
+def _loads(doc: dict, source: str) -> list[Load]:
+    lds = doc.get("loads", [])
+    if not isinstance(lds, list):
+        raise DescriptionError(f"loads must be an array of tables [[loads]], got {_kind(lds)}",
+                               source)
     loads = []
-    for i, ld in enumerate(doc.get("loads", [])):
+    for i, ld in enumerate(lds):
         lw = f"{source}: load {i}"
         _check_keys(ld, _LOAD_KEYS, lw)
-        loads.append(Load(str(_req(ld, "body", lw)),
-                          str(ld["point"]) if "point" in ld else None,
-                          _vec(ld.get("force", [0.0, 0.0]), "force", lw),
-                          _num(ld.get("torque", 0.0), "torque", lw)))
+        loads.append(Load(_str(_req(ld, "body", lw), "body", lw),
+                          _str(ld["point"], "point", lw) if "point" in ld else None,
+                          _vec(ld.get("force", [0.0, 0.0]), "force", lw, 1.0, MAX_LOAD, "N"),
+                          _num(ld.get("torque", 0.0), "torque", lw, MAX_LOAD, "N m")))
+    return loads
 
-    ad = doc.get("assembly", {})
+
+def _assembly(doc: dict, source: str, L: float, lu: str) -> Assembly:
     aw = f"{source}: [assembly]"
-    _check_keys(ad, {"points", "angles"}, aw)
-    assembly = Assembly(
-        {k: _vec(v, f"hint {k!r}", aw, L) for k, v in ad.get("points", {}).items()},
-        {k: _num(v, f"hint {k!r}", aw) * deg for k, v in ad.get("angles", {}).items()})
+    ad = _check_keys(doc.get("assembly", {}), {"points", "angles"}, aw)
+    pts = _table(ad.get("points", {}), "points", aw)
+    angs = _table(ad.get("angles", {}), "angles", aw)
+    return Assembly(
+        {k: _vec(v, f"hint {k!r}", aw, L, MAX_LENGTH, lu) for k, v in pts.items()},
+        {k: _num(v, f"hint {k!r}", aw, MAX_ANGLE, "deg", DEG) for k, v in angs.items()})
 
+
+def _loops(doc: dict, source: str) -> tuple[tuple[str, ...], ...] | None:
     loops = doc.get("loops")
-    if loops is not None:
-        if not (isinstance(loops, list) and all(isinstance(lp, list) for lp in loops)):
-            raise DescriptionError("loops must be a list of lists of joint names", source)
-        loops = tuple(tuple(str(n) for n in lp) for lp in loops)
+    if loops is None:
+        return None
+    if not (isinstance(loops, list) and all(isinstance(lp, list) for lp in loops)):
+        raise DescriptionError("loops must be a list of lists of joint names", source)
+    return tuple(tuple(_str(n, f"loops entry {i}: joint name", source) for n in lp)
+                 for i, lp in enumerate(loops, 1))
 
-    gravity = _vec(doc["gravity"], "gravity", source) if "gravity" in doc else (0.0, 0.0)
+
+def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
+    """Build a :class:`Mechanism` from a parsed TOML document (file units).
+
+    Every value is checked where it is read: its type, that it is finite, and
+    that it lies in the accepted range of :mod:`analytic.mechanism` (stated in
+    the file's units when it is not).
+    """
+    _check_keys(doc, _TOP_KEYS, source)
+    L, lu = _length_unit(doc, source)
+    bodies = _bodies(doc, source, L, lu)
+    joints = _joints(doc, source)
+    driver = _driver(doc, source, joints, L, lu)
+    gravity = (_vec(doc["gravity"], "gravity", source, 1.0, MAX_GRAVITY, "m/s^2")
+               if "gravity" in doc else (0.0, 0.0))
+    for key in ("name", "ground", "description"):
+        if key in doc and not isinstance(doc[key], str):
+            raise DescriptionError(f"{key} must be a string, got {_kind(doc[key])}", source)
     return Mechanism(
         name=str(doc.get("name", Path(source).stem)),
         ground=str(doc.get("ground", "ground")),
-        bodies=tuple(bodies), joints=tuple(joints), driver=driver, loads=tuple(loads),
-        gravity=gravity, assembly=assembly, loops=loops,
+        bodies=tuple(bodies), joints=tuple(joints), driver=driver,
+        loads=tuple(_loads(doc, source)), gravity=gravity,
+        assembly=_assembly(doc, source, L, lu), loops=_loops(doc, source),
         description=str(doc.get("description", "")), source=source)
+
+
+def decode_text(data: bytes, where: str) -> str:
+    """A TOML file's text: UTF-8 (a leading byte-order mark is dropped), or a one-line
+    :class:`DescriptionError` that says what the file looks like instead."""
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise DescriptionError("the file is UTF-16 text; TOML files must be UTF-8 (save it "
+                               "as UTF-8)", where)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise DescriptionError(f"not a UTF-8 text file (byte 0x{data[e.start]:02x} at "
+                               f"offset {e.start}); TOML files must be UTF-8 text",
+                               where) from None
+    if "\x00" in text:
+        raise DescriptionError(f"not a text file (a NUL byte at offset {text.index(chr(0))})",
+                               where)
+    return text
 
 
 def load_mechanism(path: str | Path) -> Mechanism:
@@ -176,9 +286,10 @@ def load_mechanism(path: str | Path) -> Mechanism:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        data = path.read_bytes()
     except OSError as e:
         raise DescriptionError(f"cannot read file: {e.strerror}", str(path)) from None
+    text = decode_text(data, str(path))
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

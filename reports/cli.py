@@ -4,21 +4,30 @@
 ``xval solve CASE_OR_FILE --angle DEG``  one configuration, tabulated as in the notes
 ``xval sweep CASE_OR_FILE``            the full-cycle table (CSV)
 
-Errors in the input (bad file, unknown case, an angle where the loops cannot
-close, a singular position) print one line naming the problem and exit 2.
+Exit status: 0 done; 1 a failed verdict (``xval compare``); 2 a user error (a bad
+file, case, option or input value, an angle where the loops cannot close, a
+singular position, an output file that cannot be written), reported as one line
+on standard error that names the problem and where it is.  A closed output pipe
+(``xval sweep ... | head``) ends quietly with status 141, as for SIGPIPE.  Any
+other failure is a bug in xval.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
 
 import numpy as np
 
 from analytic import Linkage, LinkageError, case_names, load_case
+from analytic.errors import OutputError
 from analytic.mechanism import Prismatic, Revolute
+
+from . import cli_options as opt
 
 CONVENTIONS = {
     "units": "SI: m, rad, s, kg, N; angle_deg in degrees",
@@ -164,7 +173,7 @@ def cmd_cases(args) -> int:
 def cmd_solve(args) -> int:
     res = _result_dict(*_solve_one(args))
     if args.json:
-        print(json.dumps(res, indent=2))
+        print(json.dumps(res, indent=2, allow_nan=False))
     else:
         _print_tables(res)
     return 0
@@ -172,10 +181,11 @@ def cmd_solve(args) -> int:
 
 def cmd_sweep(args) -> int:
     mech = load_case(args.case)
+    opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints))
     lk = Linkage(mech)
     r = lk.sweep(args.points)
     if args.csv:
-        r.frame.to_csv(args.csv, index=False)
+        write_csv(r.frame, args.csv, getattr(args, "stdout", sys.stdout))
     print(f"{mech.name}: {len(r.frame)} points, "
           + ("full cycle" if r.full_cycle else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))
@@ -186,29 +196,43 @@ def cmd_sweep(args) -> int:
     if r.forces is not None:
         print(f"peak |drive effort| {np.max(np.abs(r.forces.effort)):.6g}, "
               f"power balance error {r.forces.power_balance_error():.2g} (relative)")
-    if args.csv:
+    if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
 
 
+def write_csv(frame, path: str, stdout) -> None:
+    """Write a table as CSV to ``path``, or to ``stdout`` when ``path`` is ``-``."""
+    if path == "-":
+        frame.to_csv(stdout, index=False)
+        return
+    try:
+        frame.to_csv(path, index=False)
+    except OSError as e:  # checked at the option; this is a race or a full disk
+        raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="xval", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = opt.OneLineParser(prog="xval", description=__doc__,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="cmd", required=True)
     s = sub.add_parser("cases", help="list the built-in cases")
     s.set_defaults(func=cmd_cases)
     s = sub.add_parser("solve", help="solve one configuration")
     s.add_argument("case", help="built-in case name or TOML file")
-    s.add_argument("--angle", type=float, help="input angle, deg (revolute driver)")
-    s.add_argument("--value", type=float, help="input displacement, m (prismatic driver)")
-    s.add_argument("--omega", type=float, help="input velocity, rad/s (or m/s)")
-    s.add_argument("--alpha", type=float, help="input acceleration, rad/s^2 (or m/s^2)")
+    s.add_argument("--angle", type=opt.angle_deg, help="input angle, deg (revolute driver)")
+    s.add_argument("--value", type=opt.length_m, help="input displacement, m (prismatic driver)")
+    s.add_argument("--omega", type=opt.rate, help="input velocity, rad/s (or m/s)")
+    s.add_argument("--alpha", type=opt.accel, help="input acceleration, rad/s^2 (or m/s^2)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
     s.set_defaults(func=cmd_solve)
     s = sub.add_parser("sweep", help="full-cycle table")
     s.add_argument("case", help="built-in case name or TOML file")
-    s.add_argument("--points", type=int, default=360)
-    s.add_argument("--csv", help="write the table to this CSV file")
+    s.add_argument("--points", type=opt.sweep_points, default=360,
+                   help=f"sweep points, 2 to {opt.MAX_SWEEP_POINTS}")
+    s.add_argument("--csv", type=opt.output_file,
+                   help="write the table to this CSV file ('-': standard output, the "
+                        "summary then goes to standard error)")
     s.set_defaults(func=cmd_sweep)
     _register_more(sub)
     return p
@@ -226,12 +250,32 @@ def _register_more(sub) -> None:
 def main(argv: list[str] | None = None) -> int:
     from analytic.perf import tune_allocator
     tune_allocator()  # large temporaries recycled, not re-mapped (see analytic/perf.py)
-    args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
-    except LinkageError as e:
+        args = build_parser().parse_args(argv)
+        args.stdout = sys.stdout
+        # with the table on standard output, the summary goes to standard error
+        to_err = getattr(args, "csv", None) == "-"
+        with contextlib.redirect_stdout(sys.stderr) if to_err else contextlib.nullcontext():
+            code = args.func(args)
+        sys.stdout.flush()  # a closed pipe shows here, inside the handler
+        return code
+    except LinkageError as e:  # every user error: one line, status 2
         print(f"xval: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader stopped reading (| head): end quietly
+        _stdout_to_devnull()
+        return 141
+
+
+def _stdout_to_devnull() -> None:
+    """Point standard output at /dev/null so that the interpreter's final flush
+    does not report the closed pipe again (the recipe of Python's signal docs)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # replaced by a capture: nothing to do
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,182 @@
+"""Command-line option types of ``xval``: every number and path is checked where it enters.
+
+Each type either returns the parsed value or raises
+:class:`argparse.ArgumentTypeError` with the accepted range and why; the parser
+(:class:`OneLineParser`) turns that into one line on standard error and exit
+status 2.  The physical ranges are the ones a description file must satisfy
+(:mod:`analytic.mechanism`), so an input value is accepted on the command line
+exactly when it would be accepted in a file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from analytic.errors import LinkageError
+from analytic.mechanism import MAX_ACCEL, MAX_ANGLE, MAX_LENGTH, MAX_RATE
+
+
+class UsageError(LinkageError):
+    """A command-line option or argument is malformed or out of range."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (no usage block) and a
+    :class:`UsageError`, so that ``main`` reports them like every other user error."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's hook
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+# --- sizes ---------------------------------------------------------------------
+
+#: Most points a sweep may have.  A sweep holds about 190-200 bytes per point for
+#: each body and joint (measured peak with forces, every built-in case: 1.2 kB a
+#: point for the four-bars, 2.6 kB for the six-bar), so 1e6 points of a six-bar take
+#: 2.6 GB; a finer sweep resolves nothing more, since events are located between
+#: samples anyway.
+MAX_SWEEP_POINTS = 1_000_000
+#: Bytes a sweep holds per point for each body and joint (the measured ~200 B with
+#: a 25% margin), and the memory a sweep may take: together they lower
+#: MAX_SWEEP_POINTS for descriptions with many bodies.
+SWEEP_BYTES_PER_ELEMENT = 250
+SWEEP_MEMORY_BUDGET = 4 * 2 ** 30
+
+#: Engine samples per revolution: 0.1 deg apart at the ceiling.  The engine's step
+#: is shortened so that every sample falls on a step, so more samples make a run
+#: longer without showing anything between them that 3600 do not.
+MAX_SAMPLES = 3600
+#: Engine revolutions: the last one is compared; beyond 1000 a run measures only
+#: drift, which the report's long-run study covers.
+MAX_REVOLUTIONS = 1000
+#: Engine time step, s: below 1e-6 a revolution at the built-in cases' speeds takes
+#: ~1e5-1e6 steps per engine; above 0.1 s a crank at 15 rad/s turns 86 deg per step.
+MIN_TIMESTEP, MAX_TIMESTEP = 1e-6, 0.1
+#: Report worker processes: each holds both engines (a few hundred MB).
+MAX_WORKERS = 64
+
+
+def int_range(lo: int, hi: int, why: str = ""):
+    """An argparse type: an integer in ``[lo, hi]``."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(
+                f"{v} is out of range: the accepted range is {lo} to {hi}"
+                + (f" ({why})" if why else ""))
+        return v
+    return parse
+
+
+def finite_float(limit: float, unit: str, lo: float | None = None, why: str = "",
+                 scale: float = 1.0):
+    """An argparse type: a finite float with ``|x| <= limit`` (or ``lo <= x <= limit``).
+
+    ``limit``/``lo`` are SI; ``scale`` converts the typed value to SI (degrees)."""
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{text} is not a finite number")
+        si = v * scale
+        if (abs(si) <= limit) if lo is None else (lo <= si <= limit):
+            return v
+        rng = (f"|x| <= {limit / scale:g} {unit}" if lo is None
+               else f"{lo / scale:g} to {limit / scale:g} {unit}")
+        raise argparse.ArgumentTypeError(f"{v:g} is out of range: the accepted range is {rng}"
+                                         + (f" ({why})" if why else ""))
+    return parse
+
+
+# the solver's input values: the ranges of a description file (analytic.mechanism)
+angle_deg = finite_float(MAX_ANGLE, "deg", scale=math.pi / 180, why="1000 turns")
+length_m = finite_float(MAX_LENGTH, "m")
+rate = finite_float(MAX_RATE, "rad/s or m/s")
+accel = finite_float(MAX_ACCEL, "rad/s^2 or m/s^2")
+sweep_points = int_range(2, MAX_SWEEP_POINTS, "about 200 bytes a point per body and joint")
+samples = int_range(2, MAX_SAMPLES, "0.1 deg apart at most; every sample falls on an "
+                                    "engine step")
+revolutions = int_range(1, MAX_REVOLUTIONS, "the last revolution is compared")
+timestep = finite_float(MAX_TIMESTEP, "s", lo=MIN_TIMESTEP,
+                        why="the step must be positive; the bounds keep a run between "
+                            "minutes and a few steps per revolution")
+workers = int_range(1, MAX_WORKERS, "each worker is a process holding both engines")
+
+
+def check_sweep_points(points: int, n_elements: int) -> None:
+    """Raise :class:`UsageError` when a sweep of ``points`` over a mechanism with
+    ``n_elements`` bodies and joints would exceed :data:`SWEEP_MEMORY_BUDGET`."""
+    cap = min(MAX_SWEEP_POINTS,
+              SWEEP_MEMORY_BUDGET // (SWEEP_BYTES_PER_ELEMENT * max(n_elements, 1)))
+    if points > cap:
+        raise UsageError(f"argument --points: {points} is out of range for a mechanism of "
+                         f"{n_elements} bodies and joints: the accepted range is 2 to {cap} "
+                         f"(about {SWEEP_BYTES_PER_ELEMENT} bytes a point per body and joint, "
+                         f"{SWEEP_MEMORY_BUDGET / 2 ** 30:g} GiB at most)")
+
+
+# --- paths ---------------------------------------------------------------------
+
+def _probe_dir(d: Path, what: str) -> None:
+    """Raise ArgumentTypeError unless a file can be created in directory ``d``
+    (a real probe: a permission check alone is wrong for root and read-only mounts)."""
+    try:
+        with tempfile.TemporaryFile(dir=d):
+            pass
+    except OSError as e:
+        raise argparse.ArgumentTypeError(f"cannot write {what} in folder {str(d)!r}: "
+                                         f"{e.strerror}") from None
+
+
+def output_file(text: str) -> str:
+    """An argparse type: a file to (over)write, or ``-`` for standard output."""
+    if text == "-":
+        return text
+    p = Path(text)
+    if p.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise argparse.ArgumentTypeError(f"folder {str(parent)!r} does not exist")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise argparse.ArgumentTypeError(f"file {text!r} is not writable")
+    _probe_dir(parent, "a file")
+    return text
+
+
+def output_dir(text: str) -> str:
+    """An argparse type: a folder to write into (created if missing)."""
+    p = Path(text)
+    if p.exists() and not p.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} exists and is not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise argparse.ArgumentTypeError(f"cannot create folder {text!r}: "
+                                         f"{e.strerror}") from None
+    _probe_dir(p, "the report")
+    return text
+
+
+def case_or_file(text: str) -> str:
+    """An argparse type: a built-in case name, or a readable TOML file (returned as
+    an absolute path, so that worker processes and file names do not depend on the
+    current folder)."""
+    from analytic.cases import case_names
+    if text in case_names():
+        return text
+    p = Path(text)
+    if p.is_file():
+        return str(p.resolve())
+    if text.endswith(".toml") or os.sep in text:
+        raise argparse.ArgumentTypeError(f"no such file {text!r}")
+    raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}")
