@@ -158,11 +158,16 @@ class Linkage:
         df = lk.sweep(360)                                 # full cycle, DataFrame
     """
 
-    def __init__(self, mech: Mechanism):
+    def __init__(self, mech: Mechanism, branch_rule: str = "continuous"):
+        """``branch_rule``: what the solution does at a change point, where two
+        assembly branches cross (:class:`analytic.positions.PositionSolver`):
+        ``"continuous"`` (default) continues the branch whose velocity is continuous,
+        as the physical linkage and the engines do, holding the dyad signs where
+        continuity cannot decide; ``"hold"`` holds the signs; ``"switch"`` switches."""
         self.mech = mech
         self.topo: Topology = build_topology(mech)
         self.eqs = LoopEquations(self.topo)
-        self.positions = PositionSolver(self.topo, self.eqs)
+        self.positions = PositionSolver(self.topo, self.eqs, branch_rule)
 
     def body_index(self, name: str) -> int:
         try:
@@ -176,13 +181,22 @@ class Linkage:
         return isinstance(self.mech.driver_joint, Revolute)
 
     def kinematics(self, values=None, velocity=None, acceleration=None,
-                   on_singular: str = "raise") -> Kinematics:
+                   on_singular: str = "raise", branch: str = "continued") -> Kinematics:
         """Solve positions, velocities and accelerations.
 
         Parameters
         ----------
         values
             Driver values (rad or m), scalar or ``(N,)``; default the description's.
+            In any order, over any number of turns.  A value is a point on the input
+            axis reached by moving the input continuously from the description's
+            reference value, and gets the branch the linkage is on there: the
+            assembled branch continued through change points (see
+            :mod:`analytic.branches`; :meth:`branch_crossings` lists them), exactly as
+            in :meth:`sweep`.
+        branch
+            ``"continued"`` (default, above) or ``"held"``: hold the reference dyad
+            signs at every value (the other assembly mode past a change point).
         velocity, acceleration
             Driver rates (scalar or ``(N,)``); default the description's.
         on_singular
@@ -198,7 +212,7 @@ class Linkage:
                                          float), (N,)).copy()
         acc = np.broadcast_to(np.asarray(d.acceleration if acceleration is None
                                          else acceleration, float), (N,)).copy()
-        q, theta, E, O, trans, pre = self.positions.solve(values)
+        q, theta, E, O, trans, pre = self.positions.solve(values, branch)
         eqs = self.eqs
         L2 = 2 * eqs.L
         J = eqs.jacobian(q, pre)
@@ -289,6 +303,29 @@ class Linkage:
             bb = topo.body_names.index(self.mech.joints[j].body_b)
             jp[j] = O[:, bb] + E[:, bb] * cplx(topo.attach(j, bb))
         return zv, za, jp
+
+    def kinematics_along(self, values, velocity=None, acceleration=None,
+                         on_singular: str = "flag") -> Kinematics:
+        """Kinematics at arbitrary input values on the branch the moving linkage
+        follows: :meth:`kinematics` with ``branch="continued"`` and singular positions
+        flagged, not raised.  For comparing with a run (an engine's sampled inputs,
+        possibly over several turns, possibly reversing): each value gets the branch
+        continued from the reference value through every change point in between."""
+        return self.kinematics(values, velocity, acceleration, on_singular=on_singular,
+                               branch="continued")
+
+    def branch_crossings(self, lo: float, hi: float):
+        """Change points met moving the input from the reference value to ``lo`` and
+        to ``hi`` (SI): a list of :class:`analytic.branches.Crossing` (value, joints,
+        signs before and after, the rule that chose).  Empty on the Newton path, where
+        :attr:`PositionSolver.trace` lists the singular positions crossed."""
+        sch = self.positions.schedule
+        return [] if sch is None else sch.crossings(lo, hi)
+
+    def feasible_ranges(self) -> list[tuple[float, float]]:
+        """Input intervals (SI) the assembled branch reaches; for a Newton-path
+        mechanism, the traced branch between its limit positions."""
+        return self.positions.feasible()
 
     # convenience wrappers ----------------------------------------------------
     def forces(self, kin: Kinematics):

@@ -18,13 +18,21 @@ from __future__ import annotations
 import cmath
 import itertools
 import math
+from functools import cached_property
 
 import numpy as np
 
 from .errors import AssemblyError
 from .loops import LoopEquations
 from .mechanism import Revolute
-from .tolerances import LOOP_RESIDUAL, NEWTON_MAX_ITER, TOGGLE_SNAP
+from .tolerances import (
+    ASSEMBLY_STARTS,
+    HINT_DISTANCE,
+    LOOP_RESIDUAL,
+    NEWTON_MAX_ITER,
+    NEWTON_MAX_STEP,
+    TOGGLE_SNAP,
+)
 from .topology import Topology
 
 
@@ -278,35 +286,75 @@ def poses_from_q(topo: Topology, q: np.ndarray):
     return theta, E, O
 
 
-def _hint_score(topo: Topology, theta, E, O) -> float:
-    """Squared distance of a single pose to the assembly hints (m^2, rad^2 * size^2)."""
+def hint_distances(topo: Topology, theta, E, O) -> tuple[list[str], np.ndarray]:
+    """Distance of each pose to each assembly hint, relative to the mechanism's size.
+
+    Returns the hints' labels (``"body.point"`` or ``"body angle"``) and an array
+    ``(N, H)``: a point hint's distance (m) divided by :func:`size_of`, an angle hint's
+    wrapped angle error (rad), i.e. the arc it moves a point one size from the pivot.
+    """
     hints = topo.mech.assembly
     scale = size_of(topo)
-    score = 0.0
+    labels, cols = [], []
     for key, xy in hints.points.items():
         bn, _, pn = key.partition(".")
         b = topo.body_names.index(bn)
-        P = O[0, b] + E[0, b] * cplx(topo.body_points[b][pn])
-        score += abs(P - cplx(xy)) ** 2
+        P = O[:, b] + E[:, b] * cplx(topo.body_points[b][pn])
+        labels.append(key)
+        cols.append(np.abs(P - cplx(xy)) / scale)
     for bn, ang in hints.angles.items():
         b = topo.body_names.index(bn)
-        dth = (theta[0, b] - ang + math.pi) % (2 * math.pi) - math.pi
-        score += float(dth * dth) * scale * scale
-    return score
+        labels.append(f"{bn} angle")
+        cols.append(np.abs((theta[:, b] - ang + math.pi) % (2 * math.pi) - math.pi))
+    N = theta.shape[0]
+    return labels, (np.stack(cols, axis=1) if cols else np.zeros((N, 0)))
+
+
+def _hint_score(topo: Topology, theta, E, O) -> np.ndarray:
+    """Sum of squared relative hint distances of each pose ``(N,)`` (0 without hints)."""
+    return np.sum(hint_distances(topo, theta, E, O)[1] ** 2, axis=1)
+
+
+def check_hints(topo: Topology, theta, E, O, value: float) -> None:
+    """Raise :class:`AssemblyError` when the solved pose (first row) lies farther from
+    any hint than :data:`HINT_DISTANCE` of the mechanism's size, naming the hint and
+    the distance."""
+    labels, d = hint_distances(topo, theta[:1], E[:1], O[:1])
+    if not labels:
+        return
+    k = int(np.argmax(d[0]))
+    if d[0, k] <= HINT_DISTANCE:
+        return
+    scale = size_of(topo)
+    if labels[k].endswith(" angle"):
+        ang = math.degrees(topo.mech.assembly.angles[labels[k][:-6]])
+        what = (f"hint {labels[k]!r} = {ang:.6g} deg is {math.degrees(d[0, k]):.4g} deg "
+                "from the nearest assembly")
+    else:
+        xy = topo.mech.assembly.points[labels[k]]
+        what = (f"point hint {labels[k]!r} = ({xy[0]:.6g}, {xy[1]:.6g}) m is "
+                f"{d[0, k] * scale:.4g} m from the nearest assembly")
+    raise AssemblyError(
+        f"mechanism {topo.mech.name!r}: at driver {topo.mech.driver.joint!r} = "
+        f"{_fmt_value(topo, value)} no assembly lies near the hints: {what} "
+        f"({d[0, k]:.3g} of the linkage's size {scale:.4g} m; at most {HINT_DISTANCE} "
+        "is accepted); correct the [assembly] hints or the geometry", value)
 
 
 def choose_branches(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, ...]:
     """The dyad branch signs whose pose at ``value`` lies nearest the hints.
 
-    Without hints the all-(+1) combination is taken when it closes.
+    Without hints the all-(+1) combination is taken when it closes.  Scores are
+    relative to the mechanism's size, so the choice is the same at any scale.
     """
     best, best_score = None, math.inf
     for signs in itertools.product((1, -1), repeat=cf.n_branch):
         th, E, O, disc, _ = cf.run(np.array([value]), signs)
         if disc.size and np.any(disc < -TOGGLE_SNAP):
             continue
-        sc = _hint_score(topo, th, E, O)
-        if sc < best_score - 1e-15:
+        sc = float(_hint_score(topo, th, E, O)[0])
+        # relative scores: a tie (no hints) keeps the first combination
+        if sc < best_score - 1e-12:
             best, best_score = signs, sc
     if best is None:
         raise _infeasible(topo, value)
@@ -394,35 +442,62 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
     return out
 
 
-def newton(eqs: LoopEquations, q0: np.ndarray, values: np.ndarray, tol: float):
+def step_limits(topo: Topology) -> np.ndarray:
+    """Largest Newton step per unknown ``(nq,)``: rad for angles, m for sliders."""
+    lim = np.full(topo.nq, NEWTON_MAX_STEP)
+    lim[topo.n_groups:] *= size_of(topo)
+    return lim
+
+
+def newton(eqs: LoopEquations, q0: np.ndarray, values: np.ndarray, tol: float,
+           max_iter: int = NEWTON_MAX_ITER):
     """Damped Newton-Raphson on the loop equations plus the driver row, batched.
 
-    Returns ``(q, converged)``; ``converged`` is a bool array ``(N,)``.
+    ``tol`` bounds the loop residual (m); the driver row (rad or m) is held to
+    :data:`LOOP_RESIDUAL` of its own scale, so that the test does not depend on the
+    mechanism's size.  Each start is iterated until it converges (a singular or
+    diverging start simply fails).  Returns ``(q, converged)``; ``converged`` is a bool
+    array ``(N,)``.
     """
     topo = eqs.topo
-    q = q0.copy()
+    q = np.array(q0, float, copy=True)
+    values = np.broadcast_to(np.asarray(values, float), (len(q),))
     c = topo.driver_row
-    for _ in range(NEWTON_MAX_ITER):
-        f = eqs.residual(q)
-        fd = q @ c - topo.driver_const - values
-        F = np.concatenate([f, fd[:, None]], axis=1)
-        err = np.max(np.abs(F), axis=1)
-        if np.all(err < tol):
-            return q, err < tol
-        J = eqs.jacobian(q)
-        A = np.concatenate([J, np.broadcast_to(c, (len(q), 1, eqs.nq))], axis=1)
-        try:
-            dq = np.linalg.lstsq(A[0], -F[0], rcond=None)[0][None] if len(q) == 1 else \
-                np.linalg.solve(A, -F[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            return q, np.zeros(len(q), bool)
-        # limit angle steps to 0.5 rad so a far start does not jump branch wildly
-        step = np.max(np.abs(dq), axis=1, keepdims=True)
-        q = q + dq * np.minimum(1.0, 0.5 / np.maximum(step, 1e-300))
-    f = eqs.residual(q)
-    fd = q @ c - topo.driver_const - values
-    err = np.maximum(np.max(np.abs(f), axis=1), np.abs(fd))
-    return q, err < tol
+    lim = step_limits(topo)
+    tol_d = LOOP_RESIDUAL * (np.maximum(1.0, np.abs(values)) if topo.driven_var is None
+                             or topo.driven_var < topo.n_groups else size_of(topo))
+
+    def errors(q_, v_, td):
+        f = eqs.residual(q_)
+        fd = q_ @ c - topo.driver_const - v_
+        err = np.maximum(np.max(np.abs(f), axis=1, initial=0.0) / tol, np.abs(fd) / td)
+        return np.concatenate([f, fd[:, None]], axis=1), np.where(np.isfinite(err), err, np.inf)
+
+    tol_d = np.broadcast_to(tol_d, (len(q),))
+    active = np.ones(len(q), bool)
+    for _ in range(max_iter):
+        idx = np.flatnonzero(active)
+        F, err = errors(q[idx], values[idx], tol_d[idx])
+        done = err < 1.0
+        active[idx[done]] = False
+        idx, F = idx[~done], F[~done]
+        if not idx.size:
+            break
+        J = eqs.jacobian(q[idx])
+        A = np.concatenate([J, np.broadcast_to(c, (len(idx), 1, eqs.nq))], axis=1)
+        with np.errstate(all="ignore"):
+            try:
+                dq = (np.linalg.pinv(A) @ -F[..., None])[..., 0]
+            except np.linalg.LinAlgError:  # non-finite entries: those starts fail
+                active[idx] = False
+                break
+        ratio = np.max(np.abs(dq) / lim, axis=1, keepdims=True)
+        dq = dq * np.minimum(1.0, 1.0 / np.where(ratio > 0, ratio, 1.0))
+        bad = ~np.all(np.isfinite(dq), axis=1)
+        active[idx[bad]] = False
+        q[idx[~bad]] += dq[~bad]
+    _, err = errors(q, values, tol_d)
+    return q, err < 1.0
 
 
 def initial_guess(topo: Topology) -> np.ndarray:
@@ -435,29 +510,191 @@ def initial_guess(topo: Topology) -> np.ndarray:
     return q
 
 
-class PositionSolver:
-    """Solve positions for any input values; remembers the branch choice."""
+def _driven(topo: Topology, q: np.ndarray, value: float) -> np.ndarray:
+    """Set the driven variable of each row of ``q`` so that the driver row holds."""
+    k = topo.driven_var
+    if k is not None:
+        q[:, k] = (value + topo.driver_const
+                   - q @ topo.driver_row + q[:, k] * topo.driver_row[k]) / topo.driver_row[k]
+    return q
 
-    def __init__(self, topo: Topology, eqs: LoopEquations):
+
+def fit_to_hints(topo: Topology, eqs: LoopEquations, value: float, q0: np.ndarray,
+                 weights=(1.0, 0.1, 1e-2, 1e-3)) -> np.ndarray:
+    """A configuration near the hints: Levenberg-Marquardt on the loop residual (in
+    sizes) plus ``w`` times the hint residuals, for decreasing ``w``.  The result is a
+    Newton start nearest the hints, not an assembly."""
+    hints = topo.mech.assembly
+    scale = size_of(topo)
+    q = _driven(topo, np.array(q0, float, copy=True), value)[0]
+    free = [i for i in range(topo.nq) if i != topo.driven_var]
+    pts = [(topo.body_names.index(k.partition(".")[0]),
+            cplx(topo.body_points[topo.body_names.index(k.partition(".")[0])][k.partition(".")[2]]),
+            cplx(xy)) for k, xy in hints.points.items()]
+    angs = [(topo.body_names.index(bn), a) for bn, a in hints.angles.items()]
+
+    def resid(qs, w):  # qs (M, nq) -> (M, R)
+        th, E, O = poses_from_q(topo, qs)
+        parts = [eqs.residual(qs) / scale]
+        for b, c_, xy in pts:
+            d = (O[:, b] + E[:, b] * c_ - xy) / scale
+            parts += [w * d.real[:, None], w * d.imag[:, None]]
+        for b, a in angs:
+            parts.append(w * ((th[:, b] - a + math.pi) % (2 * math.pi) - math.pi)[:, None])
+        return np.concatenate(parts, axis=1)
+
+    h = 1e-7
+    lim = step_limits(topo)
+    for w in weights:
+        lam = 1e-3
+        for _ in range(40):
+            r0 = resid(q[None], w)[0]
+            Q = np.repeat(q[None], len(free), axis=0)
+            for n, i in enumerate(free):
+                Q[n, i] += h * (scale if i >= topo.n_groups else 1.0)
+            Jr = ((resid(Q, w) - r0) / h).T  # (R, n_free), per unit step
+            g = Jr.T @ r0
+            H = Jr.T @ Jr
+            step = -np.linalg.solve(H + lam * np.diag(np.diag(H) + 1e-12), g)
+            dq = np.zeros(topo.nq)
+            for n, i in enumerate(free):
+                dq[i] = step[n] * (scale if i >= topo.n_groups else 1.0)
+            ratio = float(np.max(np.abs(dq) / lim))
+            if ratio > 1:
+                dq /= ratio
+            qn = q + dq
+            if np.sum(resid(qn[None], w) ** 2) < np.sum(r0 ** 2):
+                q, lam = qn, lam * 0.3
+                if np.max(np.abs(dq) / lim) < 1e-10:
+                    break
+            else:
+                lam *= 10.0
+                if lam > 1e8:
+                    break
+    return q[None]
+
+
+def _distinct(topo: Topology, q: np.ndarray) -> np.ndarray:
+    """Rows of ``q`` that are different assemblies (angles compared modulo 2 pi)."""
+    out = []
+    scale = size_of(topo)
+    for row in q:
+        key = row.copy()
+        for r in out:
+            d = key - r
+            d[:topo.n_groups] = (d[:topo.n_groups] + math.pi) % (2 * math.pi) - math.pi
+            d[topo.n_groups:] /= scale
+            if np.max(np.abs(d)) < 1e-6:
+                break
+        else:
+            out.append(key)
+    return np.array(out).reshape(-1, topo.nq)
+
+
+def assemble(topo: Topology, eqs: LoopEquations, value: float, tol: float) -> np.ndarray:
+    """The assembly ``(1, nq)`` at ``value`` nearest the hints, by Newton-Raphson.
+
+    Newton runs from the hinted angles (0 elsewhere), from a configuration fitted to
+    all hints (:func:`fit_to_hints`) and from :data:`ASSEMBLY_STARTS` seeded random
+    starts; of the distinct assemblies found, the one nearest the hints (in the
+    relative distance of :func:`hint_distances`) is returned.  Without hints, the
+    assembly reached from the plain start (or else the first found) is returned.
+    """
+    hints = topo.mech.assembly
+    q_plain = _driven(topo, initial_guess(topo), value)
+    if not hints.points and not hints.angles:
+        q, ok = newton(eqs, q_plain, np.array([value]), tol)
+        if ok[0]:
+            return q
+    starts = [q_plain]
+    if hints.points or hints.angles:
+        try:
+            starts.append(fit_to_hints(topo, eqs, value, q_plain))
+        except np.linalg.LinAlgError:
+            pass
+    rng = np.random.default_rng(8)
+    R = np.empty((ASSEMBLY_STARTS, topo.nq))
+    R[:, :topo.n_groups] = rng.uniform(-math.pi, math.pi, (ASSEMBLY_STARTS, topo.n_groups))
+    R[:, topo.n_groups:] = rng.uniform(-2, 2, (ASSEMBLY_STARTS, topo.nq - topo.n_groups)) \
+        * size_of(topo)
+    starts.append(_driven(topo, R, value))
+    q, ok = newton(eqs, np.concatenate(starts), np.array([value]), tol)
+    cands = _distinct(topo, q[ok])
+    if not len(cands):
+        raise AssemblyError(
+            f"mechanism {topo.mech.name!r}: Newton-Raphson did not assemble the loops at "
+            f"driver {topo.mech.driver.joint!r} = {_fmt_value(topo, value)} from the hints "
+            f"nor from {ASSEMBLY_STARTS} other starts: the loops cannot close there", value)
+    th, E, O = poses_from_q(topo, cands)
+    return cands[[int(np.argmin(_hint_score(topo, th, E, O)))]]
+
+
+class PositionSolver:
+    """Solve positions for any input values; remembers the branch choice.
+
+    The assembly at the reference input is the one nearest the hints (closed form: the
+    dyad signs; otherwise :func:`assemble`), and it must lie within
+    :data:`HINT_DISTANCE` of them (:func:`check_hints`).  Other inputs continue that
+    assembly along the input axis (see :meth:`solve`).
+
+    ``branch_rule`` says what to do at a change point (two branches crossing):
+    ``"continuous"`` (default) continues the branch whose velocity is continuous and,
+    where that cannot decide, holds the dyad signs; ``"hold"`` always holds them;
+    ``"switch"`` always switches the touching dyads.
+    """
+
+    RULES = ("continuous", "hold", "switch")
+
+    def __init__(self, topo: Topology, eqs: LoopEquations, branch_rule: str = "continuous"):
+        if branch_rule not in self.RULES:
+            raise ValueError(f"branch_rule must be one of {self.RULES}, got {branch_rule!r}")
         self.topo, self.eqs = topo, eqs
+        self.branch_rule = branch_rule
         self.size = size_of(topo)
         self.tol = LOOP_RESIDUAL * self.size
         self.cf = ClosedForm(topo) if topo.plan is not None else None
         v0 = topo.mech.driver.value
+        self.reference = v0
         if self.cf is not None:
             self.signs = choose_branches(topo, self.cf, v0)
+            th, E, O, _, _ = self.cf.run(np.array([v0]), self.signs)
         else:
-            q, ok = newton(eqs, initial_guess(topo), np.array([v0]), self.tol)
-            if not ok[0]:
-                raise AssemblyError(
-                    f"mechanism {topo.mech.name!r}: Newton-Raphson did not assemble the "
-                    f"loops at driver {topo.mech.driver.joint!r} = {_fmt_value(topo, v0)} "
-                    "from the assembly hints; give approximate body angles in [assembly]",
-                    v0)
-            self.q_ref = q
+            self.q_ref = assemble(topo, eqs, v0, self.tol)
+            th, E, O = poses_from_q(topo, self.q_ref)
+        check_hints(topo, th, E, O, v0)
 
-    def solve(self, values: np.ndarray):
+    @cached_property
+    def schedule(self):
+        """The dyad signs along the input axis (:class:`analytic.branches.BranchSchedule`);
+        ``None`` on the Newton path."""
+        if self.cf is None:
+            return None
+        from .branches import BranchSchedule
+        return BranchSchedule(self.topo, self.cf, self.signs, self.reference, self.branch_rule)
+
+    @cached_property
+    def trace(self):
+        """The assembled branch traced over the input (:class:`analytic.continuation.Trace`);
+        ``None`` on the dyad path."""
+        if self.cf is not None:
+            return None
+        from .continuation import trace_branch
+        return trace_branch(self.eqs, self.q_ref[0], self.reference, self.tol)
+
+    def feasible(self) -> list[tuple[float, float]]:
+        """Input intervals (SI) the assembled branch reaches (see :func:`feasible_ranges`)."""
+        if self.cf is None:
+            return self.trace.feasible
+        return feasible_ranges(self.topo, signs=self.signs)
+
+    def solve(self, values: np.ndarray, branch: str = "continued"):
         """Positions for sorted or unsorted input values (SI).
+
+        ``values`` lie on the input axis reached by moving the input continuously from
+        the reference value (so 2 pi and 0 are different after a change point):
+        ``branch="continued"`` follows the assembled branch through change points as
+        the linkage moves (:attr:`schedule`, :attr:`trace`); ``"held"`` holds the
+        reference dyad signs (the closed form's old behaviour).
 
         Returns ``(q, theta, E, O, trans, pre)``: the loop unknowns ``(N, nq)``, body
         angles ``(N, B)``, ``exp(i theta)`` and origins (complex ``(N, B)``), the
@@ -472,7 +709,7 @@ class PositionSolver:
         values = np.asarray(values, float)
         trans = []
         if self.cf is not None:
-            theta, E, O, disc, trans = self.cf.run(values, self.signs)
+            theta, E, O, disc, trans = self._closed_form(values, branch)
             if disc.size:
                 bad = np.flatnonzero(np.any(disc < -TOGGLE_SNAP, axis=1))
                 if bad.size:
@@ -483,7 +720,7 @@ class PositionSolver:
                 if g >= 0:
                     theta[:, b] = q[:, g] + self.topo.offset[b]
         else:
-            q = self._continue(values)
+            q = self.trace.solve(values)
             theta, E, O = poses_from_q(self.topo, q)
         pre = self.eqs.terms_from_poses(q, E)
         if self.eqs.L and len(q):
@@ -498,28 +735,25 @@ class PositionSolver:
                     f"{self.tol:.3g} m", float(values[worst]))
         return q, theta, E, O, trans, pre
 
-    def _continue(self, values):
-        """Sequential Newton continuation from the reference pose, in input order
-        outward from the reference value (first-order predictor)."""
-        v0 = self.topo.mech.driver.value
-        out = np.zeros((len(values), self.topo.nq))
-        order = np.argsort(np.abs(values - v0))
-        prev_v, prev_q = v0, self.q_ref[0]
-        # continue outward in both directions from v0
-        for direction in (1, -1):
-            pv, pq = prev_v, prev_q
-            pqd = None
-            idx = [i for i in order if (values[i] - v0) * direction >= 0]
-            idx.sort(key=lambda i: abs(values[i] - v0))
-            for i in idx:
-                v = values[i]
-                guess = pq.copy()
-                if pqd is not None:
-                    guess = guess + pqd * (v - pv)
-                q, ok = newton(self.eqs, guess[None], np.array([v]), self.tol)
-                if not ok[0]:
-                    raise _infeasible(self.topo, float(v), feasible=[])
-                J = self.eqs.jacobian(q)
-                pqd = self.eqs.solve_rates(J, np.zeros((1, 2 * self.eqs.L)), np.ones(1))[0]
-                out[i], pv, pq = q[0], v, q[0]
-        return out
+    def _closed_form(self, values, branch):
+        """The closed form with each value's dyad signs from the schedule."""
+        if branch == "held" or not len(values) or self.schedule.constant:
+            return self.cf.run(values, self.signs)
+        combos, idx = self.schedule.signs_for(values)
+        if len(combos) == 1:
+            return self.cf.run(values, combos[0])
+        N, B = len(values), len(self.topo.body_names)
+        theta, E, O = np.zeros((N, B)), np.ones((N, B), complex), np.zeros((N, B), complex)
+        disc = None
+        trans = None
+        for k, sg in enumerate(combos):
+            sel = np.flatnonzero(idx == k)
+            th_, E_, O_, d_, tr_ = self.cf.run(values[sel], sg)
+            theta[sel], E[sel], O[sel] = th_, E_, O_
+            if disc is None:
+                disc = np.zeros((N, d_.shape[1]))
+                trans = [(n, np.zeros(N, complex), np.zeros(N, complex)) for n, _, _ in tr_]
+            disc[sel] = d_
+            for (_, a, b), (_, a_, b_) in zip(trans, tr_, strict=True):
+                a[sel], b[sel] = a_, b_
+        return theta, E, O, disc, trans

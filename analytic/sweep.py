@@ -34,7 +34,6 @@ from .errors import AssemblyError
 from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
-from .positions import feasible_ranges
 from .tolerances import SINGULAR_CONDITION
 
 
@@ -50,17 +49,28 @@ class SweepResult:
     feasible: list[tuple[float, float]]
     grashof: str | None = None
     notes: list[str] = field(default_factory=list)
+    #: change points passed (:class:`analytic.branches.Crossing`), in the order met
+    crossings: list = field(default_factory=list)
+    #: engineering summary (:class:`analytic.summary.Summary`)
+    summary: object = None
+
+    def nearest_event(self, at: float, kinds=None):
+        """See :func:`nearest_event`."""
+        return nearest_event(self, at, kinds)
 
 
-def input_values(linkage: Linkage, points: int) -> tuple[np.ndarray, bool, list]:
-    """The sweep's input values: a full turn from the reference angle when the
-    crank can turn fully, else the feasible interval holding the reference value
-    (the branch is held, so the sweep ends near the limit positions)."""
+def input_values(linkage: Linkage, points: int, start: float | None = None
+                 ) -> tuple[np.ndarray, bool, list]:
+    """The sweep's input values: a full turn from ``start`` (default the reference
+    angle) when the crank can turn fully, else the feasible interval of the assembled
+    branch holding the reference value (on the Newton path, the traced branch between
+    its limit positions), so the sweep ends near the limit positions."""
     v0 = linkage.mech.driver.value
-    feas = feasible_ranges(linkage.topo, signs=getattr(linkage.positions, "signs", None))
+    feas = linkage.feasible_ranges()
     if linkage.driver_is_revolute and len(feas) == 1 and \
             feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
-        return v0 + 2 * math.pi * np.arange(points) / points, True, feas
+        a = v0 if start is None else start
+        return a + 2 * math.pi * np.arange(points) / points, True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
             # stay a hair inside the limit positions, where the Jacobian is singular
@@ -97,15 +107,24 @@ def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool) -> list[float]:
     return out
 
 
-def find_events(linkage: Linkage, kin: Kinematics, periodic: bool) -> pd.DataFrame:
+def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
+                feasible: list | None = None, crossings: list | None = None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
 
     * ``singular``: the loop Jacobian's determinant changes sign or its condition
       number exceeds :data:`SINGULAR_CONDITION`: the output cannot be driven
       there (dead centre) or the linkage may switch branch (change point);
+    * ``change_point``: a singular position where two branches cross, passed on the
+      branch named in the detail (``crossings``, see :mod:`analytic.branches`);
     * ``limit``: a body's angular velocity or a slider's velocity changes sign: the
-      extreme (toggle) positions of rockers and the dead centres of sliders;
-    * ``min_transmission``: the least transmission angle of each dyad.
+      extreme (toggle) positions of rockers and the dead centres of sliders; and, for
+      a sweep of a limited range (``feasible``), the input's own limit positions at
+      the ends of the range, beyond which the loops cannot close (located to 1e-9);
+    * ``min_transmission``: the least transmission angle of each dyad (folded into
+      0..90 deg) and its largest deviation from 90 deg.
+
+    Inputs are in the frame's units (deg or m); a full cycle's are wrapped into one
+    turn from its first value.
     """
     topo = linkage.topo
     rev = linkage.driver_is_revolute
@@ -135,12 +154,66 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool) -> pd.DataFra
         _, sd, _ = kin.slider(jn)
         for v in _crossings(x, sd * np.sign(kin.velocity), periodic):
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
+    fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
+    if not periodic and feasible is not None and len(x):
+        for lo, hi in feasible:
+            for end in (lo, hi):
+                if np.min(np.abs(x - end)) <= 1e-3 * max(hi - lo, 1e-300):
+                    rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
+                                 "input limit position: the loops cannot close beyond it "
+                                 "on this branch (the drive effort grows without bound "
+                                 "toward it)"))
+    for c in crossings or []:
+        if len(x) and np.min(x) - 1e-9 <= c.value <= np.max(x) + 1e-9:
+            rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
+                         c.describe(fmt).split(": ", 1)[1]))
     for jn, tr in kin.transmission.items():
-        dev = np.abs(90.0 - tr)
-        i = int(np.argmax(dev))
+        folded = np.minimum(tr, 180.0 - tr)
+        i = int(np.argmin(folded))
         rows.append(("min_transmission", jn, float(conv(x[i])),
-                     f"transmission angle {tr[i]:.3f} deg"))
-    return pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
+                     f"least transmission angle {folded[i]:.3f} deg (raw {tr[i]:.3f} deg; "
+                     f"largest deviation from 90 deg: {90.0 - folded[i]:.3f} deg)"))
+    ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
+    if periodic and rev and len(ev) and len(x):
+        a = float(np.degrees(x[0]))
+        ev["input"] = a + np.mod(ev["input"].to_numpy() - a, 360.0)
+    if len(ev):
+        ev["input"] = np.round(ev["input"].to_numpy(dtype=float), 9) + 0.0
+    return ev.sort_values("input", kind="stable").reset_index(drop=True) if len(ev) else ev
+
+
+@dataclass(frozen=True)
+class NearestEvent:
+    """The event nearest an input value: its row and the distance (frame units)."""
+
+    kind: str
+    where: str
+    input: float
+    detail: str
+    distance: float
+
+
+def nearest_event(result: SweepResult, at: float, kinds=None) -> NearestEvent | None:
+    """The singular position, change point or limit position nearest the input ``at``.
+
+    ``at`` is in the sweep frame's input units (deg for a revolute input, m for a
+    prismatic one), on any turn: for a full cycle the distance is taken modulo 360
+    deg.  ``kinds`` defaults to ``("singular", "change_point", "limit")``.  Returns
+    ``None`` when the sweep has no such event.  Use it to say whether a large error
+    sits next to a position where the mechanism itself is singular.
+    """
+    kinds = ("singular", "change_point", "limit") if kinds is None else tuple(kinds)
+    ev = result.events[result.events.kind.isin(kinds)]
+    if not len(ev):
+        return None
+    d = np.abs(ev["input"].to_numpy() - float(at))
+    if result.full_cycle and result.kinematics.linkage.driver_is_revolute:
+        d = np.mod(d, 360.0)
+        d = np.minimum(d, 360.0 - d)
+    k = int(np.argmin(d))
+    r = ev.iloc[k]
+    return NearestEvent(str(r["kind"]), str(r["where"]), float(r["input"]), str(r["detail"]),
+                        float(d[k]))
 
 
 def grashof(linkage: Linkage) -> str | None:
@@ -225,7 +298,9 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
 
 
 def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
-          values: np.ndarray | None = None) -> SweepResult:
+          values: np.ndarray | None = None, start: float | None = None,
+          velocity: float | None = None, input_range: tuple[float, float] | None = None
+          ) -> SweepResult:
     """Solve the mechanism over a full cycle (or its feasible input range).
 
     Parameters
@@ -236,25 +311,54 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
         Compute kinetostatics; default: when every moving body has a mass.
     values
         Explicit input values (SI) instead of the automatic range.
+    start
+        Input value (SI) where a full-cycle sweep starts (default the reference
+        value; ``0.0`` gives the 0-360 deg table engineers expect).
+    velocity
+        Input velocity (rad/s or m/s) instead of the description's.
+    input_range
+        ``(lo, hi)`` (SI): sweep ``points`` values from ``lo`` to ``hi`` inclusive.
 
     The driver's velocity and acceleration are the description's at every point
     (a constant-speed crank by default).  Singular points do not raise here:
-    they are flagged in ``events`` and in ``jacobian_condition``.
+    they are flagged in ``events`` and in ``jacobian_condition``.  The branch is the
+    assembled one, continued through change points as the linkage moves (listed in
+    ``crossings`` and as ``change_point`` events).
     """
     if points < 2:
         raise ValueError(f"a sweep needs at least 2 points, got {points}")
-    if values is None:
-        values, full, feas = input_values(linkage, points)
+    full, auto = False, values is None and input_range is None
+    if values is not None:
+        values, feas = np.asarray(values, float), linkage.feasible_ranges()
+    elif input_range is not None:
+        values, feas = np.linspace(*input_range, points), linkage.feasible_ranges()
     else:
-        values, full, feas = np.asarray(values, float), False, []
-    kin = linkage.kinematics(values, on_singular="flag")
+        values, full, feas = input_values(linkage, points, start)
+    kin = linkage.kinematics(values, velocity, on_singular="flag")
     if forces is None:
         forces = linkage.mech.has_mass
     frc = linkage.forces(kin) if forces else None
     notes = []
-    if not full and linkage.driver_is_revolute:
+    if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
                                  for a, b in feas) + " on the assembled branch")
-    return SweepResult(kin, frc, to_frame(linkage, kin, frc), find_events(linkage, kin, full),
-                       full, feas, grashof(linkage), notes)
+    crossings = linkage.branch_crossings(float(np.min(values)), float(np.max(values))) \
+        if len(values) else []
+    undecided = [c for c in crossings if c.rule.startswith("held: ")]
+    if undecided:
+        notes.append(f"{len(undecided)} change point(s) where continuity of velocity cannot "
+                     "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
+                     "xval sweep --branch-rule switch takes the other)")
+    trace = linkage.positions.trace
+    if trace is not None:
+        for xc in trace.crossings:
+            notes.append("the assembled branch passes a singular position at "
+                         + (f"{math.degrees(xc):.6g} deg" if linkage.driver_is_revolute
+                            else f"{xc:.6g} m"))
+    events = find_events(linkage, kin, full, None if full else feas, crossings)
+    res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
+                      full, feas, grashof(linkage), notes, crossings)
+    from .summary import summarise
+    res.summary = summarise(res)
+    return res

@@ -63,3 +63,45 @@ ENGINE_RELATIVE = 1e-3
 #: four-bar: only the constraint regularisation separates it from the exact answer;
 #: measured 1.5e-5 of peak for alpha4 with solimp 0.9999, so 1e-4 holds with margin.
 MUJOCO_INSTANTANEOUS = 1e-4
+
+# --- assembly, branches and continuation -------------------------------------
+
+#: Largest distance between the solved assembly and any assembly hint, as a fraction of
+#: the mechanism's size (its longest in-body point distance); an angle hint's distance
+#: is its angle error in rad (the arc it sweeps at one size from the pivot).  Hints are
+#: approximate by design, often only "which side of the line": the built-in six-bar's
+#: hint for link.E sits 0.60 of the size from its assembly, and side hints placed a link
+#: length off the line of a dyad's outer joints (tests/conftest.py) sit up to 1.18 sizes
+#: from theirs.  A hint farther than 1.5 sizes from every assembly is no hint for any
+#: of them (a unit slip, a mirrored drawing, a geometry edited after the hint): the
+#: solver raises, naming the hint and the distance, instead of returning an assembly the
+#: user did not ask for.
+HINT_DISTANCE = 1.5
+
+#: Random Newton starts used to enumerate the assemblies of a mechanism without a dyad
+#: plan (a Stephenson triad has up to 6 real assemblies).  Deterministic (seeded).
+ASSEMBLY_STARTS = 384
+
+#: Largest Newton step: 0.5 rad for an angle, 0.5 mechanism sizes for a slider, so that a
+#: far start moves toward the nearest assembly instead of jumping across the chain.
+NEWTON_MAX_STEP = 0.5
+
+#: Limit and singular positions found by continuation are located by bisection to this
+#: width: rad for a revolute input, times the mechanism's size (m) for a prismatic one.
+#: (Issue 8 asks for 1e-9; the bisection goes to 1e-10 to leave a margin.)
+LIMIT_BISECTION = 1e-10
+
+#: A dyad's relative discriminant (h^2 / L^2) whose local minimum over the input lies
+#: within this of 0 touches zero there: a change point (two assembly branches meet and
+#: cross), not a near miss.  Rounding leaves a few eps at an exact touch, and the
+#: minimum is located to ~1e-11 rad, where a true double root's disc is ~1e-22; a
+#: near-toggle linkage 1e-4 of its length off the Grashof boundary has a minimum of
+#: ~1e-4.  Same size as TOGGLE_SNAP, with which the dyad is snapped to its toggle.
+CHANGE_POINT_DISC = 1e-12
+
+#: Continuity of velocity decides the branch after a change point when the best
+#: candidate's jump in d(pose)/d(input) is below this fraction of the next best's; the
+#: held (kinked) branch jumps by about twice the rocker's speed ratio, the continued one
+#: by O(step * curvature) ~ 1e-5 of it.  Otherwise continuity cannot decide and the
+#: ``branch_rule`` option does.
+CONTINUITY_RATIO = 0.1

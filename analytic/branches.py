@@ -1,0 +1,270 @@
+"""Which dyad signs hold at which input: branches continued through change points.
+
+A dyad's two assemblies are its branch signs.  Where its relative discriminant
+``h^2 / L^2`` touches zero without going negative (a Grashof-boundary linkage's flat
+positions), the two branches meet and cross: this is a *change point*.  Holding the
+sign through it puts a kink in the motion (the velocity of the dyad's links flips), so
+the moving linkage -- and an engine simulating it -- continues on the branch whose
+velocity is continuous, which takes the other sign past the change point.  A
+parallelogram four-bar then stays a parallelogram; holding the sign would turn it into
+the anti-parallelogram.
+
+:class:`BranchSchedule` walks the input axis from the reference value in both
+directions and decides at each change point met which signs follow
+(:meth:`BranchSchedule.decide`): by continuity of velocity (``branch_rule
+"continuous"``; where continuity cannot decide, the signs are held and the crossing
+says so), or as the user says (``"hold"`` or ``"switch"``).  An input value is a point
+on that axis, reached by moving the input continuously from the reference: 0 and
+2 pi differ after a change point, and values over several turns (an engine's run) get
+the branch the linkage is on by then.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .mechanism import Revolute
+from .positions import ClosedForm, input_span, size_of
+from .tolerances import CHANGE_POINT_DISC, CONTINUITY_RATIO, TOGGLE_SNAP
+from .topology import Topology
+
+#: Samples per turn (or span) searched for the discriminants' minima.
+_SAMPLES = 3600
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """A change point passed on the way from the reference input.
+
+    ``value`` (SI, on the input axis), ``joints`` the inner joints of the dyads at
+    their toggle there, ``before`` and ``after`` the dyad signs, ``rule`` how the
+    signs after were chosen: ``"velocity"`` (continuity of velocity),
+    ``"held: continuity cannot decide"``, ``"hold"`` or ``"switch"`` (the
+    ``branch_rule`` option), and ``jump`` the jump in d(pose)/d(input) that holding
+    the signs would have caused (relative; 0 when held by velocity).
+    """
+
+    value: float
+    joints: tuple[str, ...]
+    before: tuple[int, ...]
+    after: tuple[int, ...]
+    rule: str
+    jump: float
+
+    @property
+    def switched(self) -> bool:
+        return self.before != self.after
+
+    def describe(self, fmt=str) -> str:
+        if self.switched:
+            what = (f"dyad sign at {', '.join(self.joints)} switched "
+                    f"{_signs(self.before)} -> {_signs(self.after)}")
+        else:
+            what = f"dyad signs held {_signs(self.before)}"
+        how = {"velocity": "the branch whose velocity is continuous (the linkage's own motion)",
+               "hold": "branch_rule 'hold'", "switch": "branch_rule 'switch'"}.get(
+                   self.rule, "continuity of velocity cannot decide here; signs held "
+                              "(branch_rule 'switch' takes the other branch)")
+        return f"change point at {fmt(self.value)}: {what}; {how}"
+
+
+def _signs(s) -> str:
+    return "(" + ", ".join("+1" if v > 0 else "-1" for v in s) + ")"
+
+
+class BranchSchedule:
+    """Dyad signs along the input axis, continued from the reference through change
+    points (see the module docstring)."""
+
+    def __init__(self, topo: Topology, cf: ClosedForm, signs0: tuple[int, ...],
+                 reference: float, rule: str = "continuous"):
+        self.topo, self.cf, self.signs0 = topo, cf, tuple(signs0)
+        self.reference, self.rule = reference, rule
+        self.revolute = isinstance(topo.mech.driver_joint, Revolute)
+        self.size = size_of(topo)
+        self.period = 2 * math.pi if self.revolute else None
+        self._touch_memo: dict = {}
+        self._decide_memo: dict = {}
+        # the inner joint of each branching dyad (the order of the signs)
+        self.dyad_joints = [topo.joint_names[st.joints[1]] for st in topo.plan
+                            if st.kind in ("RRR", "RRP", "RPR")]
+
+    # --- change points ------------------------------------------------------------
+    def touches(self, signs) -> list[tuple[float, tuple[int, ...]]]:
+        """Change points of the branch ``signs`` on one period from the reference (or
+        the input span of a slider): ``[(value, dyads touching zero)]``."""
+        signs = tuple(signs)
+        if signs in self._touch_memo:
+            return self._touch_memo[signs]
+        if self.period is not None:
+            lo, hi = self.reference, self.reference + self.period
+        else:
+            lo, hi = input_span(self.topo)
+        x = np.linspace(lo, hi, _SAMPLES + 1)
+        disc = self.cf.run(x, signs)[3]
+        found = []
+        for k in range(disc.shape[1]):
+            d = disc[:, k]
+            for i in range(len(x)):
+                prev = d[i - 1] if i > 0 else (d[-2] if self.period else np.inf)
+                nxt = d[i + 1] if i < len(x) - 1 else (d[1] if self.period else np.inf)
+                if d[i] <= prev and d[i] <= nxt and abs(d[i]) < 1e-3 \
+                        and (i < len(x) - 1 or not self.period):
+                    xm = self._refine_min(x[i], x[1] - x[0], signs, k)
+                    dm = float(self.cf.run(np.array([xm]), signs)[3][0, k])
+                    if abs(dm) <= CHANGE_POINT_DISC:
+                        found.append((xm, k))
+        out: dict[float, set] = {}
+        for xm, k in sorted(found):
+            key = next((v for v in out if abs(v - xm) < 1e-7 * (1 if self.revolute
+                                                                  else self.size)), xm)
+            out.setdefault(key, set()).add(k)
+        res = [(v, tuple(sorted(ks))) for v, ks in sorted(out.items())]
+        self._touch_memo[signs] = res
+        return res
+
+    def _refine_min(self, x0: float, dx: float, signs, k: int) -> float:
+        """The minimum of dyad ``k``'s discriminant near ``x0``: vertex of a parabola
+        through three samples, twice, with a shrinking spacing (a double root's
+        minimum is located to ~1e-11 where sampling the values alone gives 1e-8)."""
+        x = x0
+        for h in (dx, 1e-3 * dx, 1e-5 * dx):
+            y = self.cf.run(np.array([x - h, x, x + h]), signs)[3][:, k]
+            den = y[0] - 2 * y[1] + y[2]
+            if den > 0:
+                x = x + 0.5 * h * (y[0] - y[2]) / den
+        return float(x)
+
+    @cached_property
+    def constant(self) -> bool:
+        """True when the reference branch meets no change point (signs never change)."""
+        return not self.touches(self.signs0)
+
+    # --- decisions ----------------------------------------------------------------
+    def _pose(self, x, signs):
+        th, E, O, disc, _ = self.cf.run(np.asarray(x, float), signs)
+        v = np.concatenate([th, O.real / self.size, O.imag / self.size], axis=1)
+        return v, disc
+
+    def decide(self, t: float, signs, dyads, d: int) -> Crossing:
+        """The signs after the change point ``t`` met moving in direction ``d``."""
+        signs = tuple(signs)
+        key = (round(t, 9), signs, d)
+        if key in self._decide_memo:
+            c = self._decide_memo[key]
+            return Crossing(t, c.joints, c.before, c.after, c.rule, c.jump)
+        joints = tuple(self.dyad_joints[k] for k in dyads)
+        cands = []
+        for flip in itertools.product((False, True), repeat=len(dyads)):
+            s = list(signs)
+            for k, f in zip(dyads, flip, strict=True):
+                if f:
+                    s[k] = -s[k]
+            cands.append(tuple(s))
+        switch = tuple(-s if k in dyads else s for k, s in enumerate(signs))
+        h = 1e-5 * (1.0 if self.revolute else self.size)
+        left, _ = self._pose(t - d * np.array([2 * h, h]), signs)
+        slope_l = (left[1] - left[0]) / h
+        # the pose angles may wrap by 2 pi between the two samples: compare them unwrapped
+        jumps = {}
+        for c in cands:
+            right, disc = self._pose(t + d * np.array([h, 2 * h]), c)
+            if disc.size and np.any(disc < -TOGGLE_SNAP):
+                continue
+            dr = right[1] - right[0]
+            dr[:len(self.topo.body_names)] = (dr[:len(self.topo.body_names)] + math.pi) \
+                % (2 * math.pi) - math.pi
+            jumps[c] = float(np.max(np.abs(dr / h - slope_l)))
+        scale = max(float(np.max(np.abs(slope_l))), 1e-300)
+        held_jump = jumps.get(signs, math.inf) / scale
+        if self.rule == "hold" or not jumps:
+            after, rule = signs, "hold"
+        elif self.rule == "switch":
+            after, rule = (switch if switch in jumps else signs), "switch"
+        else:
+            order = sorted(jumps, key=jumps.get)
+            best = order[0]
+            second = jumps[order[1]] if len(order) > 1 else math.inf
+            if jumps[best] <= CONTINUITY_RATIO * second:
+                after, rule = best, "velocity"
+            else:
+                after, rule = signs, "held: continuity cannot decide"
+        c = Crossing(t, joints, signs, after, rule, 0.0 if after == signs else held_jump)
+        self._decide_memo[key] = c
+        return c
+
+    # --- the walk -----------------------------------------------------------------
+    def _next(self, x: float, signs, d: int):
+        """The next change point of branch ``signs`` strictly beyond ``x`` in
+        direction ``d``: ``(value, dyads)`` or ``None``."""
+        tp = self.touches(signs)
+        if not tp:
+            return None
+        eps = 1e-9 * (1.0 if self.revolute else self.size)
+        if self.period is None:
+            c = [(v, k) for v, k in tp if (v - x) * d > eps]
+            return (min(c, key=lambda t: abs(t[0] - x))) if c else None
+        P = self.period
+        best = None
+        for v, k in tp:
+            n = math.floor((x - v) / P) + (1 if d > 0 else 0)
+            for m in (n - 1, n, n + 1):
+                w = v + m * P
+                if (w - x) * d > eps and (best is None or abs(w - x) < abs(best[0] - x)):
+                    best = (w, k)
+        return best
+
+    def walk(self, lo: float, hi: float):
+        """Segments ``[(a, b, signs)]`` covering ``[min(lo, ref), max(hi, ref)]`` in
+        increasing order, and the change points crossed (:class:`Crossing`, in the
+        order met going outward from the reference)."""
+        segs_up, segs_dn, crossings = [], [], []
+        for d, end, segs in ((1, hi, segs_up), (-1, lo, segs_dn)):
+            x, s = self.reference, self.signs0
+            guard = 0
+            while (end - x) * d > 0:
+                nx = self._next(x, s, d)
+                if nx is None or (nx[0] - end) * d >= 0:
+                    segs.append((x, end, s))
+                    break
+                c = self.decide(nx[0], s, nx[1], d)
+                crossings.append(c)
+                segs.append((x, nx[0], s))
+                x, s = nx[0], c.after
+                guard += 1
+                if guard > 100000:
+                    raise RuntimeError("branch schedule: too many change points")
+        out = [(min(a, b), max(a, b), s) for a, b, s in segs_dn[::-1]] + \
+            [(a, b, s) for a, b, s in segs_up]
+        if not out:
+            out = [(self.reference, self.reference, self.signs0)]
+        return out, crossings
+
+    def signs_for(self, values: np.ndarray):
+        """The dyad signs at each input value: ``(combos, index (N,))``."""
+        values = np.asarray(values, float)
+        if self.constant:
+            return [self.signs0], np.zeros(len(values), int)
+        segs, _ = self.walk(float(np.min(values)), float(np.max(values)))
+        starts = np.array([a for a, _, _ in segs])
+        k = np.clip(np.searchsorted(starts, values, side="right") - 1, 0, len(segs) - 1)
+        combos, idx = [], np.empty(len(values), int)
+        for i, seg in enumerate(segs):
+            sel = k == i
+            if not sel.any():
+                continue
+            if seg[2] not in combos:
+                combos.append(seg[2])
+            idx[sel] = combos.index(seg[2])
+        return combos, idx
+
+    def crossings(self, lo: float, hi: float) -> list[Crossing]:
+        """The change points passed moving from the reference to ``lo`` and to ``hi``."""
+        if self.constant:
+            return []
+        return self.walk(lo, hi)[1]

@@ -1,0 +1,203 @@
+"""The engineering summary of a sweep: stroke, swing, time ratio, transmission, peak effort.
+
+All figures come from the sweep's own arrays and events (:mod:`analytic.sweep`), so
+the summary and the table beside it are the same computation.
+
+* **Stroke** of each slider (not the driver): ``max s - min s`` over the sweep (m).
+* **Swing** of each rocker (a moving body pivoted on the ground, other than the
+  input): ``max - min`` of its unwrapped angle (deg); a body that turns fully in a full
+  cycle is a crank and has no swing.
+* **Time ratio**: where a slider or rocker reverses twice per full cycle, the input
+  spans of its two strokes (between its limit positions); at constant input speed the
+  times are in the same ratio.  Reported as slower / quicker (>= 1), with the
+  direction of the slower stroke.
+* **Transmission angle** of each dyad: its least value folded into 0..90 deg and its
+  largest deviation from 90 deg (= 90 - least), with where it occurs.
+* **Peak drive effort** and the event nearest it (a peak next to a limit or singular
+  position is the mechanism's own, not an error).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Stroke:
+    """A slider's (``kind="slider"``, m) or rocker's (``"rocker"``, deg) travel."""
+
+    kind: str
+    name: str
+    low: float
+    high: float
+    travel: float
+    turns_fully: bool = False
+    #: input spans (frame units) of the two strokes between the limit positions, the
+    #: slower first, and the direction of the slower one ("increasing"/"decreasing")
+    slow_span: float | None = None
+    quick_span: float | None = None
+    slow_direction: str | None = None
+
+    @property
+    def time_ratio(self) -> float | None:
+        if self.slow_span is None or not self.quick_span:
+            return None
+        return self.slow_span / self.quick_span
+
+
+@dataclass(frozen=True)
+class TransmissionSummary:
+    joint: str
+    least_deg: float
+    at: float
+    largest_deviation_deg: float
+
+
+@dataclass
+class Summary:
+    """See the module docstring.  Inputs are in the sweep frame's units (``unit``)."""
+
+    unit: str
+    first: float
+    last: float
+    full_cycle: bool
+    reference: float
+    strokes: list[Stroke] = field(default_factory=list)
+    transmission: list[TransmissionSummary] = field(default_factory=list)
+    effort_name: str | None = None
+    effort_unit: str | None = None
+    peak_effort: float | None = None
+    peak_effort_at: float | None = None
+    peak_event: object = None
+    constant_speed: bool = True
+
+    def lines(self) -> list[str]:
+        """Plain-text lines for the command line."""
+        u = self.unit
+        out = [f"input {self.first:.6g} to {self.last:.6g} {u}"
+               + (" (one full turn)" if self.full_cycle else " (limited range)")
+               + f"; reference value {self.reference:.6g} {u}"]
+        for s in self.strokes:
+            unit = "m" if s.kind == "slider" else "deg"
+            if s.turns_fully:
+                out.append(f"{s.kind} {s.name}: turns fully")
+                continue
+            line = (f"{s.kind} {s.name}: {'stroke' if s.kind == 'slider' else 'swing'} "
+                    f"{s.travel:.6g} {unit} ({s.low:.6g} to {s.high:.6g} {unit})")
+            if s.time_ratio is not None:
+                line += (f", time ratio {s.time_ratio:.4f} (slower stroke {s.slow_direction}"
+                         f" over {s.slow_span:.4f} {u} of input, quicker over "
+                         f"{s.quick_span:.4f} {u}"
+                         + ("" if self.constant_speed else "; input spans, the input "
+                            "accelerates") + ")")
+            out.append(line)
+        for t in self.transmission:
+            out.append(f"transmission angle at {t.joint}: least {t.least_deg:.3f} deg at "
+                       f"{t.at:.6g} {u}, largest deviation from 90 deg "
+                       f"{t.largest_deviation_deg:.3f} deg")
+        if self.peak_effort is not None:
+            line = (f"peak |{self.effort_name}| {self.peak_effort:.6g} {self.effort_unit} at "
+                    f"{self.peak_effort_at:.6g} {u}")
+            ev = self.peak_event
+            if ev is not None:
+                line += (f", {ev.distance:.3g} {u} from the {ev.kind.replace('_', ' ')} "
+                         f"position ({ev.where}) at {ev.input:.6g} {u}")
+            out.append(line)
+        return out
+
+
+def _spans(x: np.ndarray, y: np.ndarray, period: float):
+    """Input spans of the increasing and decreasing strokes of a periodic ``y(x)``
+    with one maximum and one minimum per period (parabolic interpolation)."""
+    def vertex(i):
+        n = len(y)
+        a, b, c = y[(i - 1) % n], y[i], y[(i + 1) % n]
+        den = a - 2 * b + c
+        h = x[1] - x[0]
+        return x[i] + (0.5 * h * (a - c) / den if den != 0 else 0.0)
+    xmax, xmin = vertex(int(np.argmax(y))), vertex(int(np.argmin(y)))
+    inc = (xmax - xmin) % period
+    return inc, period - inc
+
+
+def _reversals(y: np.ndarray) -> int:
+    d = np.diff(np.concatenate([y, y[:1]]))
+    peak = np.max(np.abs(d)) if len(d) else 0.0
+    s = np.sign(d[np.abs(d) > 1e-9 * peak]) if peak > 0 else np.array([])
+    return int(np.sum(s != np.roll(s, 1))) if len(s) else 0
+
+
+def summarise(result) -> Summary:
+    """The :class:`Summary` of a :class:`analytic.sweep.SweepResult`."""
+    from .sweep import nearest_event
+    kin = result.kinematics
+    lk = kin.linkage
+    mech, topo = lk.mech, lk.topo
+    rev = lk.driver_is_revolute
+    unit = "deg" if rev else "m"
+    conv = np.degrees if rev else (lambda v: np.asarray(v, float))
+    x = conv(kin.value)
+    summ = Summary(unit, float(x[0]) if len(x) else math.nan,
+                   float(x[-1]) if len(x) else math.nan, result.full_cycle,
+                   float(conv(mech.driver.value)),
+                   constant_speed=bool(np.all(kin.acceleration == 0)))
+    if not len(x):
+        return summ
+    period = 360.0 if rev else None
+    periodic = result.full_cycle and rev
+    for j in topo.prismatic:
+        if j == topo.driver_joint:
+            continue
+        jn = topo.joint_names[j]
+        s = kin.slider(jn)[0]
+        st = dict(kind="slider", name=jn, low=float(s.min()), high=float(s.max()),
+                  travel=float(s.max() - s.min()))
+        if periodic and _reversals(s) == 2:
+            inc, dec = _spans(x, s, period)
+            slow, quick, dirn = (inc, dec, "increasing") if inc >= dec else \
+                (dec, inc, "decreasing")
+            st.update(slow_span=slow, quick_span=quick, slow_direction=f"(s {dirn})")
+        summ.strokes.append(Stroke(**st))
+    dj = mech.driver_joint
+    driven = {dj.body_a, dj.body_b} - {mech.ground}
+    for jt in mech.joints:
+        if not _is_revolute(jt) or mech.ground not in jt.bodies or jt.name == dj.name:
+            continue
+        body = jt.body_b if jt.body_a == mech.ground else jt.body_a
+        if body in driven:
+            continue
+        b = topo.body_names.index(body)
+        th = np.degrees(kin.theta[:, b])
+        net = th[-1] + (th[-1] - th[-2]) - th[0] if len(th) > 1 else 0.0
+        if periodic and abs(net) > 180.0:
+            summ.strokes.append(Stroke("rocker", body, math.nan, math.nan, math.nan, True))
+            continue
+        st = dict(kind="rocker", name=body, low=float(th.min()), high=float(th.max()),
+                  travel=float(th.max() - th.min()))
+        if periodic and _reversals(th) == 2:
+            inc, dec = _spans(x, th, period)
+            slow, quick, dirn = (inc, dec, "ccw") if inc >= dec else (dec, inc, "cw")
+            st.update(slow_span=slow, quick_span=quick, slow_direction=f"({dirn})")
+        summ.strokes.append(Stroke(**st))
+    for jn, tr in kin.transmission.items():
+        folded = np.minimum(tr, 180.0 - tr)
+        i = int(np.argmin(folded))
+        summ.transmission.append(TransmissionSummary(jn, float(folded[i]), float(x[i]),
+                                                     float(90.0 - folded[i])))
+    if result.forces is not None:
+        eff = np.abs(result.forces.effort)
+        if np.any(np.isfinite(eff)):
+            i = int(np.nanargmax(eff))
+            summ.effort_name = "drive torque" if rev else "drive force"
+            summ.effort_unit = "N m" if rev else "N"
+            summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
+            summ.peak_event = nearest_event(result, float(x[i]))
+    return summ
+
+
+def _is_revolute(jt) -> bool:
+    from .mechanism import Revolute
+    return isinstance(jt, Revolute)
