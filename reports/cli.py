@@ -182,20 +182,31 @@ def cmd_solve(args) -> int:
 def cmd_sweep(args) -> int:
     mech = load_case(args.case)
     opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints))
-    lk = Linkage(mech)
-    r = lk.sweep(args.points)
+    lk = Linkage(mech, branch_rule=args.branch_rule)
+    kw = {"velocity": args.omega}
+    if args.range is not None:
+        rev = isinstance(mech.driver_joint, Revolute)
+        if not (np.all(np.isfinite(args.range)) and args.range[1] > args.range[0]):
+            raise LinkageError(f"option --range: {args.range[0]} {args.range[1]} must be two "
+                               "finite numbers, the second larger")
+        kw["input_range"] = tuple(math.radians(v) if rev else v for v in args.range)
+    elif isinstance(mech.driver_joint, Revolute):
+        kw["start"] = 0.0  # the table and the events run from 0 to 360 deg
+    r = lk.sweep(args.points, **kw)
     if args.csv:
         write_csv(r.frame, args.csv, getattr(args, "stdout", sys.stdout))
     print(f"{mech.name}: {len(r.frame)} points, "
-          + ("full cycle" if r.full_cycle else "feasible range only")
+          + ("full cycle" if r.full_cycle else "the range asked for" if args.range
+             else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))
     for n in r.notes:
         print("note:", n)
     if len(r.events):
         print(r.events.to_string(index=False))
+    for line in r.summary.lines():
+        print(line)
     if r.forces is not None:
-        print(f"peak |drive effort| {np.max(np.abs(r.forces.effort)):.6g}, "
-              f"power balance error {r.forces.power_balance_error():.2g} (relative)")
+        print(f"power balance error {r.forces.power_balance_error():.2g} (relative)")
     if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
@@ -233,6 +244,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--csv", type=opt.output_file,
                    help="write the table to this CSV file ('-': standard output, the "
                         "summary then goes to standard error)")
+    s.add_argument("--omega", type=opt.rate,
+                   help="input velocity, rad/s (or m/s); default the description's")
+    s.add_argument("--range", type=float, nargs=2, metavar=("FROM", "TO"),
+                   help="sweep from FROM to TO, deg (or m), instead of the full cycle "
+                        "(default: 0 to 360 deg, or the feasible range)")
+    s.add_argument("--branch-rule", choices=("continuous", "hold", "switch"),
+                   default="continuous",
+                   help="branch taken at a change point: the one whose velocity is "
+                        "continuous (default), or hold / switch the dyad signs")
     s.set_defaults(func=cmd_sweep)
     _register_more(sub)
     return p
