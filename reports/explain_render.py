@@ -1,0 +1,212 @@
+"""Write a worked solution as Markdown, HTML or LaTeX.
+
+* Markdown: ``$...$`` / ``$$...$$`` LaTeX from SymPy's printer; each figure as an SVG
+  file beside the output (or embedded as a data URI when printing to stdout).
+* HTML: one self-contained page; mathematics as presentation MathML from SymPy's
+  MathML printer (rendered by the browser itself, offline: no script, no network),
+  figures as inline SVG.
+* LaTeX: a standalone ``article``; figures as TikZ.
+
+A substituted equation is followed by its ``calc:`` line, the plain-text form of
+the same SymPy expression and the value it evaluates to.
+"""
+
+from __future__ import annotations
+
+import base64
+import html as _html
+from pathlib import Path
+
+from . import explain_sym as S
+from .explain_blocks import Document, Figure, Heading, Math, Para, Table
+
+
+def _calc(b: Math) -> str:
+    return f"calc: {b.check} = {b.value}"
+
+
+def _unit_tex(u: str) -> str:
+    u = u.replace("^2", "²")
+    return r"\ \mathrm{{{}}}".format(u.replace("²", "^2").replace("deg", r"{}^\circ")) if u else ""
+
+
+def _chain_tex(b: Math) -> str:
+    parts = [S.latex(p) for p in b.parts]
+    if b.value is not None:
+        v = b.value + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
+        parts.append(v)
+    if len(parts) <= 2:
+        return " = ".join(parts)
+    return (r"\begin{aligned} " + parts[0] + " &= " + r" \\ &= ".join(parts[1:])
+            + r" \end{aligned}")
+
+
+def _cell_md(c) -> str:
+    if isinstance(c, str):
+        return c.replace("|", "\\|")
+    return f"${S.latex(c)}$"
+
+
+def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain") -> str:
+    out = [f"# {doc.title}", ""]
+    for b in doc.blocks:
+        if isinstance(b, Heading):
+            out += ["#" * b.level + " " + b.text, ""]
+        elif isinstance(b, Para):
+            out += ["".join(p if isinstance(p, str) else f"${S.latex(p)}$" for p in b.parts),
+                    ""]
+        elif isinstance(b, Math):
+            out += ["$$", _chain_tex(b), "$$", ""]
+            if b.note:
+                out += [f"*{b.note}*", ""]
+            if b.check is not None:
+                out += [f"`{_calc(b)}`", ""]
+        elif isinstance(b, Table):
+            out += [f"*Table {b.key}: {b.caption}*", ""]
+            out.append("| " + " | ".join(_cell_md(c) for c in b.header) + " |")
+            out.append("|" + "---|" * len(b.header))
+            for row in b.rows:
+                out.append("| " + " | ".join(_cell_md(c) for c in row) + " |")
+            out.append("")
+        elif isinstance(b, Figure):
+            if figdir is not None:
+                name = f"{stem}-{b.name}.svg"
+                (figdir / name).write_text(b.svg, encoding="utf-8")
+                out += [f"![{b.caption}]({name})", ""]
+            else:
+                data = base64.b64encode(b.svg.encode()).decode()
+                out += [f"![{b.caption}](data:image/svg+xml;base64,{data})", ""]
+            out += [f"*{b.caption}*", ""]
+    return "\n".join(out)
+
+
+# -- HTML -----------------------------------------------------------------------------------
+
+_CSS = """
+body { font-family: Georgia, 'DejaVu Serif', serif; max-width: 1100px; margin: 2em auto;
+       padding: 0 1em; color: #222; line-height: 1.45; }
+h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
+math[display=block] { display: block; margin: 0.6em 0; overflow-x: auto; font-size: 1.1em; }
+.eq { overflow-x: auto; }
+table { border-collapse: collapse; margin: 0.5em 0 1em; }
+td, th { border: 1px solid #bbb; padding: 0.25em 0.7em; text-align: right; }
+caption { caption-side: top; text-align: left; font-style: italic; padding: 0.3em 0; }
+code.calc { display: block; color: #555; font-size: 0.85em; margin: -0.2em 0 0.8em 1em; }
+.note { color: #555; font-style: italic; margin: -0.3em 0 0.6em 1em; }
+figure { margin: 1em 0; } figcaption { font-style: italic; color: #444; }
+"""
+
+
+def _ml(e, display: bool = False) -> str:
+    if isinstance(e, str):
+        return _html.escape(e)
+    d = ' display="block"' if display else ""
+    return f'<math xmlns="http://www.w3.org/1998/Math/MathML"{d}>{S.mathml(e)}</math>'
+
+
+def _chain_ml(b: Math) -> str:
+    items = [S.mathml(p) for p in b.parts]
+    if b.value is not None:
+        unit = {"deg": "<mo>°</mo>"}.get(b.unit, f"<mspace width='0.3em'/><mtext>"
+                                         f"{_html.escape(b.unit.replace('^2', '²'))}</mtext>"
+                                         if b.unit else "")
+        items.append(f"<mrow><mn>{b.value}</mn>{unit}</mrow>")
+    body = "<mo>=</mo>".join(items)
+    return (f'<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">'
+            f"<mrow>{body}</mrow></math>")
+
+
+def to_html(doc: Document) -> str:
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+           f"<title>{_html.escape(doc.title)}</title><style>{_CSS}</style></head><body>",
+           f"<h1>{_html.escape(doc.title)}</h1>"]
+    for b in doc.blocks:
+        if isinstance(b, Heading):
+            out.append(f"<h{b.level}>{_html.escape(b.text)}</h{b.level}>")
+        elif isinstance(b, Para):
+            out.append("<p>" + "".join(_ml(p) for p in b.parts) + "</p>")
+        elif isinstance(b, Math):
+            out.append(f'<div class="eq">{_chain_ml(b)}</div>')
+            if b.note:
+                out.append(f'<p class="note">{_html.escape(b.note)}</p>')
+            if b.check is not None:
+                out.append(f'<code class="calc">{_html.escape(_calc(b))}</code>')
+        elif isinstance(b, Table):
+            out.append(f'<table id="{b.key}"><caption>Table {b.key}: '
+                       f"{_html.escape(b.caption)}</caption><tr>"
+                       + "".join(f"<th>{_ml(c)}</th>" for c in b.header) + "</tr>")
+            for row in b.rows:
+                out.append("<tr>" + "".join(f"<td>{_ml(c)}</td>" for c in row) + "</tr>")
+            out.append("</table>")
+        elif isinstance(b, Figure):
+            out.append(f"<figure>{b.svg}<figcaption>{_html.escape(b.caption)}</figcaption>"
+                       "</figure>")
+    out.append("</body></html>")
+    return "\n".join(out)
+
+
+# -- LaTeX -----------------------------------------------------------------------------------
+
+_TEX_TEXT = [("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
+             ("#", r"\#"), ("_", r"\_"), ("{", r"\{"), ("}", r"\}"), ("^", r"\^{}"),
+             ("~", r"\~{}")]
+_TEX_UNICODE = [("θ̇", r"$\dot\theta$"), ("θ̈", r"$\ddot\theta$"), ("ṙ", r"$\dot r$"),
+                ("r̈", r"$\ddot r$"), ("ṡ", r"$\dot s$"), ("s̈", r"$\ddot s$"),
+                ("θ", r"$\theta$"), ("μ", r"$\mu$"), ("σ", r"$\sigma$"), ("ω", r"$\omega$"),
+                ("α", r"$\alpha$"), ("δ", r"$\delta$"), ("γ", r"$\gamma$"), ("°", r"$^\circ$"),
+                ("²", r"$^2$"), ("−", "-"), ("·", r"$\cdot$"), ("→", r"$\to$"),
+                ("∞", r"$\infty$"), ("≈", r"$\approx$"), ("×", r"$\times$")]
+
+
+def _tex_text(s: str) -> str:
+    for a, b in _TEX_TEXT:
+        s = s.replace(a, b)
+    for a, b in _TEX_UNICODE:
+        s = s.replace(a, b)
+    return s
+
+
+def _tex_cell(c) -> str:
+    return _tex_text(c) if isinstance(c, str) else f"${S.latex(c)}$"
+
+
+def to_latex(doc: Document) -> str:
+    out = [r"\documentclass[11pt]{article}", r"\usepackage[utf8]{inputenc}",
+           r"\usepackage{amsmath,amssymb}", r"\usepackage{tikz}",
+           r"\usepackage[margin=2cm]{geometry}", r"\allowdisplaybreaks",
+           r"\begin{document}", rf"\section*{{{_tex_text(doc.title)}}}"]
+    for b in doc.blocks:
+        if isinstance(b, Heading):
+            out.append({2: r"\subsection*{%s}", 3: r"\subsubsection*{%s}"}.get(
+                b.level, r"\paragraph{%s}") % _tex_text(b.text))
+        elif isinstance(b, Para):
+            out.append("".join(_tex_text(p) if isinstance(p, str) else f"${S.latex(p)}$"
+                               for p in b.parts) + "\n")
+        elif isinstance(b, Math):
+            out.append(r"\[" + _chain_tex(b) + r"\]")
+            if b.note:
+                out.append(r"{\small\itshape " + _tex_text(b.note) + "}\n")
+            if b.check is not None:
+                out.append(r"{\footnotesize\texttt{" + _tex_text(_calc(b)) + "}}\n")
+        elif isinstance(b, Table):
+            out.append(r"\begin{center}{\small\itshape Table " + _tex_text(b.key) + ": "
+                       + _tex_text(b.caption) + r"}\\[2pt]")
+            out.append(r"\begin{tabular}{" + "|c" * len(b.header) + "|}\\hline")
+            out.append(" & ".join(_tex_cell(c) for c in b.header) + r"\\\hline")
+            for row in b.rows:
+                out.append(" & ".join(_tex_cell(c) for c in row) + r"\\\hline")
+            out.append(r"\end{tabular}\end{center}")
+        elif isinstance(b, Figure):
+            out.append(r"\begin{center}" + b.tikz + r"\\[2pt]{\small\itshape "
+                       + _tex_text(b.caption) + r"}\end{center}")
+    out.append(r"\end{document}")
+    return "\n".join(out)
+
+
+def render(doc: Document, fmt: str, out: Path | None = None) -> str:
+    if fmt == "html":
+        return to_html(doc)
+    if fmt == "tex":
+        return to_latex(doc)
+    figdir = out.parent if out is not None else None
+    return to_markdown(doc, figdir, out.stem if out is not None else "explain")
