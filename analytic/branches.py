@@ -110,15 +110,18 @@ class BranchSchedule:
         found = []
         for k in range(disc.shape[1]):
             d = disc[:, k]
-            for i in range(len(x)):
-                prev = d[i - 1] if i > 0 else (d[-2] if self.period else np.inf)
-                nxt = d[i + 1] if i < len(x) - 1 else (d[1] if self.period else np.inf)
-                if d[i] <= prev and d[i] <= nxt and abs(d[i]) < 1e-3 \
-                        and (i < len(x) - 1 or not self.period):
-                    xm = self._refine_min(x[i], x[1] - x[0], signs, k)
-                    dm = float(self.cf.run(np.array([xm]), signs)[3][0, k])
-                    if abs(dm) <= CHANGE_POINT_DISC:
-                        found.append((xm, k))
+            if self.period:  # periodic: the last sample repeats the first
+                prev, nxt = np.roll(d[:-1], 1), np.roll(d[:-1], -1)
+                d = d[:-1]
+            else:
+                prev = np.concatenate([[np.inf], d[:-1]])
+                nxt = np.concatenate([d[1:], [np.inf]])
+            # candidate minima near zero; the refined minimum decides
+            for i in np.flatnonzero((d <= prev) & (d <= nxt) & (np.abs(d) < 1e-3)):
+                xm = self._refine_min(x[i], x[1] - x[0], signs, k)
+                dm = float(self.cf.run(np.array([xm]), signs)[3][0, k])
+                if abs(dm) <= CHANGE_POINT_DISC:
+                    found.append((xm, k))
         out: dict[float, set] = {}
         for xm, k in sorted(found):
             key = next((v for v in out if abs(v - xm) < 1e-7 * (1 if self.revolute

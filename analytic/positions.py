@@ -439,6 +439,11 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
             i = k + 1
         else:
             i += 1
+    if isinstance(topo.mech.driver_joint, Revolute) and len(out) > 1 and \
+            out[0][0] == lo and out[-1][1] == hi:
+        # one interval across the span's seam (the span is one turn): join its halves
+        out = [(out[-1][0] - 2 * math.pi, out[0][1])] + out[1:-1]
+        out.sort()
     return out
 
 
@@ -720,7 +725,10 @@ class PositionSolver:
                 if g >= 0:
                     theta[:, b] = q[:, g] + self.topo.offset[b]
         else:
-            q = self.trace.solve(values)
+            if len(values) and np.all(values == self.reference):
+                q = np.repeat(self.q_ref, len(values), axis=0)  # no trace needed
+            else:
+                q = self.trace.solve(values)
             theta, E, O = poses_from_q(self.topo, q)
         pre = self.eqs.terms_from_poses(q, E)
         if self.eqs.L and len(q):

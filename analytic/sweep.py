@@ -34,6 +34,7 @@ from .errors import AssemblyError
 from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
+from .positions import size_of
 from .tolerances import SINGULAR_CONDITION
 
 
@@ -80,15 +81,17 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
                         f"feasible range {feas}", v0, feas)
 
 
-def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool) -> list[float]:
+def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
+               ) -> list[float]:
     """Input values where ``y`` changes sign, linearly interpolated.
 
-    Samples within 1e-9 of the series' peak of zero are round-off, not sign: a stretch
-    of them (a parallelogram's translating coupler) yields at most one crossing, between
-    the significant samples on either side.
+    Samples within 1e-9 of the series' peak (or of ``scale``, the size the series would
+    have if it moved at all, when larger) of zero are round-off, not sign: a stretch of
+    them (a parallelogram's translating coupler) yields at most one crossing, between
+    the significant samples on either side, and a series of round-off alone none.
     """
     n = len(y)
-    peak = float(np.max(np.abs(y))) if n else 0.0
+    peak = max(float(np.max(np.abs(y))) if n else 0.0, scale)
     sig = np.flatnonzero(np.abs(y) > 1e-9 * peak) if peak > 0 else np.array([], int)
     out = []
     if len(sig) < 2:
@@ -138,6 +141,11 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     for i in hi:
         rows.append(("singular", "loop Jacobian", float(conv(x[i])),
                      f"condition number {kin.condition[i]:.3g}"))
+    # rates at a singular sample are not determined by the input: no limits from them
+    regular = kin.condition < SINGULAR_CONDITION
+    xr = x[regular]
+    w_in = float(np.max(np.abs(kin.velocity))) if len(x) else 0.0
+    size = size_of(topo)
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
         if topo.group_of[b] < 0 or name in djb:
@@ -145,14 +153,16 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         # one row per rotation group (bodies of a group share omega)
         if any(topo.group_of[o] == topo.group_of[b] for o in range(b)):
             continue
-        for v in _crossings(x, kin.omega[:, b] * np.sign(kin.velocity), periodic):
+        for v in _crossings(xr, (kin.omega[:, b] * np.sign(kin.velocity))[regular], periodic,
+                            w_in * (1.0 if rev else 1.0 / size)):
             rows.append(("limit", name, float(conv(v)), "omega = 0 (extreme angle)"))
     for j in topo.prismatic:
         jn = topo.joint_names[j]
         if j == topo.driver_joint:
             continue
         _, sd, _ = kin.slider(jn)
-        for v in _crossings(x, sd * np.sign(kin.velocity), periodic):
+        for v in _crossings(xr, (sd * np.sign(kin.velocity))[regular], periodic,
+                            w_in * (size if rev else 1.0)):
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     if not periodic and feasible is not None and len(x):

@@ -60,10 +60,10 @@ def test_limited_range_sweep_reports_its_range():
 
 def test_change_point_is_flagged_singular_without_noise():
     """The parallelogram passes flat configurations at 0 and 180 deg: singular events
-    there.  Holding its dyad sign, the analytic solution turns into the
-    anti-parallelogram past each, so the coupler alternates between translating
-    (omega = 0 to round-off) and turning: its round-off must not make limit events
-    (before the fix: about 100)."""
+    there.  Continued through them it stays a parallelogram, whose coupler translates
+    (omega = 0 to round-off): its round-off must not make limit events (before the fix:
+    about 100; the held dyad sign, which alternates with the anti-parallelogram, made
+    as many)."""
     lk = Linkage(four_bar(0.4, 0.1, 0.4, 0.1, theta=math.radians(30), masses=None))
     res = lk.sweep(360)
     sing = np.mod(res.events[res.events.kind == "singular"]["input"].to_numpy(), 360)

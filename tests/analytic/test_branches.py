@@ -1,0 +1,114 @@
+"""Branches continued through change points, checked against the parallelogram's own
+geometry: on the parallelogram branch the rocker stays parallel to the crank and the
+coupler translates (theta4 = theta2, omega3 = alpha3 = 0), and with uniform rods at
+constant speed without loads the kinetic energy is constant, so the drive torque is 0."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analytic import Linkage, load_case
+from analytic.sweep import nearest_event
+from reports.cli import main
+
+from .conftest_helpers import four_bar
+
+DATA = Path(__file__).parent / "data"
+PARA = DATA / "parallelogram-four-bar.toml"
+
+#: Angles and rates on the continued branch match the parallelogram's to rounding; the
+#: samples stay 0.25 deg from the flat positions, where the closed form's snapping to the
+#: toggle (TOGGLE_SNAP) does not act.
+ANGLE_TOL = 1e-9
+
+
+def _wrap(a):
+    return (np.asarray(a) + math.pi) % (2 * math.pi) - math.pi
+
+
+def _engine_like_inputs():
+    """An engine's sampled inputs: four turns forward from the reference, then back
+    over two turns (not monotonic), avoiding the flat positions by 0.25 deg."""
+    fwd = np.radians(30 + np.arange(0, 1440, 2.5))
+    back = fwd[-1] - np.radians(np.arange(0, 720, 3.5))
+    x = np.concatenate([fwd, back])
+    keep = np.abs(_wrap(x * 2) / 2) > np.radians(0.25)  # away from 0 and 180 deg
+    return x[keep]
+
+
+def test_parallelogram_stays_a_parallelogram_over_turns_and_reversals():
+    lk = Linkage(load_case(PARA))
+    x = _engine_like_inputs()
+    kin = lk.kinematics_along(x)
+    b = {n: lk.body_index(n) for n in ("crank", "coupler", "rocker")}
+    np.testing.assert_allclose(_wrap(kin.theta[:, b["rocker"]] - kin.theta[:, b["crank"]]),
+                               0.0, atol=ANGLE_TOL)
+    np.testing.assert_allclose(_wrap(kin.theta[:, b["coupler"]]), 0.0, atol=ANGLE_TOL)
+    w = kin.velocity[0]
+    np.testing.assert_allclose(kin.omega[:, b["rocker"]], w, atol=ANGLE_TOL * abs(w))
+    np.testing.assert_allclose(kin.omega[:, b["coupler"]], 0.0, atol=ANGLE_TOL * abs(w))
+    np.testing.assert_allclose(kin.alpha[:, b["coupler"]], 0.0, atol=ANGLE_TOL * w * w)
+    # constant kinetic energy, no loads: the drive torque is zero.  Scale: the torque of
+    # the coupler's centripetal inertia force about O2, m3 a w^2 * a.
+    frc = lk.forces(kin)
+    scale = 0.8 * 0.1 * w * w * 0.1
+    assert np.max(np.abs(frc.effort)) < 1e-9 * scale
+
+
+def test_kinematics_order_does_not_matter():
+    """The branch depends on the input value, not on the order of the batch."""
+    lk = Linkage(load_case(PARA))
+    x = _engine_like_inputs()
+    perm = np.random.default_rng(3).permutation(len(x))
+    a = lk.kinematics_along(x).theta
+    b = lk.kinematics_along(x[perm]).theta
+    np.testing.assert_allclose(_wrap(a[perm] - b), 0.0, atol=1e-12)
+
+
+def test_holding_the_sign_gives_the_anti_parallelogram():
+    """``branch_rule="hold"`` keeps the dyad sign past 180 deg: the rocker then leaves
+    the crank's direction (the crossed branch), as the old solver did."""
+    lk = Linkage(load_case(PARA), branch_rule="hold")
+    x = np.radians([100.0, 200.0, 300.0])
+    kin = lk.kinematics(x)
+    d = np.abs(_wrap(kin.theta[:, lk.body_index("rocker")] - kin.theta[:, lk.body_index("crank")]))
+    assert d[0] < 1e-9 and np.all(d[1:] > 0.1)
+    assert Linkage(load_case(PARA)).kinematics(x, branch="held").theta[1, 3] == \
+        pytest.approx(kin.theta[1, 3])
+
+
+def test_sweep_reports_the_change_points(capsys):
+    lk = Linkage(load_case(PARA))
+    res = lk.sweep(360, start=0.0)
+    cp = res.events[res.events.kind == "change_point"]
+    assert set(np.round(np.mod(cp["input"].to_numpy(), 360), 6)) <= {0.0, 180.0}
+    assert (np.round(cp["input"].to_numpy(), 6) == 180.0).any()
+    assert all("switched" in d and "continuous" in d for d in cp["detail"])
+    assert all(c.rule == "velocity" and c.switched for c in res.crossings)
+    # the nearest event to 182 deg is a singular position or the change point at 180
+    ev = nearest_event(res, 182.0)
+    assert ev.input == pytest.approx(180.0) and ev.distance == pytest.approx(2.0)
+    code = main(["sweep", str(PARA)])
+    out = capsys.readouterr().out
+    assert code == 0 and "change_point" in out and "switched" in out
+
+
+def test_near_toggle_four_bar_never_switches():
+    """A four-bar 1 mm off the Grashof boundary has no change point: its dyad's
+    discriminant stays positive, the branch is held and no crossing is reported."""
+    lk = Linkage(four_bar(0.4, 0.1, 0.399, 0.1, theta=math.radians(30), masses=None))
+    res = lk.sweep(720)
+    assert not res.crossings and "change_point" not in set(res.events.kind)
+    assert lk.positions.schedule.constant
+
+
+def test_grashof_boundary_kite_or_ambiguity_is_reported_as_a_rule():
+    """Every crossing says which rule chose its branch."""
+    lk = Linkage(four_bar(0.4, 0.1, 0.4, 0.1, theta=math.radians(30), masses=None))
+    for c in lk.branch_crossings(-4 * math.pi, 4 * math.pi):
+        assert c.rule in ("velocity", "hold", "switch") or c.rule.startswith("held: ")
+        assert c.describe().startswith("change point at ")
