@@ -9,6 +9,8 @@ import json
 import sys
 from dataclasses import asdict
 
+from . import cli_options as opt
+
 
 def cmd_models(args) -> int:
     from sim_models.models import MODELS_DIR, write_models
@@ -17,70 +19,49 @@ def cmd_models(args) -> int:
     return 0
 
 
-def engine_settings(engine: str, timestep: float | None = None):
-    """The recommended (default) settings of an engine, optionally with another step."""
-    from dataclasses import replace
-
-    from sim_models.mjcf import MujocoSettings
-    if engine == "mujoco":
-        s = MujocoSettings()
-    elif engine == "pybullet":
-        from sim_models.pybullet_sim import PybulletSettings
-        s = PybulletSettings()
-    else:
-        from analytic import LinkageError
-        raise LinkageError(f"unknown engine {engine!r}; use mujoco, pybullet or all")
-    return replace(s, timestep=timestep) if timestep else s
-
-
-def run_comparison(mech, engine: str, mode: str = "run", revolutions: int = 2,
-                   samples: int = 36, timestep: float | None = None):
-    """Run one engine on a mechanism and compare: ``(run, comparisons)``."""
-    from analytic import Linkage
-    from analytic.sweep import input_values
-    from reports.compare import compare_run
-    from sim_models.engines import mujoco_instantaneous, run
-    settings = engine_settings(engine, timestep)
-    if mode == "instantaneous":
-        if engine != "mujoco":
-            from analytic import LinkageError
-            raise LinkageError("the instantaneous mode exists for MuJoCo only (mj_forward at "
-                               "the analytic state); PyBullet has no forward-dynamics call")
-        vals = input_values(Linkage(mech), samples)[0]
-        r = mujoco_instantaneous(mech, settings, vals)
-    else:
-        r = run(mech, engine, settings, revolutions=revolutions, samples=samples)
-    return r, compare_run(r, mech)
-
-
 def cmd_compare(args) -> int:
+    """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import comparison_frame, verdict
+    from reports.compare import comparison_frame, near_event, verdict
+    from reports.verdict_runs import engine_list, run_comparison, settings_for
+    from sim_models import compile_linkage
     mech = load_case(args.case)
-    engines = ["mujoco", "pybullet"] if args.engine == "all" else [args.engine]
+    engines = engine_list(args.engine)
+    settings = settings_for(engines, list(args.set or ()) +
+                            ([f"mujoco.integrator={args.integrator}"] if args.integrator else []),
+                            {"timestep": args.timestep})
+    tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     out, all_ok = [], True
     for eng in engines:
-        r, comps = run_comparison(mech, eng, args.mode, args.revolutions, args.samples,
-                                  args.timestep)
+        r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
+                                  args.samples)
         ok = r.ok and verdict(comps)
         all_ok &= ok
-        out.append((r, comps, ok))
+        out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
     if args.json:
         print(json.dumps([{
-            "case": mech.name, "engine": r.engine, "mode": args.mode, "settings": r.settings,
+            "case": mech.name, "engine": r.engine, "mode": args.mode,
+            "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
+            "sampled_by": "time" if r.by_time else "input",
             "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if ok else "fail",
-            "wall_seconds_per_revolution": r.wall_per_rev, "timestep": r.timestep,
-            "notes": list(r.notes),
-            "comparisons": [asdict(c) for c in comps]} for r, comps, ok in out], indent=2))
+            "near_event": near, "wall_seconds_per_revolution": r.wall_per_rev,
+            "timestep": r.timestep, "notes": list(r.notes),
+            "comparisons": [asdict(c) for c in comps]} for r, comps, ok, near in out],
+            indent=2))
     else:
         import pandas as pd
         with pd.option_context("display.width", 160, "display.max_columns", 20):
-            for r, comps, ok in out:
+            for r, comps, ok, near in out:
                 print(f"== {mech.name} / {r.engine} ({args.mode}) : "
                       f"{'PASS' if ok else 'FAIL'}")
-                print(f"settings: {r.settings}")
+                print(f"settings: {r.settings_text}")
+                if r.by_time:
+                    print(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
+                          "(the input is not a monotonic turn); 'at' is the input there")
                 if not r.ok:
                     print(f"run failed: {r.reason}")
+                if near:
+                    print(f"near an event: {near}")
                 df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
                                                  "at", "tolerance", "passed"]]
                 print(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
@@ -96,8 +77,14 @@ def cmd_compare(args) -> int:
 
 
 def cmd_report(args) -> int:
+    from analytic.errors import OutputError
     from reports.report import main as report_main
-    return report_main(args)
+    try:
+        return report_main(args)
+    except OSError as e:  # the output folder was checked at --out; a race or a full disk
+        if e.filename is None:
+            raise
+        raise OutputError(f"cannot write {e.filename!r}: {e.strerror}") from None
 
 
 def register(sub) -> None:
@@ -106,13 +93,23 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_models)
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
-    s.add_argument("--engine", choices=["mujoco", "pybullet", "all"], default="all")
+    from sim_models.registry import engine_names
+    s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
-                   help="run: step N revolutions at constant input speed; instantaneous: "
-                        "MuJoCo mj_forward at the analytic state")
-    s.add_argument("--revolutions", type=int, default=2)
-    s.add_argument("--samples", type=int, default=36)
-    s.add_argument("--timestep", type=float, help="override the recommended step, s")
+                   help="run: step through the driver's motion; instantaneous: the "
+                        "engine's forward dynamics at the analytic state (MuJoCo)")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="an engine setting (repeatable; ENGINE.KEY=VALUE for one engine "
+                        "only), e.g. --set integrator=Euler --set pybullet.erp=0.2")
+    s.add_argument("--integrator", choices=["RK4", "implicitfast", "implicit", "Euler"],
+                   help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
+    s.add_argument("--revolutions", type=opt.revolutions, default=2,
+                   help=f"1 to {opt.MAX_REVOLUTIONS}")
+    s.add_argument("--samples", type=opt.samples, default=36,
+                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
+    s.add_argument("--timestep", type=opt.timestep,
+                   help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
+                        f"{opt.MAX_TIMESTEP:g} s")
     s.add_argument("--json", action="store_true")
     s.set_defaults(func=cmd_compare)
     try:
@@ -120,10 +117,13 @@ def register(sub) -> None:
     except ImportError:
         return
     s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
-    s.add_argument("--out", help="output directory (default reports/out/<timestamp>)")
+    s.add_argument("--out", type=opt.output_dir,
+                   help="output directory (default reports/out/<timestamp>)")
     s.add_argument("--quick", action="store_true", help="the quick variant (< 90 s)")
-    s.add_argument("--cases", nargs="+", help="only these cases")
-    s.add_argument("--workers", type=int, help="process-pool size (default: cores)")
+    s.add_argument("--cases", nargs="+", type=opt.case_or_file,
+                   help="only these cases (built-in names or TOML files)")
+    s.add_argument("--workers", type=opt.workers,
+                   help=f"process-pool size, 1 to {opt.MAX_WORKERS} (default: cores)")
     s.add_argument("--dask", metavar="SCHEDULER_ADDRESS",
                    help="run the study tasks on an existing Dask distributed scheduler")
     s.set_defaults(func=cmd_report)

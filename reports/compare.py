@@ -6,10 +6,13 @@ sampled cycle, so zero crossings do not blow them up.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
+
+from analytic.errors import LinkageError
 
 
 @dataclass(frozen=True)
@@ -99,11 +102,25 @@ def compare(quantity: str, reference, test, at, tolerance: float,
 MAX_CONDITION = 100.0
 
 
-def analytic_at(run_, mech):
-    """The analytic kinematics (and forces, when the case has masses) at a run's samples,
-    with the driver rates the engine was given."""
+def _linkage_of(run_, reference=None):
+    """The analytic :class:`Linkage` to compare ``run_`` with: ``reference`` when it is
+    one (the compiled object passed down), else built from ``reference`` (a Mechanism)
+    or from the run's own mechanism (never found again by name)."""
     from analytic import Linkage
-    lk = Linkage(mech)
+    if isinstance(reference, Linkage):
+        return reference
+    lk = getattr(reference, "linkage", None)  # a SimTree
+    if isinstance(lk, Linkage):
+        return lk
+    return Linkage(reference if reference is not None else run_.mechanism)
+
+
+def analytic_at(run_, reference=None):
+    """The analytic kinematics (and forces, when the case has masses) at a run's samples,
+    with the driver rates the engine was given: ``(linkage, kin, frc)``.  ``reference``:
+    the Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
+    lk = _linkage_of(run_, reference)
+    mech = lk.mech
     vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
                    mech.driver.velocity)
     kin = lk.kinematics(run_.values, vel, run_.driver_acceleration, on_singular="flag")
@@ -111,28 +128,40 @@ def analytic_at(run_, mech):
     return lk, kin, frc
 
 
-def compare_run(run_, mech=None, tolerance: float | None = None,
-                max_condition: float = MAX_CONDITION) -> list[Comparison]:
-    """Every compared quantity of an :class:`sim_models.engines.EngineRun`.
+class NothingToCompare(LinkageError):
+    """No sample of a run can be compared (every one unreached or at a limit position);
+    the message says why.  The command line reports it like a refusal (status 2)."""
 
-    Quantities: ``<body>.alpha`` for each moving body (one whose exact alpha is
-    identically zero, such as a constant-speed crank or a piston, is judged against the
-    largest body's peak), ``<joint>.a`` for each slider,
-    ``drive.effort``, ``<joint>.force`` for each joint (vector error), and, where the
-    engine has its own reading, ``<joint>.force[engine]`` and ``drive.effort[engine]``.
-    ``at`` is in degrees for a revolute driver, m for a prismatic one.  A failed run's
-    NaN samples make every quantity fail at the first such sample.
+
+def compare_run(run_, reference=None, tolerance: float | None = None,
+                max_condition: float = MAX_CONDITION) -> list[Comparison]:
+    """Every compared quantity of an :class:`sim_models.engine_base.EngineRun`.
+
+    ``reference`` is the analytic :class:`Linkage` the run was built from (pass the
+    compiled object down), a ``SimTree`` or a Mechanism; default the run's own
+    mechanism.  Quantities: ``<body>.alpha`` for each moving body (one whose exact alpha
+    is identically zero, such as a constant-speed crank or a piston, is judged against
+    the largest body's peak), ``<joint>.a`` for each slider, ``drive.effort``,
+    ``<joint>.force`` for each joint (vector error), and, where the engine has its own
+    reading, ``<joint>.force[engine]`` and ``drive.effort[engine]``.  ``at`` is in
+    degrees for a revolute driver, m for a prismatic one.  A failed run's NaN samples
+    make every quantity fail at the first such sample.  Raises
+    :class:`NothingToCompare` when no sample is comparable.
     """
-    from analytic import load_case
     from analytic.tolerances import ENGINE_RELATIVE
-    mech = mech or load_case(run_.case)
     tol = ENGINE_RELATIVE if tolerance is None else tolerance
-    lk, kin, frc = analytic_at(run_, mech)
+    lk, kin, frc = analytic_at(run_, reference)
+    mech = lk.mech
     keep = kin.condition <= max_condition
     if run_.ok:
         # a limited-range driver runs forward from its reference value only: samples
         # behind it are NaN by design (counted in ``skipped_samples``), not failures
         keep &= np.all(np.isfinite(run_.alpha), axis=1)
+    if not keep.any():
+        why = run_.reason or ("every sample is within a limit or singular position "
+                              f"(loop condition number above {max_condition:g}) or unreached")
+        raise NothingToCompare(f"{run_.case} / {run_.engine}: no sample can be compared: "
+                               f"{why}")
     x = run_.values
     # degrees in [0, 360): rounded first so that 360 - 1 ulp reads 0, not 5.7e-14
     at = (np.mod(np.round(np.degrees(x), 9), 360.0) if lk.driver_is_revolute else x)[keep]
@@ -164,12 +193,77 @@ def compare_run(run_, mech=None, tolerance: float | None = None,
     return out
 
 
+#: A failed verdict whose worst error sits within this many degrees (revolute driver) of
+#: a limit or singular position says so: the mechanism, not the engine, may be at fault.
+NEAR_EVENT_DEG = 5.0
+#: The same for a prismatic driver, as a fraction of its feasible stroke.
+NEAR_EVENT_STROKE = 0.02
+
+
+def input_events(linkage) -> list[tuple[str, float]]:
+    """The input values (deg for a revolute driver, m for a prismatic one) of the
+    linkage's limit positions (ends of the feasible input range) and singular positions
+    (dead centres, change points), as ``(kind, value)``."""
+    from analytic.sweep import input_values
+    rev = linkage.driver_is_revolute
+    conv = math.degrees if rev else float
+    _, full, feas = input_values(linkage, 2)
+    out = []
+    if not full:
+        for lo, hi in feas:
+            out += [("limit position", conv(lo)), ("limit position", conv(hi))]
+    try:
+        ev = linkage.sweep(720, forces=False).events
+        for v in ev.loc[ev["kind"] == "singular", "input"].to_numpy(float):
+            out.append(("singular position", float(v)))
+    except Exception:  # noqa: BLE001 - events are advice; a sweep that fails gives none
+        pass
+    return out
+
+
+def near_event(comparisons: list[Comparison], linkage) -> str | None:
+    """For a failed verdict: where the worst failing quantity's error sits relative to
+    the nearest limit or singular position, when within :data:`NEAR_EVENT_DEG` (or
+    :data:`NEAR_EVENT_STROKE` of the stroke); else None."""
+    bad = [c for c in comparisons if not c.passed and not c.quantity.endswith("[engine]")]
+    if not bad:
+        return None
+    worst = max(bad, key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf)
+    if not math.isfinite(worst.at):
+        return None
+    rev = linkage.driver_is_revolute
+    events = input_events(linkage)
+    if not events:
+        return None
+
+    def dist(v):
+        d = worst.at - v
+        return abs((d + 180.0) % 360.0 - 180.0) if rev else abs(d)
+
+    kind, v = min(events, key=lambda e: dist(e[1]))
+    d = dist(v)
+    if rev:
+        if d > NEAR_EVENT_DEG:
+            return None
+        return (f"the worst error ({worst.quantity} at {worst.at:.4g} deg) is {d:.3g} deg "
+                f"from the {kind} at {v % 360.0:.5g} deg: the mechanism is near a position "
+                "where no finite drive effort moves it, so a small engine offset there is a "
+                "large error")
+    from analytic.sweep import input_values
+    _, _, feas = input_values(linkage, 2)
+    stroke = max((hi - lo for lo, hi in feas), default=0.0)
+    if stroke <= 0 or d > NEAR_EVENT_STROKE * stroke:
+        return None
+    return (f"the worst error ({worst.quantity} at {worst.at:.6g} m) is {d:.3g} m from the "
+            f"{kind} at {v:.6g} m")
+
+
 def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
     """One row per quantity: case, engine, settings and the diagnostic."""
     rows = []
     for c in comparisons:
         d = c.as_dict()
-        d.update(case=run_.case, engine=run_.engine, settings=run_.settings,
+        d.update(case=run_.case, engine=run_.engine, settings=run_.settings_text,
                  run_ok=run_.ok, run_reason=run_.reason or "",
                  engine_reading=c.quantity.endswith("[engine]"))
         rows.append(d)

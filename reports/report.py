@@ -25,7 +25,7 @@ import platform
 import time
 import traceback
 from concurrent.futures import Executor, ProcessPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -87,19 +87,13 @@ def engine_task(case: str, engine: str, overrides: dict, revolutions: int, sampl
     """One (case, engine) run and its comparisons; never raises (picklable result)."""
     t0 = time.perf_counter()
     try:
-        from analytic import Linkage, load_case
-        from analytic.sweep import input_values
-        from reports.cli_engines import engine_settings
-        from reports.compare import compare_run
-        from sim_models.engines import mujoco_instantaneous, run
-        mech = load_case(case)
-        settings = replace(engine_settings(engine), **overrides)
-        if mode == "instantaneous":
-            vals = input_values(Linkage(mech), samples)[0]
-            r = mujoco_instantaneous(mech, settings, vals)
-        else:
-            r = run(mech, engine, settings, revolutions=revolutions, samples=samples)
-        comps = compare_run(r, mech)
+        from analytic import load_case
+        from reports.verdict_runs import run_comparison
+        from sim_models import compile_linkage, make_settings
+        # the description is compiled once (Linkage + reference solution) and passed down
+        tree = compile_linkage(load_case(case))
+        settings = make_settings(engine, overrides)
+        r, comps = run_comparison(tree, engine, settings, mode, revolutions, samples)
         return {"case": case, "engine": engine, "mode": mode, "overrides": overrides,
                 "run": r, "comparisons": comps, "error": None,
                 "seconds": time.perf_counter() - t0}
@@ -172,7 +166,7 @@ def verdict_table(results: list[dict]) -> pd.DataFrame:
                 "max_abs": np.nan, "peak": np.nan, "normalised": np.inf,
                 "at": math.degrees(r.fail_value) if r.fail_value is not None else np.nan,
                 "tolerance": np.nan, "passed": False, "engine_reading": False,
-                "run_ok": False, "run_reason": r.reason, "settings": r.settings}]), df])
+                "run_ok": False, "run_reason": r.reason, "settings": r.settings_text}]), df])
         frames.append(df)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -520,7 +514,7 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
           "from the engine's motion.")
     doc.table(summary, "verdict_summary", "case x engine: worst judged quantity")
     doc.table(verdicts, "verdicts", "case x engine x quantity")
-    settings_rows = [{"engine": r["engine"], "settings": r["run"].settings}
+    settings_rows = [{"engine": r["engine"], "settings": r["run"].settings_text}
                      for r in results if r["mode"] == "run" and r["run"] is not None]
     doc.table(pd.DataFrame(settings_rows).drop_duplicates("engine"), "engine_settings",
               "engine settings used for the verdict runs")

@@ -1,26 +1,40 @@
-"""Engine models of the linkages (MuJoCo via MjSpec, PyBullet via URDF) and their runs.
+"""Engine models of the linkages and their runs, behind one protocol and registry.
 
 Front door::
 
-    from sim_models import run, mujoco_instantaneous, MujocoSettings, PybulletSettings
-    r = run(mech, "mujoco", MujocoSettings(), revolutions=2, samples=36)
+    from sim_models import compile_linkage, run, make_settings
+    tree = compile_linkage(mech)                  # the analytic solution, compiled once
+    r = run(tree, "mujoco", make_settings("mujoco", {"integrator": "Euler"}))
 
-Neither engine is imported until a model is built.
+The protocol is :mod:`sim_models.engine_base`, the registry :mod:`sim_models.registry`,
+one module per engine (:mod:`sim_models.mujoco_engine`, :mod:`sim_models.pybullet_engine`,
+...).  No engine library is imported until an engine is asked for.
 """
 
-from .engines import EngineRun, mujoco_instantaneous, run
+from .engine_base import (
+    EngineRefusal,
+    EngineRun,
+    EngineSettings,
+    Session,
+    SettingsError,
+    compile_linkage,
+)
+from .engines import instantaneous, mujoco_instantaneous, open_session, rerun, run
 from .mjcf import EngineVersionError, MujocoSettings, build_mjcf, compile_mjcf
+from .registry import engine_names, get_engine, make_settings, register_engine
 from .tree import SimModelError, SimTree, UnsupportedClosureError
 from .urdf import Closure, build_urdf
 
 
 def __getattr__(name):  # PybulletSettings without importing pybullet eagerly
     if name == "PybulletSettings":
-        from .pybullet_sim import PybulletSettings
+        from .pybullet_engine import PybulletSettings
         return PybulletSettings
     raise AttributeError(name)
 
 
-__all__ = ["Closure", "EngineRun", "EngineVersionError", "MujocoSettings", "PybulletSettings",
-           "SimModelError", "SimTree", "UnsupportedClosureError", "build_mjcf", "build_urdf",
-           "compile_mjcf", "mujoco_instantaneous", "run"]
+__all__ = ["Closure", "EngineRefusal", "EngineRun", "EngineSettings", "EngineVersionError",
+           "MujocoSettings", "PybulletSettings", "Session", "SettingsError", "SimModelError",
+           "SimTree", "UnsupportedClosureError", "build_mjcf", "build_urdf", "compile_linkage",
+           "compile_mjcf", "engine_names", "get_engine", "instantaneous", "make_settings",
+           "mujoco_instantaneous", "open_session", "register_engine", "rerun", "run"]

@@ -395,6 +395,32 @@ def _time_plan(tree: SimTree, revolutions: int, samples: int) -> Plan:
     return Plan(x, times, np.where(ok, v, np.nan), a, False, True, t_end, t_end, 1)
 
 
+def times_plan(tree: SimTree, times) -> Plan:
+    """A plan sampling at the given times (s, from the start; e.g. ``per_rev`` equal
+    times per revolution over a long run, :func:`periodic_plan`)."""
+    times = np.asarray(times, float)
+    x, v, a = (np.broadcast_to(np.asarray(z, float), times.shape).copy()
+               for z in tree.driver_path(times))
+    t_end = float(np.nanmax(times)) if times.size else 0.0
+    d = tree.mech.driver
+    t_turn = travel_time(d, 2 * math.pi) if isinstance(tree.mech.driver_joint, Revolute) \
+        else math.nan
+    full = math.isfinite(t_turn) and t_turn > 0
+    revs = max(1, round(t_end / t_turn)) if full else 1
+    return Plan(x, times, v, a, False, True, t_end, t_turn if full else t_end, revs)
+
+
+def periodic_plan(tree: SimTree, revolutions: int, per_rev: int) -> Plan:
+    """``per_rev`` equal times per revolution (of the driver's first turn) over
+    ``revolutions`` turns, from t = 0 (``revolutions * per_rev + 1`` samples)."""
+    d = tree.mech.driver
+    T = travel_time(d, 2 * math.pi)
+    if not (math.isfinite(T) and T > 0):
+        raise EngineRefusal(f"mechanism {tree.mech.name!r}: driver {d.joint!r} never "
+                            "completes a turn; no periodic sampling")
+    return times_plan(tree, np.arange(revolutions * per_rev + 1) * T / per_rev)
+
+
 def step_schedule(times: np.ndarray, dt_max: float):
     """Step sizes so that every finite sample time is a step boundary.
 
@@ -668,7 +694,7 @@ def finish(session: Session, plan: Plan, rec: Recorder, request: RunRequest,
     steps_per_rev = plan.rev_time / dt if dt > 0 else math.nan
     ex = {"prismatic_driver": isinstance(mech.driver_joint, Prismatic),
           "tree": st.tree_names, "chords": [c.name for c in st.chords],
-          "analytic_chords": st.analytic_chords()}
+          "analytic_chords": st.analytic_chords(), "t_end": plan.t_end}
     ex.update(session.extra())
     readings = session.engine_readings
     return EngineRun(
@@ -888,5 +914,5 @@ __all__ = ["HUGE", "LIMITED_RANGE_CONDITION", "EngineRefusal", "EngineRun", "Eng
            "Plan", "Recorder", "RunRequest", "Session", "SettingsError", "check_motion",
            "check_state",
            "compile_linkage", "drive", "finish", "fmt_value", "loop_gap", "plan_samples",
-           "reversal_time", "step_schedule", "steps_to", "time_of", "time_steps",
-           "travel_time"]
+           "periodic_plan", "reversal_time", "step_schedule", "steps_to", "time_of",
+           "time_steps", "times_plan", "travel_time"]

@@ -42,6 +42,7 @@ import numpy as np
 
 from analytic import Mechanism
 
+from .engine_base import EngineSettings, SettingsError
 from .tree import SimModelError, SimTree
 
 #: Oldest MuJoCo accepted: before 3.7.0 connect/weld constraints lacked the
@@ -84,9 +85,14 @@ def direct_solref(tau: float) -> tuple[float, float]:
 HARD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 
+#: Scene variants of :attr:`MujocoSettings.scene` (built by :mod:`sim_models.mujoco_scene`).
+SCENES = ("minimal", "contacts", "contacts-same-plane", "contacts-no-excludes",
+          "extra-visual", "extra-collision")
+
+
 @dataclass(frozen=True)
-class MujocoSettings:
-    """Solver settings of the MuJoCo models.
+class MujocoSettings(EngineSettings):
+    """Solver settings of the MuJoCo models (recommended defaults; evidence below).
 
     Parameters
     ----------
@@ -132,6 +138,10 @@ class MujocoSettings:
         max error / peak): stock (1.0) 7.4e-5 seed-four-bar, 7.6e-4
         seed-slider-crank, 2.7e-4 six-bar; 1e-2 gives 100x less; 1e-4 about
         1e-7; 1e-6 is worse again (conditioning).  1.0 restores stock MuJoCo.
+    scene
+        ``"minimal"`` (the project's scene: contacts off, one capsule per link) or a
+        variant of the scene-economy study with unneeded parts added (:data:`SCENES`,
+        :mod:`sim_models.mujoco_scene`).
     """
 
     timestep: float = 2.5e-4
@@ -143,12 +153,25 @@ class MujocoSettings:
     armature: float = 1e8
     diagexact: bool = False
     invweight_scale: float = 1e-3
+    scene: str = "minimal"
+
+    def __post_init__(self):
+        if str(self.integrator).lower() not in _INTEGRATORS:
+            raise SettingsError(f"engine 'mujoco' setting integrator={self.integrator!r}: use "
+                                "one of RK4, implicitfast, implicit, Euler")
+        if self.scene not in SCENES:
+            raise SettingsError(f"engine 'mujoco' setting scene={self.scene!r}: use one of "
+                                f"{', '.join(SCENES)}")
+        if not (self.timestep > 0 and math.isfinite(self.timestep)):
+            raise SettingsError(f"engine 'mujoco' setting timestep={self.timestep!r}: needs a "
+                                "positive finite step, s")
 
     def describe(self) -> str:
+        scene = "" if self.scene == "minimal" else f", scene={self.scene}"
         return (f"MuJoCo {self.integrator} dt<={self.timestep:g} s, solref={self.solref}, "
                 f"solimp={self.solimp}, iterations={self.iterations}, "
                 f"tolerance={self.tolerance:g}, armature={self.armature:g}, "
-                f"diagexact={self.diagexact}, invweight_scale={self.invweight_scale:g}")
+                f"diagexact={self.diagexact}, invweight_scale={self.invweight_scale:g}{scene}")
 
 
 _INTEGRATORS = {"rk4": "mjINT_RK4", "implicitfast": "mjINT_IMPLICITFAST",

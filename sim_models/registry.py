@@ -38,6 +38,8 @@ BUILTIN: tuple[EngineEntry, ...] = (
                 "MuJoCo via MjSpec: soft loop equalities, armature drive"),
     EngineEntry("pybullet", "sim_models.pybullet_engine", "PybulletSession",
                 "PyBullet via URDF: point-to-point loop constraints, velocity motor"),
+    EngineEntry("exudyn", "sim_models.exudyn_engine", "ExudynSession",
+                "Exudyn: index-3 DAE, reactions from the Lagrange multipliers"),
 )
 
 _REGISTRY: dict[str, EngineEntry] = {e.name: e for e in BUILTIN}

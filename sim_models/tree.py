@@ -135,6 +135,7 @@ class SimTree:
                  chords: str = "moving"):
         self.mech = mech
         self.linkage = linkage or Linkage(mech)
+        self.chords_mode = chords
         names = [b.name for b in mech.bodies]
         self.body_names = names
         idx = {n: i for i, n in enumerate(names)}

@@ -132,7 +132,7 @@ def test_urdf_structure(case):
 @pytest.mark.parametrize("case", CASES)
 def test_urdf_loads_in_pybullet_at_the_reference_pose(case):
     p = pytest.importorskip("pybullet")
-    from sim_models.pybullet_sim import PybulletSettings, PybulletSim
+    from sim_models.pybullet_engine import PybulletSettings, PybulletSim
     mech = load_case(case)
     st = SimTree(mech)
     sim = PybulletSim(st, PybulletSettings())

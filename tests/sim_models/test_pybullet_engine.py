@@ -14,7 +14,7 @@ from sim_models.tree import SimTree
 from .conftest import ENGINE_RELATIVE, assert_run_within, engine_reading
 
 pytest.importorskip("pybullet")
-from sim_models.pybullet_sim import PybulletSettings  # noqa: E402
+from sim_models.pybullet_engine import PybulletSettings  # noqa: E402
 
 #: The recommended (default) settings: dt 3e-5 s, residual threshold 1e-30, erp 1,
 #: damping 0.  Measured worst error / peak over the 2nd revolution: seed-four-bar 4e-7,

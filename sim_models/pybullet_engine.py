@@ -1,4 +1,4 @@
-"""PyBullet driver for :func:`sim_models.engines.run` (use that front door).
+"""PyBullet behind the engine protocol (:class:`PybulletSession`, :class:`PybulletSettings`).
 
 Model: the URDF of :func:`sim_models.urdf.build_urdf` loaded with a fixed base
 and ``URDF_USE_INERTIA_FROM_FILE``; loops closed with ``JOINT_POINT2POINT``
@@ -11,6 +11,13 @@ global ``erp`` (the per-constraint one does nothing for multibody p2p).
 
 Drive: a ``VELOCITY_CONTROL`` motor on the driven joint with a large force;
 its target is the prescribed rate at the end of each step.
+
+Quirks kept here: the **pre-roll** (the first step after ``resetJointState`` ignores the
+loop, so a run starts ``preroll_steps`` early from the analytic state of that earlier
+time), the **mid-step velocity** (semi-implicit Euler leaves ``v_n`` half a step behind
+the positions), accelerations as **finite differences over the step after a sample** (so
+:meth:`PybulletSession.sample` steps once and says so), and the **Newton-Euler
+reconstruction** of the pin forces.
 
 Readout at a sample (the start of step n): joint positions/velocities of
 step n, accelerations ``(v_{n+1} - v_n) / dt`` (exact for the semi-implicit
@@ -32,20 +39,28 @@ from __future__ import annotations
 import math
 import os
 import tempfile
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from .engines import EngineRun, _finish, _Plan, _Recorder, _step_schedule
+from .engine_base import (
+    EngineRefusal,
+    EngineSettings,
+    Recorder,
+    Session,
+    SettingsError,
+    check_motion,
+    loop_gap,
+)
 from .newton_euler import reconstruct
 from .tree import SimModelError, SimTree
-from .urdf import build_urdf
+from .urdf import build_urdf, link_offsets
 
 
 @dataclass(frozen=True)
-class PybulletSettings:
-    """PyBullet settings.
+class PybulletSettings(EngineSettings):
+    """PyBullet settings (recommended defaults; evidence in the README "Engines" section and
+    the speed-against-error grid of :mod:`reports.studies`).
 
     Parameters
     ----------
@@ -91,6 +106,11 @@ class PybulletSettings:
     midpoint_velocity: bool = True
     preroll_steps: int = 20
 
+    def __post_init__(self):
+        if not (self.timestep > 0 and math.isfinite(self.timestep)):
+            raise SettingsError(f"engine 'pybullet' setting timestep={self.timestep!r}: needs "
+                                "a positive finite step, s")
+
     def describe(self) -> str:
         return (f"PyBullet dt<={self.timestep:g} s, iterations={self.solver_iterations}, "
                 f"residual threshold={self.residual_threshold:g}, erp={self.erp:g}, "
@@ -98,16 +118,9 @@ class PybulletSettings:
                 f"{self.max_joint_velocity:g}, average_impulses={self.average_impulses}")
 
 
-def _require_pybullet():
-    try:
-        import pybullet
-    except ImportError as e:  # pragma: no cover
-        raise SimModelError(f"PyBullet is not installed ({e}); pip install pybullet") from None
-    return pybullet
-
-
 class PybulletSim:
-    """A loaded PyBullet model (DIRECT client) with index tables."""
+    """A loaded PyBullet model (DIRECT client) with index tables (the raw model; the
+    protocol session is :class:`PybulletSession`)."""
 
     def __init__(self, st: SimTree, settings: PybulletSettings):
         p = _require_pybullet()
@@ -191,7 +204,6 @@ class PybulletSim:
                 pos = p.getLinkState(self.body, link, physicsClientId=self.cid)[0]
             else:
                 # link frame = URDF frame (index 4/5); the point in link-frame coordinates
-                from .urdf import link_offsets
                 off = link_offsets(st)[b]
                 ls = p.getLinkState(self.body, link, computeForwardKinematics=True,
                                     physicsClientId=self.cid)
@@ -224,152 +236,152 @@ class PybulletSim:
         self.p.stepSimulation(physicsClientId=self.cid)
 
 
-def run_pybullet(st: SimTree, settings: PybulletSettings, plan: _Plan, max_violation: float,
-                 max_speed_error: float) -> EngineRun:
-    sim = PybulletSim(st, settings)
-    try:
-        return _run(sim, st, settings, plan, max_violation, max_speed_error)
-    finally:
-        sim.close()
+class PybulletSession(Session):
+    """A loaded PyBullet model of one linkage, driven by a velocity motor."""
 
+    name = "pybullet"
+    settings_class = PybulletSettings
+    engine_readings = True
 
-def _run(sim: PybulletSim, st: SimTree, settings: PybulletSettings, plan: _Plan,
-         max_violation: float, max_speed_error: float) -> EngineRun:
-    p = sim.p
-    rec = _Recorder(st, plan)
-    dmech = st.mech.driver
-    order, stops, steps = _step_schedule(plan.times, settings.timestep)
-    sample_at: dict[float, list[int]] = {}
-    for i in order:
-        if np.isfinite(plan.times[i]):
-            sample_at.setdefault(float(plan.times[i]) if plan.times[i] > 1e-15 else 0.0,
-                                 []).append(int(i))
-    vmax = max_violation * st.size
-    accel = dmech.acceleration != 0.0
-    moving = bool(sim.loads)
-    # the sign factor of each tree joint, to express engine readings as body_a -> body_b
-    sig = np.array([tj.sigma for tj in st.joints])
-    reason = fail = None
-    dt_used = max((s[0] for s in steps), default=settings.timestep)
-    prev_cf = prev_tau = None
-    stepped = False
+    def __init__(self, tree: SimTree, settings: PybulletSettings | None = None):
+        super().__init__(tree, settings)
+        self.sim = PybulletSim(tree, self.settings)
+        self.h = self.settings.timestep
+        self.accel = tree.mech.driver.acceleration != 0.0
+        self.sig = np.array([tj.sigma for tj in tree.joints])
+        self.jnames = [j.name for j in tree.mech.joints]
+        self._last = None
+        self.notes.append(
+            "tree-joint forces and drive effort reconstructed by Newton-Euler from PyBullet's "
+            "accelerations and loop forces; PyBullet's own readings in joint_force_engine "
+            "(jointReactionForces) and drive_effort_engine (motor torque)")
 
-    def one_step(h, t_now):
-        if accel:
-            sim.set_drive(dmech.velocity + dmech.acceleration * (t_now + h))
-        if moving:
+    def close(self) -> None:
+        if getattr(self, "sim", None) is not None:
+            self.sim.close()
+            self.sim = None
+
+    def _set_step(self, h: float) -> None:
+        if h != self.h:
+            self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
+            self.h = h
+
+    def _one_step(self, h: float, t_now: float) -> None:
+        sim = self.sim
+        if self.accel:
+            d = self.tree.mech.driver
+            # the motor sets v_{n+1}, and q_{n+1} = q_n + h v_{n+1}: the rate at mid-step
+            # keeps the positions on the prescribed path exactly
+            sim.set_drive(d.velocity + d.acceleration * (t_now + 0.5 * h))
+        if sim.loads:
             sim.apply_loads()
         sim.step()
 
-    # start a few steps early (see PybulletSettings.preroll_steps)
-    h0 = next((h for h, n in steps if n > 0), settings.timestep)
-    n_pre = max(int(settings.preroll_steps), 0)
-    t = -n_pre * h0
-    try:
-        val, vel0, acc0 = (float(x) for x in st.driver_path(t))
-        kin = st.linkage.kinematics(val, vel0, acc0)
-        q0, qd0, _ = st.coords(kin)
-    except Exception:  # e.g. the reference sits at a limit position: no pre-roll
-        n_pre, t = 0, 0.0
-        q0, qd0, _ = st.coords(st.kin_ref)
-        q0 = np.zeros_like(q0)
-    sim.set_state(q0[0], qd0[0])
-    sim.set_drive(dmech.velocity + dmech.acceleration * t)
-    p.setPhysicsEngineParameter(fixedTimeStep=h0, physicsClientId=sim.cid)
-    h_cur = h0
-    t0 = time.perf_counter()
-    for _ in range(n_pre):
-        one_step(h0, t)
-        t += h0
-    t = 0.0
-    carried = 0  # steps of the current interval already taken (the post-sample step)
-    for (h, n), t_stop in zip(steps, stops[1:], strict=True):
-        if carried:
-            # the post-sample step (of the previous interval's size) is already taken
-            rem = t_stop - t
-            k = rem / h
-            if abs(k - round(k)) < 1e-6 * max(k, 1.0):
-                n = int(round(k))
-            else:
-                n = max(1, math.ceil(rem / settings.timestep - 1e-9))
-                h = rem / n
-            carried = 0
-        if h != h_cur and n > 0:
-            p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=sim.cid)
-            h_cur = h
-        for _ in range(n):
-            one_step(h, t)
-            stepped = True
-            t += h
-        t = t_stop
-        # impulse readings of the step that ends at the sample (for averaging)
-        prev_cf = sim.constraint_forces() if stepped else None
-        prev_tau = sim.states()[3] if stepped else None
-        idx = sample_at.get(t_stop, [])
-        # sample: the state at the start of the next step, then that step for the differences
+    def state(self):
+        q, v, _, _ = self.sim.states()
+        return q, v
+
+    # -- the protocol -------------------------------------------------------------
+    def reset(self, t: float, h: float) -> None:
+        """The analytic state ``preroll_steps`` steps of ``h`` before ``t``, stepped to
+        ``t`` (no pre-roll when the analytic solution there is not the continuation of the
+        reference pose, e.g. past a change point, or cannot close)."""
+        st, sim = self.tree, self.sim
+        d = st.mech.driver
+        n_pre = max(int(self.settings.preroll_steps), 0)
+        q0, qd0, _ = self.analytic_state(t)
+        if n_pre:
+            try:
+                qp, qdp, _ = self.analytic_state(t - n_pre * h)
+                # the same assembly: each tree coordinate within ~ its rate x the pre-roll
+                drift = np.abs(qp - (q0 - qd0 * n_pre * h))
+                if np.max(drift, initial=0.0) < math.radians(5.0):
+                    q0, qd0 = qp, qdp
+                else:
+                    n_pre = 0
+            except (ValueError, ArithmeticError):  # e.g. an infeasible earlier input
+                n_pre = 0
+        t0 = t - n_pre * h
+        if n_pre == 0 and t == 0.0 and not np.all(np.isfinite(qd0)):
+            raise EngineRefusal(f"mechanism {st.mech.name!r}: no finite analytic state at "
+                                "the reference input to start PyBullet from")
+        sim.set_state(q0, qd0)
+        sim.set_drive(d.velocity + d.acceleration * t0)
+        self.h = None
+        self._set_step(h)
+        self._last = None
+        for k in range(n_pre):
+            self._one_step(h, t0 + k * h)
+
+    def advance(self, t: float, h: float, n: int) -> str | None:
+        self._set_step(h)
+        step = self._one_step
+        for k in range(n):
+            step(h, t + k * h)
+        return None
+
+    def sample(self, t: float, rows, rec: Recorder) -> float:
+        """The state at ``t``, then one more step for the finite differences (returns
+        that step's length)."""
+        st, sim, s = self.tree, self.sim, self.settings
+        prev_cf = prev_tau = None
+        if s.average_impulses:
+            prev_cf, prev_tau = sim.constraint_forces(), sim.states()[3]
         q, v, _, _ = sim.states()
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            reason = "non-finite state (simulation diverged)"
+            self._last = "non-finite state (simulation diverged)"
+            return 0.0
+        h = self.h
+        self._one_step(h, t)
+        q1, v1, rf1, tau1 = sim.states()
+        cf1 = sim.constraint_forces()
+        qdd = (v1 - v) / h
+        # semi-implicit Euler: v_n lags the positions by about half a step, so the
+        # velocity at the sample is the mean of v_n and v_{n+1} (second order)
+        vm = 0.5 * (v + v1) if s.midpoint_velocity else v
+        th, om, al, org, _, a_org = rec.put_motion(rows, t, q, vm, qdd)
+        if s.average_impulses and prev_cf is not None:
+            cf, tau = 0.5 * (prev_cf + cf1), 0.5 * (prev_tau + tau1)
         else:
-            h_next = h_cur  # same step as before the sample: consistent differences
-            one_step(h_next, t)
-            carried = 1
-            q1, v1, rf1, tau1 = sim.states()
-            cf1 = sim.constraint_forces()
-            qdd = (v1 - v) / h_next
-            # semi-implicit Euler: v_n lags the positions by about half a step, so the
-            # velocity at the sample is the mean of v_n and v_{n+1} (second order)
-            vm = 0.5 * (v + v1) if settings.midpoint_velocity else v
-            th, om, al, org, _, a_org = st.propagate(q[None], vm[None], qdd[None])
-            stepped = True
-            if settings.average_impulses and prev_cf is not None:
-                cf = 0.5 * (prev_cf + cf1)
-                tau = 0.5 * (prev_tau + tau1)
-            else:
-                cf, tau = cf1, tau1
-            viol = 0.0
-            for ch in st.chords:
-                pa = st.point_world(th, org, ch.body_a, ch.point_a)[0]
-                pb = st.point_world(th, org, ch.body_b, ch.point_b)[0]
-                viol = max(viol, float(np.linalg.norm(pa - pb)))
-            _, vel_now, acc_now = st.driver_path(t)
-            rate = st.driver_sigma * vm[st.driver_tree]
-            jnames = [j.name for j in st.mech.joints]
-            for i in idx:
-                rec.theta[i], rec.omega[i], rec.alpha[i] = th[0], om[0], al[0]
-                rec.measured[i] = st.driver_value(q[st.driver_tree])
-                rec.viol[i] = viol
-                rec.speed[i] = rate - float(vel_now)
-                F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf[None])
-                for name, val in F.items():
-                    rec.force[i, jnames.index(name)] = val[0]
-                for pi, k in enumerate(st.prismatic):
-                    name = st.mech.joints[k].name
-                    rec.normal[i, pi] = Nn[name][0]
-                    rec.moment[i, pi] = M[name][0]
-                    t_idx = st.tree_joint_indices.index(k)
-                    rec.slider_acc[i, pi] = st.joints[t_idx].sigma * qdd[t_idx]
-                rec.effort[i] = eff[0]
-                rec.effort_engine[i] = st.driver_sigma * tau
-                for t_idx, tj in enumerate(st.joints):
-                    rec.force_engine[i, tj.joint] = sig[t_idx] * rf1[t_idx]
-                for ci, ch in enumerate(st.chords):
-                    rec.force_engine[i, ch.joint] = cf1[ci]
-            t += h_next
-            if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(v1))):
-                reason = "non-finite state (simulation diverged)"
-            elif viol > vmax:
-                reason = f"loop violation {viol:.3g} m > {vmax:.3g} m"
-            elif abs(rate - vel_now) > max_speed_error * max(abs(vel_now), abs(dmech.velocity),
-                                                             1e-12):
-                reason = (f"driver rate off by {abs(rate - vel_now):.3g} "
-                          f"(> {max_speed_error:g} relative)")
-        if reason is not None:
-            reason, fail = rec.fail(st, t_stop, reason)
-            break
-    wall = time.perf_counter() - t0
-    notes = ("tree-joint forces and drive effort reconstructed by Newton-Euler from PyBullet's "
-             "accelerations and loop forces; PyBullet's own readings in joint_force_engine "
-             "(jointReactionForces) and drive_effort_engine (motor torque)",)
-    return _finish(st, plan, rec, "pybullet", settings.describe(), reason, fail, wall, dt_used,
-                   notes=notes, engine_readings=True)
+            cf, tau = cf1, tau1
+        self._last = (loop_gap(st, th, org), st.driver_sigma * vm[st.driver_tree], t,
+                      bool(np.all(np.isfinite(q1)) and np.all(np.isfinite(v1))))
+        if len(rows):
+            F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf[None])
+            force = np.full((len(self.jnames), 2), np.nan)
+            for name, val in F.items():
+                force[self.jnames.index(name)] = val[0]
+            names = [st.mech.joints[k].name for k in st.prismatic]
+            normal = np.array([Nn[n][0] for n in names])
+            moment = np.array([M[n][0] for n in names])
+            engine = np.full_like(force, np.nan)
+            for ti, tj in enumerate(st.joints):
+                engine[tj.joint] = self.sig[ti] * rf1[ti]
+            for ci, ch in enumerate(st.chords):
+                engine[ch.joint] = cf1[ci]
+            rec.put_forces(rows, force, eff[0], normal, moment, force_engine=engine,
+                           effort_engine=st.driver_sigma * tau)
+        return h
+
+    def divergence(self, t: float) -> str | None:
+        last, self._last = self._last, None
+        if isinstance(last, str):
+            return last
+        if last is None:
+            return super().divergence(t)
+        gap, rate, t_sample, finite = last
+        if not finite:
+            return "non-finite state (simulation diverged)"
+        return check_motion(self.tree, gap, rate, t_sample, self.max_violation,
+                            self.max_speed_error)
+
+
+def _require_pybullet():
+    try:
+        import pybullet
+    except ImportError as e:  # pragma: no cover
+        raise SimModelError(f"PyBullet is not installed ({e}); pip install pybullet") from None
+    return pybullet
+
+
+__all__ = ["PybulletSession", "PybulletSettings", "PybulletSim"]

@@ -1,0 +1,54 @@
+"""Verdict runs: one engine on one compiled linkage, compared with its analytic solution.
+
+Used by ``xval compare`` (:mod:`reports.cli_engines`) and the report's engine tasks
+(:mod:`reports.report`).  Engines are chosen by name from :mod:`sim_models.registry` and
+their settings built there (``--set KEY=VALUE``); the compiled linkage
+(:func:`sim_models.compile_linkage`) is built once and passed down to the engine run and
+the comparison.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+
+def engine_list(choice: str) -> list[str]:
+    """``"all"`` -> every registered engine; else the one named."""
+    from sim_models.registry import engine_names, get_engine
+    if choice == "all":
+        return list(engine_names())
+    return [get_engine(choice).name]
+
+
+def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
+                 common: Mapping[str, object] | None = None) -> dict:
+    """Each engine's settings: its recommended defaults, then ``common`` (typed
+    overrides such as ``timestep``, applied where the engine has the field), then the
+    ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``."""
+    from sim_models.registry import get_engine, split_overrides
+    per = split_overrides(pairs, engines)
+    out = {}
+    for e in engines:
+        eng = get_engine(e)
+        fields = eng.settings_class.field_types()
+        over = {k: v for k, v in (common or {}).items() if v is not None and k in fields}
+        over.update(per.get(e, {}))
+        out[e] = eng.settings(over)
+    return out
+
+
+def run_comparison(tree, engine: str, settings=None, mode: str = "run",
+                   revolutions: int = 2, samples: int = 36):
+    """Run ``engine`` on the compiled linkage ``tree`` and compare: ``(run, comparisons)``.
+
+    ``mode="instantaneous"``: the engine's forward dynamics at the analytic state of the
+    sweep's inputs (engines without one refuse)."""
+    from analytic.sweep import input_values
+    from reports.compare import compare_run
+    from sim_models.engines import instantaneous, run
+    if mode == "instantaneous":
+        vals = input_values(tree.linkage, samples)[0]
+        r = instantaneous(tree, engine, settings, vals)
+    else:
+        r = run(tree, engine, settings, revolutions=revolutions, samples=samples)
+    return r, compare_run(r, tree.linkage)
