@@ -123,6 +123,23 @@ def _spans(x: np.ndarray, y: np.ndarray, period: float):
     return inc, period - inc
 
 
+def _extremes(y: np.ndarray, periodic: bool) -> tuple[float, float]:
+    """Least and greatest value of sampled ``y``: an interior extreme (or any, when
+    periodic) is the vertex of the parabola through it and its neighbours, which
+    removes the sampling error (O(h^2)) of the plain min/max."""
+    out = []
+    n = len(y)
+    for i, sgn in ((int(np.argmin(y)), -1), (int(np.argmax(y)), 1)):
+        v = float(y[i])
+        if n >= 3 and (periodic or 0 < i < n - 1):
+            a, b, c = y[(i - 1) % n], y[i], y[(i + 1) % n]
+            den = a - 2 * b + c
+            if den * sgn < 0:
+                v = float(b - (a - c) ** 2 / (8 * den))
+        out.append(v)
+    return out[0], out[1]
+
+
 def _reversals(y: np.ndarray) -> int:
     d = np.diff(np.concatenate([y, y[:1]]))
     peak = np.max(np.abs(d)) if len(d) else 0.0
@@ -153,8 +170,8 @@ def summarise(result) -> Summary:
             continue
         jn = topo.joint_names[j]
         s = kin.slider(jn)[0]
-        st = dict(kind="slider", name=jn, low=float(s.min()), high=float(s.max()),
-                  travel=float(s.max() - s.min()))
+        lo, hi = _extremes(s, periodic)
+        st = dict(kind="slider", name=jn, low=lo, high=hi, travel=hi - lo)
         if periodic and _reversals(s) == 2:
             inc, dec = _spans(x, s, period)
             slow, quick, dirn = (inc, dec, "increasing") if inc >= dec else \
@@ -175,8 +192,8 @@ def summarise(result) -> Summary:
         if periodic and abs(net) > 180.0:
             summ.strokes.append(Stroke("rocker", body, math.nan, math.nan, math.nan, True))
             continue
-        st = dict(kind="rocker", name=body, low=float(th.min()), high=float(th.max()),
-                  travel=float(th.max() - th.min()))
+        lo, hi = _extremes(th, periodic)
+        st = dict(kind="rocker", name=body, low=lo, high=hi, travel=hi - lo)
         if periodic and _reversals(th) == 2:
             inc, dec = _spans(x, th, period)
             slow, quick, dirn = (inc, dec, "ccw") if inc >= dec else (dec, inc, "cw")

@@ -273,7 +273,8 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
     mech, topo = linkage.mech, linkage.topo
     rev = linkage.driver_is_revolute
     cols: dict[str, np.ndarray] = {
-        "input": np.degrees(kin.value) if rev else kin.value,
+        # degrees rounded to 1e-10 deg: 359 deg, not 358.99999999999994
+        "input": np.round(np.degrees(kin.value), 10) if rev else kin.value,
         "input_velocity": kin.velocity, "input_acceleration": kin.acceleration}
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
