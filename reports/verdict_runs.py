@@ -13,10 +13,10 @@ from collections.abc import Mapping, Sequence
 
 
 def engine_list(choice: str) -> list[str]:
-    """``"all"`` -> every registered engine; else the one named."""
-    from sim_models.registry import engine_names, get_engine
+    """``"all"`` -> every registered engine whose module is present; else the one named."""
+    from sim_models.registry import available_engines, get_engine
     if choice == "all":
-        return list(engine_names())
+        return list(available_engines())
     return [get_engine(choice).name]
 
 

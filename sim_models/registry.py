@@ -15,6 +15,7 @@ A new engine is one module plus one :class:`EngineEntry` line in :data:`BUILTIN`
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -79,6 +80,12 @@ def engine_names() -> tuple[str, ...]:
     return tuple(_REGISTRY)
 
 
+def available_engines() -> tuple[str, ...]:
+    """Registered engines whose module is present (found without importing it or its
+    engine library), in registry order: what ``--engine all`` runs."""
+    return tuple(n for n, e in _REGISTRY.items() if importlib.util.find_spec(e.module))
+
+
 def get_engine(name: str) -> Engine:
     """The engine called ``name`` (imports its module; a missing engine library raises
     :class:`~sim_models.tree.SimModelError` from the module's own import check)."""
@@ -129,5 +136,6 @@ def split_overrides(pairs, engines) -> dict[str, dict[str, str]]:
     return out
 
 
-__all__ = ["BUILTIN", "Engine", "EngineEntry", "UnknownEngineError", "engine_names",
+__all__ = ["BUILTIN", "Engine", "EngineEntry", "UnknownEngineError", "available_engines",
+           "engine_names",
            "get_engine", "make_settings", "register_engine", "split_overrides"]
