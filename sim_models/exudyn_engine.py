@@ -1,0 +1,482 @@
+"""Exudyn backend: the linkage as an index-3 DAE, joint reactions from its multipliers.
+
+Model (built from the compiled linkage, :class:`sim_models.tree.SimTree`)
+-------------------------------------------------------------------------
+* one ``NodeRigidBody2D`` + ``ObjectRigidBody2D`` per moving body, the node at the
+  body's centre of mass and turned with the body frame (coordinates ``[x_G, y_G,
+  theta]``, reference = the analytic assembled pose, so the initial displacements
+  are zero);
+* **massless links are exact**: a body with ``mass = 0`` gets mass and inertia 0.
+  The mass matrix is then singular, but the Newton matrix of the index-3 system
+  stays regular because the constraint Jacobian (``2 J`` joint rows plus the
+  drive row) is square and regular for a one-degree-of-freedom linkage away from
+  singular positions; no floor mass is added (the MuJoCo/PyBullet trees need one).
+  Kinematics-only descriptions get the tree's placeholder masses (their forces are
+  not compared);
+* every joint is a constraint (no spanning tree, no cut joints): ``RevoluteJoint2D``
+  between ``MarkerBodyRigid`` markers at the two joint points (marker 0 on
+  ``body_a``), ``PrismaticJoint2D`` with marker 0 on the guide at the line's origin
+  point (``axisMarker0`` = line direction in the guide frame) and marker 1 on the
+  slider at the slider point (``normalMarker1`` = line normal in the slider frame,
+  rotation constrained), so a guide that itself moves needs nothing special;
+* the drive is a ``CoordinateConstraint``: revolute, between the rotation
+  coordinates of ``body_a`` (ground: a ground node) and ``body_b``; prismatic,
+  between the ground and an auxiliary massless coordinate ``sigma`` that an
+  ``ObjectConnectorCoordinateVector`` ties to the slider's displacement along the
+  line (``u . dx_G - sigma = 0``; the guide must be the ground).  A constant-speed
+  drive is a velocity-level constraint with the constant offset ``omega`` (no
+  Python callback); an accelerating one has the offset as a Python
+  ``offsetUserFunction_t`` (``w0 + a t``), exact at every step end;
+* gravity as ``LoadMassProportional``; loads as ``LoadForceVector`` /
+  ``LoadTorqueVector`` at the load point's marker (world axes).
+
+Solver: ``MainSolverImplicitSecondOrder`` (generalized-alpha, index 3), full Newton
+with a 1e-12 tolerance, dense linear solver, stepped interval by interval with
+``SolveSteps`` (the step schedule of :func:`sim_models.engine_base.drive`).
+The initial accelerations are the analytic ones (part of the analytic assembled
+state): Exudyn's own initial-acceleration solve omits the offset's second
+derivative of a user-function drive (documented for ``CoordinateConstraint``),
+which would leave an accelerating input with a wrong start.
+
+Readout (conventions of :mod:`sim_models.engine_base`), from the multipliers
+``lambda`` (``GetAECoordinates``) with the signs measured against the analytic
+solution (``/work/notes/exudyn_scratch``; an error of the wrong sign would be of
+the order of the peak, the measured ones are 1e-5):
+
+* revolute joint: the force by body_a (marker 0) on body_b (marker 1) is
+  ``-lambda`` (Exudyn's ``M q'' + C_q^T lambda = f``);
+* prismatic joint, ``lambda = [l0, l1]`` for ``(p1 - p0) . n1 = 0`` and
+  ``t0 . n1 = 0``: the normal force by the guide on the slider is ``-l0``, its
+  moment about the slider point ``l1 + l0 s'`` with ``s' = u . (P_slider -
+  P_origin)``; for the driven prismatic joint the drive force acts at the slider's
+  centre of mass in the model and at the slider point in the analytic convention,
+  so ``(G - P) x u * effort`` is added to the moment; the joint force reported is
+  ``normal * n`` (the analytic joint force of a prismatic joint);
+* drive effort: minus the ``CoordinateConstraint``'s multiplier (torque on body_b,
+  or force on the slider along the line);
+* accelerations are the solver's ``Coordinates_tt`` at the step end; ``s''`` of a
+  slider on a moving guide includes the guide's rotation and Coriolis terms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from analytic import Prismatic, Revolute
+
+from .engine_base import EngineRefusal, EngineSettings, Plan, Recorder, Session, check_motion
+from .tree import SimModelError, SimTree
+
+
+def require_exudyn():
+    """The ``exudyn`` module, or a :class:`SimModelError` saying how to install it."""
+    try:
+        import exudyn
+    except ImportError as e:  # pragma: no cover - exudyn is a dependency
+        raise SimModelError(f"the exudyn engine needs the exudyn package "
+                            f"(pip install exudyn): {e}") from None
+    return exudyn
+
+
+@dataclass(frozen=True)
+class ExudynSettings(EngineSettings):
+    """Exudyn settings (generalized-alpha, index 3, full Newton).
+
+    Parameters
+    ----------
+    timestep
+        Largest step, s.
+    steps_per_rev
+        Steps per revolution of the input (per run for a limited-range input).  The
+        step is the smaller of ``timestep`` and the one these give; the run shortens
+        it so that every sample falls on one.
+    spectral_radius
+        Generalized-alpha's spectral radius at infinity, rho_inf (1: no numerical
+        damping, which lets the algebraic accelerations oscillate).
+    newton_tolerance
+        Relative and absolute tolerance of the Newton iteration.
+
+    Evidence: see ``RECOMMENDED`` below (filled from the speed-against-error grid).
+    """
+
+    timestep: float = 5e-4
+    steps_per_rev: int = 2016
+    spectral_radius: float = 0.7
+    newton_tolerance: float = 1e-10
+
+    def max_step(self, plan: Plan) -> float:
+        return min(float(self.timestep), plan.rev_time / max(1, int(self.steps_per_rev)))
+
+    def describe(self) -> str:
+        return (f"gen-alpha rho={self.spectral_radius:g} steps/rev={self.steps_per_rev} "
+                f"dt<={self.timestep:g} newton tol={self.newton_tolerance:g}")
+
+
+def _rot(a: float, v) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def _perp(v) -> np.ndarray:
+    return np.array([-v[1], v[0]])
+
+
+def _cross(a, b) -> float:
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
+class ExudynSession(Session):
+    """A linkage in Exudyn (see the module docstring for the model and the readout)."""
+
+    name = "exudyn"
+    settings_class = ExudynSettings
+    engine_readings = False
+
+    def __init__(self, tree: SimTree, settings: ExudynSettings | None = None):
+        super().__init__(tree, settings)
+        self.exu = require_exudyn()
+        mech = tree.mech
+        djt = mech.driver_joint
+        if isinstance(djt, Prismatic) and djt.guide != mech.ground:
+            raise EngineRefusal(
+                f"mechanism {mech.name!r}: the exudyn engine drives a prismatic joint only "
+                f"on a ground guide; driver {djt.name!r} slides on the moving body "
+                f"{djt.guide!r}")
+        self._build()
+        self.solver = None
+        self.sim = None
+        self.t = 0.0
+
+    # ------------------------------------------------------------------ model
+    def _build(self):
+        exu, st = self.exu, self.tree
+        from exudyn import itemInterface as ii
+        mech = st.mech
+        self.SC = exu.SystemContainer()
+        mbs = self.mbs = self.SC.AddSystem()
+        self.g = st.ground
+        self.ground_obj = mbs.AddObject(ii.ObjectGround())
+        ground_node = mbs.AddNode(ii.NodePointGround())
+        kin = st.kin_ref
+        self.node, self.obj, self.com = {}, {}, {}
+        for b, body in enumerate(mech.bodies):
+            if b == self.g:
+                continue
+            if st.has_mass:  # exact: a massless link stays massless (module docstring)
+                m, inertia = float(body.mass), float(body.inertia)
+            else:
+                m, inertia = float(st.mass[b]), float(st.inertia[b])
+            c = np.asarray(st.com[b], float)
+            th = float(kin.theta[0, b])
+            rG = kin.origin[0, b] + _rot(th, c)
+            n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[rG[0], rG[1], th],
+                                               initialCoordinates=[0.0, 0.0, 0.0],
+                                               initialVelocities=[0.0, 0.0, 0.0]))
+            self.obj[b] = mbs.AddObject(ii.ObjectRigidBody2D(mass=m, inertia=inertia,
+                                                             nodeNumber=n))
+            self.node[b], self.com[b] = n, c
+        self.joint_obj = [self._add_joint(jt) for jt in mech.joints]
+        self._add_drive(ground_node)
+        self._add_loads()
+        mbs.Assemble()
+        sd = mbs.systemData
+        self.ltg = {b: np.array(sd.GetNodeLTGODE2(n)) for b, n in self.node.items()}
+        self.ref = {b: np.array(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
+                    for b, n in self.node.items()}
+        self.joint_ae = [np.array(sd.GetObjectLTGAE(o)) for o in self.joint_obj]
+        self.drive_ae = int(sd.GetObjectLTGAE(self.drive_obj)[0])
+        self.n_ode2 = sd.ODE2Size()
+
+    def _marker(self, b: int, p):
+        """A rigid marker at body-frame point ``p`` (m) of body ``b``."""
+        from exudyn import itemInterface as ii
+        p = np.asarray(p, float)
+        if b == self.g:
+            return self.mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=self.ground_obj,
+                                                         localPosition=[p[0], p[1], 0.0]))
+        r = p - self.com[b]
+        return self.mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=self.obj[b],
+                                                     localPosition=[r[0], r[1], 0.0]))
+
+    def _add_joint(self, jt):
+        from exudyn import itemInterface as ii
+        st = self.tree
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        a, b = idx[jt.body_a], idx[jt.body_b]
+        ma = self._marker(a, st.mech.bodies[a].points[jt.point_a])
+        mb = self._marker(b, st.mech.bodies[b].points[jt.point_b])
+        if isinstance(jt, Revolute):
+            return self.mbs.AddObject(ii.RevoluteJoint2D(markerNumbers=[ma, mb]))
+        d = jt.direction
+        nn = d + math.pi / 2 - jt.angle  # the line normal in the slider frame
+        return self.mbs.AddObject(ii.PrismaticJoint2D(
+            markerNumbers=[ma, mb], axisMarker0=[math.cos(d), math.sin(d), 0.0],
+            normalMarker1=[math.cos(nn), math.sin(nn), 0.0], constrainRotation=True))
+
+    def _add_drive(self, ground_node):
+        from exudyn import itemInterface as ii
+        st, mbs = self.tree, self.mbs
+        mech = st.mech
+        d, djt = mech.driver, mech.driver_joint
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        m_ground = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
+        self.sigma = None
+        if isinstance(djt, Revolute):
+            a, b = idx[djt.body_a], idx[djt.body_b]
+            m0 = (m_ground if a == self.g else
+                  mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.node[a], coordinate=2)))
+            m1 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.node[b], coordinate=2))
+        else:
+            # sigma (displacement s - s_ref) is a massless coordinate tied to the slider's
+            # displacement along the (ground) line; the drive constrains sigma
+            sb = idx[djt.slider]
+            u = np.array([math.cos(djt.direction), math.sin(djt.direction)])
+            # MarkerNodeCoordinates carries total coordinates (reference + displacement)
+            # into the CoordinateVector constraint: sigma's reference is u . x_G,ref
+            s_ref = float(u @ mbs.GetNodeParameter(self.node[sb], "referenceCoordinates")[:2])
+            self.sigma = mbs.AddNode(ii.NodeGenericODE2(referenceCoordinates=[s_ref],
+                                                        initialCoordinates=[0.0],
+                                                        initialCoordinates_t=[0.0],
+                                                        numberOfODE2Coordinates=1))
+            mbs.AddObject(ii.ObjectGenericODE2(nodeNumbers=[self.sigma],
+                                               massMatrixUserFunction=0,
+                                               massMatrix=np.zeros((1, 1))))
+            mx = mbs.AddMarker(ii.MarkerNodeCoordinates(nodeNumber=self.node[sb]))
+            ms = mbs.AddMarker(ii.MarkerNodeCoordinates(nodeNumber=self.sigma))
+            # measured: the equation is X1 q1 - X0 q0 = 0, i.e. sigma = u . x_G
+            mbs.AddObject(ii.ObjectConnectorCoordinateVector(
+                markerNumbers=[mx, ms], scalingMarker0=np.array([[u[0], u[1], 0.0]]),
+                scalingMarker1=np.array([[1.0]]), offset=[0.0]))
+            m0 = m_ground
+            m1 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.sigma, coordinate=0))
+            self.drive_u = u
+        w0, acc = float(d.velocity), float(d.acceleration)
+        if acc == 0.0:
+            drive = ii.CoordinateConstraint(markerNumbers=[m0, m1], offset=w0,
+                                            velocityLevel=True)
+        else:
+            drive = ii.CoordinateConstraint(
+                markerNumbers=[m0, m1], velocityLevel=True,
+                offsetUserFunction_t=lambda mbs, t, item, off: w0 + acc * t)
+        self.drive_obj = mbs.AddObject(drive)
+
+    def _add_loads(self):
+        from exudyn import itemInterface as ii
+        st, mbs = self.tree, self.mbs
+        mech = st.mech
+        gx, gy = mech.gravity
+        if gx or gy:
+            for b, o in self.obj.items():
+                if mech.bodies[b].mass or not st.has_mass:
+                    mk = mbs.AddMarker(ii.MarkerBodyMass(bodyNumber=o))
+                    mbs.AddLoad(ii.LoadMassProportional(markerNumber=mk,
+                                                        loadVector=[gx, gy, 0.0]))
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        for ld in mech.loads:
+            b = idx[ld.body]
+            body = mech.bodies[b]
+            p = body.points[ld.point] if ld.point is not None else self.com[b]
+            mk = self._marker(b, p)
+            if ld.force[0] or ld.force[1]:
+                mbs.AddLoad(ii.LoadForceVector(markerNumber=mk,
+                                               loadVector=[ld.force[0], ld.force[1], 0.0]))
+            if ld.torque:
+                mbs.AddLoad(ii.LoadTorqueVector(markerNumber=mk,
+                                                loadVector=[0.0, 0.0, ld.torque]))
+
+    # ------------------------------------------------------------------ stepping
+    def _simulation_settings(self, t0: float):
+        exu = self.exu
+        s = exu.SimulationSettings()
+        ti = s.timeIntegration
+        ti.startTime = t0
+        ti.endTime = 1e30            # SolveSteps is given each interval's end
+        ti.numberOfSteps = 1
+        ti.verboseMode = 0
+        ga = ti.generalizedAlpha
+        ga.spectralRadius = float(self.settings.spectral_radius)
+        ga.computeInitialAccelerations = False   # analytic ones, see the module docstring
+        nt = ti.newton
+        nt.useModifiedNewton = False
+        nt.relativeTolerance = nt.absoluteTolerance = float(self.settings.newton_tolerance)
+        s.solution.file.write = False       # no solution/ directory
+        s.solution.sensors.active = False
+        s.linearSolver.solverType = exu.LinearSolverType.EXUdense
+        s.show.statistics = False
+        s.show.computationTime = False
+        s.show.globalTimers = False
+        return s
+
+    def reset(self, t: float, h: float) -> None:
+        st, exu = self.tree, self.exu
+        mech = st.mech
+        val, vel, acc = (float(x) for x in st.driver_path(t))
+        kin = st.kin_ref if t == 0.0 else st.linkage.kinematics(val, vel, acc)
+        if t == 0.0 and (vel != mech.driver.velocity or acc != mech.driver.acceleration):
+            kin = st.linkage.kinematics(val, vel, acc)
+        q = np.zeros(self.n_ode2)
+        qd = np.zeros(self.n_ode2)
+        qdd = np.zeros(self.n_ode2)
+        for b, ltg in self.ltg.items():
+            rG, vG, aG = (z[0] for z in kin.point(st.body_names[b], tuple(self.com[b])))
+            q[ltg] = [rG[0] - self.ref[b][0], rG[1] - self.ref[b][1],
+                      kin.theta[0, b] - self.ref[b][2]]
+            qd[ltg] = [vG[0], vG[1], kin.omega[0, b]]
+            qdd[ltg] = [aG[0], aG[1], kin.alpha[0, b]]
+        if self.sigma is not None:
+            ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
+            q[ls], qd[ls], qdd[ls] = val - mech.driver.value, vel, acc
+        if isinstance(mech.driver_joint, Revolute) and t != 0.0:
+            # the rotation coordinates must carry the turns the input has made
+            idx = {n: i for i, n in enumerate(st.body_names)}
+            a, b = idx[mech.driver_joint.body_a], idx[mech.driver_joint.body_b]
+            turns = (val - mech.driver.value) - (
+                (q[self.ltg[b][2]] if b != self.g else 0.0)
+                - (q[self.ltg[a][2]] if a != self.g else 0.0))
+            if b != self.g:
+                q[self.ltg[b][2]] += 2 * math.pi * round(turns / (2 * math.pi))
+        sd = self.mbs.systemData
+        initial = exu.ConfigurationType.Initial
+        sd.SetODE2Coordinates(q, configuration=initial)
+        sd.SetODE2Coordinates_t(qd, configuration=initial)
+        sd.SetODE2Coordinates_tt(qdd, configuration=initial)
+        self.sim = self._simulation_settings(t)
+        self.solver = exu.MainSolverImplicitSecondOrder()
+        if not self.solver.InitializeSolver(self.mbs, self.sim):
+            raise EngineRefusal(f"mechanism {mech.name!r}: Exudyn could not initialise its "
+                                f"solver: {self.solver.GetErrorString()}")
+        self.t = t
+
+    def advance(self, t: float, h: float, n: int) -> str | None:
+        if n <= 0:
+            return None
+        sol = self.solver
+        sol.it.endTime = t + n * h
+        sol.it.currentStepSize = h
+        sol.it.maxStepSize = h
+        try:
+            ok = sol.SolveSteps(self.mbs, self.sim)
+        except Exception as e:  # noqa: BLE001 - a failed Newton iteration is a divergence
+            return f"Exudyn solver failed ({str(e).strip().splitlines()[0][:120]})"
+        self.t = t + n * h
+        if not ok:
+            return f"Exudyn solver failed ({sol.GetErrorString().strip()[:120]})"
+        q = self.mbs.systemData.GetODE2Coordinates()
+        if not np.all(np.isfinite(q)):
+            return "non-finite state (simulation diverged)"
+        return None
+
+    # ------------------------------------------------------------------ readout
+    def _poses(self):
+        """theta, omega, alpha (B,), centre of mass position/velocity/acceleration (B, 2)."""
+        sd = self.mbs.systemData
+        Q, Qt, Qtt = (sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(),
+                      sd.GetODE2Coordinates_tt())
+        B = len(self.tree.body_names)
+        th, om, al = np.zeros(B), np.zeros(B), np.zeros(B)
+        xG, vG, aG = np.zeros((B, 2)), np.zeros((B, 2)), np.zeros((B, 2))
+        th[self.g] = self.tree.kin_ref.theta[0, self.g]
+        for b, ltg in self.ltg.items():
+            th[b] = self.ref[b][2] + Q[ltg[2]]
+            om[b], al[b] = Qt[ltg[2]], Qtt[ltg[2]]
+            xG[b] = self.ref[b][:2] + Q[ltg[:2]]
+            vG[b], aG[b] = Qt[ltg[:2]], Qtt[ltg[:2]]
+        return th, om, al, xG, vG, aG, Q, Qt
+
+    def _point(self, pose, b: int, p):
+        """World position, velocity, acceleration of body-frame point ``p`` of body ``b``."""
+        th, om, al, xG, vG, aG = pose[:6]
+        p = np.asarray(p, float)
+        if b == self.g:
+            return _rot(th[b], p), np.zeros(2), np.zeros(2)
+        r = _rot(th[b], p - self.com[b])
+        return xG[b] + r, vG[b] + om[b] * _perp(r), aG[b] + al[b] * _perp(r) - om[b] ** 2 * r
+
+    def _driver(self, pose):
+        """The driver's value (rad or m, unwrapped) and rate in the engine."""
+        st = self.tree
+        mech = st.mech
+        d, djt = mech.driver, mech.driver_joint
+        Q, Qt = pose[6], pose[7]
+        if self.sigma is not None:
+            ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
+            return d.value + Q[ls], Qt[ls]
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        a, b = idx[djt.body_a], idx[djt.body_b]
+        qa = Q[self.ltg[a][2]] if a != self.g else 0.0
+        wa = Qt[self.ltg[a][2]] if a != self.g else 0.0
+        return d.value + Q[self.ltg[b][2]] - qa, Qt[self.ltg[b][2]] - wa
+
+    def _gap(self, pose) -> float:
+        """Largest distance (m) between the two points of any revolute joint."""
+        st = self.tree
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        gap = 0.0
+        for jt in st.mech.joints:
+            if isinstance(jt, Revolute):
+                a, b = idx[jt.body_a], idx[jt.body_b]
+                pa = self._point(pose, a, st.mech.bodies[a].points[jt.point_a])[0]
+                pb = self._point(pose, b, st.mech.bodies[b].points[jt.point_b])[0]
+                gap = max(gap, float(np.hypot(*(pa - pb))))
+        return gap
+
+    def sample(self, t: float, rows, rec: Recorder) -> float:
+        if len(rows) == 0:
+            return 0.0
+        st = self.tree
+        mech = st.mech
+        pose = self._poses()
+        th, om, al, xG = pose[:4]
+        origin = np.array([xG[b] - _rot(th[b], self.com[b]) if b != self.g
+                           else st.kin_ref.origin[0, b] for b in range(len(th))])
+        lam = self.mbs.systemData.GetAECoordinates()
+        idx = {n: i for i, n in enumerate(st.body_names)}
+        J, P = len(mech.joints), len(st.prismatic)
+        force = np.zeros((J, 2))
+        sacc, normal, moment = np.zeros(P), np.zeros(P), np.zeros(P)
+        effort = -float(lam[self.drive_ae])
+        for k, jt in enumerate(mech.joints):
+            L = lam[self.joint_ae[k]]
+            if isinstance(jt, Revolute):
+                force[k] = -L
+                continue
+            p = st.prismatic.index(k)
+            gb, sb = idx[jt.guide], idx[jt.slider]
+            ang = th[gb] + jt.direction
+            u = np.array([math.cos(ang), math.sin(ang)])
+            n = _perp(u)
+            O, Ov, Oa = self._point(pose, gb, mech.bodies[gb].points[jt.origin])
+            S, Sv, Sa = self._point(pose, sb, mech.bodies[sb].points[jt.point])
+            dd, dv, da = S - O, Sv - Ov, Sa - Oa
+            wg, ag = om[gb], al[gb]
+            # s = u . (S - O) differentiated twice with u turning with the guide
+            sacc[p] = (ag * n - wg * wg * u) @ dd + 2 * wg * (n @ dv) + u @ da
+            normal[p] = -L[0]
+            moment[p] = L[1] + L[0] * (u @ dd)
+            if jt.name == mech.driver.joint:
+                G = xG[sb]
+                moment[p] += _cross(G - S, u) * effort
+            force[k] = normal[p] * n
+        value, rate = self._driver(pose)
+        rec.put_absolute(rows, t, th, om, al, sacc, origin, value, rate)
+        rec.put_forces(rows, force, effort, normal, moment)
+        return 0.0
+
+    def divergence(self, t: float) -> str | None:
+        pose = self._poses()
+        if not all(np.all(np.isfinite(x)) for x in pose):
+            return "non-finite state (simulation diverged)"
+        _, rate = self._driver(pose)
+        return check_motion(self.tree, self._gap(pose), float(rate), t, self.max_violation,
+                            self.max_speed_error)
+
+    def extra(self) -> dict:
+        return {"massless_exact": True}
+
+    def close(self) -> None:
+        if getattr(self, "SC", None) is not None:
+            self.SC.Reset()
+            self.SC = None

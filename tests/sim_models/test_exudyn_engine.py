@@ -1,0 +1,143 @@
+"""Exudyn against the analytic solution: every built-in case at the recommended settings.
+
+Independent expectations: the analytic solver (:mod:`analytic`, itself checked against
+REFERENCE.md, closed forms and finite differences), the S4 figures of ENGINE_NOTES.md,
+and the multibody convention that a massless link adds no inertia.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from analytic import Linkage, case_names, load_case
+from analytic.mechanism import Driver
+from sim_models import compile_linkage
+from sim_models.engine_base import EngineRefusal
+from sim_models.engines import run
+from sim_models.registry import get_engine
+
+from .conftest import ENGINE_RELATIVE, assert_run_within
+
+pytest.importorskip("exudyn")
+
+#: What issue 9 asks of Exudyn at its recommended settings: every judged quantity
+#: (accelerations, every joint reaction including a prismatic joint's normal force and
+#: couple, the drive effort) within 1e-4 of its peak.  The settings' grid puts the worst
+#: built-in case at 5.3e-5 (hibbeler-two-inclines, bar.alpha next to its limit position),
+#: so this is a must-show with a factor of two to spare, not a loosened bound.
+EXUDYN_MUST_SHOW = 1e-4
+
+
+def _prismatic_reactions(r, mech, tol):
+    """Normal force and couple of every prismatic joint within ``tol``.  A ground-guided
+    slider's couple is identically zero, so the couple is judged on the scale of the
+    normal force times the mechanism's size (the couple a normal force could make)."""
+    if not mech.has_mass or not r.prismatic_names:
+        return
+    from reports.compare import analytic_at, compare
+    _, kin, frc = analytic_at(r, mech)
+    keep = (kin.condition <= 100.0) & np.all(np.isfinite(r.alpha), axis=1)
+    size = compile_linkage(mech).size
+    for p, name in enumerate(r.prismatic_names):
+        n_ref, m_ref = frc.normal[name][keep], frc.moment[name][keep]
+        at = r.values[keep]
+        c = compare(f"{name}.normal", n_ref, r.normal[keep, p], at, tol)
+        assert c.passed, str(c)
+        c = compare(f"{name}.moment", m_ref, r.moment[keep, p], at, tol,
+                    peak_floor=float(np.max(np.abs(n_ref))) * size)
+        assert c.passed, str(c)
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_every_case_at_recommended_settings(case):
+    """Two revolutions (limited-range inputs: their range) at the recommended settings:
+    the verdict tolerance and the stricter must-show of issue 9."""
+    mech = load_case(case)
+    r = run(compile_linkage(mech), "exudyn", revolutions=2, samples=36)
+    assert r.ok, r.reason
+    assert r.settings == get_engine("exudyn").settings()
+    assert_run_within(r, mech, ENGINE_RELATIVE, case)
+    assert_run_within(r, mech, EXUDYN_MUST_SHOW, case)
+    _prismatic_reactions(r, mech, EXUDYN_MUST_SHOW)
+    done = np.isfinite(r.alpha).all(axis=1)
+    assert np.max(r.loop_violation[done]) < 1e-9 * compile_linkage(mech).size
+    assert np.max(np.abs(r.speed_deviation[done])) < 1e-9 * max(
+        abs(mech.driver.velocity), abs(mech.driver.acceleration))
+
+
+def test_seed_four_bar_figures_of_engine_notes():
+    """The S4 four-bar at 60 deg (ENGINE_NOTES.md): coupler and rocker alpha, drive torque."""
+    mech = load_case("seed-four-bar")
+    r = run(mech, "exudyn", revolutions=2, samples=36)
+    k = int(np.argmin(np.abs(np.remainder(r.values - math.radians(60) + 1, 2 * math.pi) - 1)))
+    b = {n: i for i, n in enumerate(r.body_names)}
+    assert r.alpha[k, b["coupler"]] == pytest.approx(42.267, abs=2e-3)
+    assert r.alpha[k, b["rocker"]] == pytest.approx(95.504, abs=2e-3)
+    assert r.drive_effort[k] == pytest.approx(0.67334, abs=2e-5)
+
+
+def test_massless_link_is_massless_in_the_model():
+    """The seed slider-crank's crank has mass 0: the model keeps it at exactly 0 (no floor
+    mass), and the run still agrees (checked in the every-case test)."""
+    session = get_engine("exudyn").session_class(compile_linkage(load_case("seed-slider-crank")))
+    try:
+        crank = session.tree.body_names.index("crank")
+        obj = session.mbs.GetObject(session.obj[crank])
+        assert obj["mass"] == 0.0 and obj["inertia"] == 0.0
+    finally:
+        session.close()
+
+
+def _slider_driven(acc, com=None):
+    """The offset slider-crank driven at its slider (a limited-range prismatic input with
+    forces; the built-in prismatic inputs are kinematics-only), optionally with the
+    piston's centre of mass off the slider point."""
+    m = load_case("offset-slider-crank")
+    s0 = float(Linkage(m).kinematics().slider("slide")[0][0])
+    bodies = m.bodies if com is None else tuple(
+        dataclasses.replace(b, com=com) if b.name == "piston" else b for b in m.bodies)
+    return dataclasses.replace(m, name="slider-driven", bodies=bodies,
+                               driver=Driver("slide", s0, -1.0, acc))
+
+
+@pytest.mark.parametrize("com", [None, (0.01, 0.005)])
+def test_prismatic_driver_with_forces(com):
+    """Drive force on the slider, normal force and couple of the driven prismatic joint;
+    with the centre of mass off the slider point the drive force's moment enters the
+    couple (a wrong sign would be off by 0.15 of the scale)."""
+    mech = _slider_driven(-5.0, com)
+    r = run(mech, "exudyn", revolutions=1, samples=24)
+    assert r.ok, r.reason
+    assert_run_within(r, mech, ENGINE_RELATIVE, mech.name)
+    _prismatic_reactions(r, mech, ENGINE_RELATIVE)
+
+
+def test_accelerating_crank_with_forces():
+    """A crank with alpha != 0 (the drive offset is a time function) on a case with
+    masses, gravity and a load: the built-in accelerating inputs are kinematics-only."""
+    m = load_case("offset-slider-crank")
+    mech = dataclasses.replace(m, name="accelerating", driver=Driver("O", m.driver.value,
+                                                                      60.0, 200.0))
+    r = run(mech, "exudyn", revolutions=2, samples=36)
+    assert r.ok, r.reason
+    assert_run_within(r, mech, EXUDYN_MUST_SHOW, mech.name)
+
+
+def test_prismatic_driver_on_a_moving_guide_is_refused():
+    m = load_case("inverted-slider-crank")
+    s0 = float(Linkage(m).kinematics().slider("slot")[0][0])
+    mech = dataclasses.replace(m, driver=Driver("slot", s0, 0.1))
+    with pytest.raises(EngineRefusal, match="slot.*moving body 'rocker'"):
+        run(mech, "exudyn", revolutions=1, samples=6)
+
+
+def test_failed_newton_is_a_failed_run_not_an_exception():
+    """A Newton tolerance below round-off cannot be met: the run ends with a reason."""
+    s = get_engine("exudyn").settings({"newton_tolerance": "1e-30"})
+    r = run(load_case("seed-four-bar"), "exudyn", s, revolutions=1, samples=6)
+    assert not r.ok and "Exudyn solver failed" in r.reason
+    assert np.isnan(r.alpha[r.times > 0]).all()  # the t = 0 sample precedes any step
