@@ -56,11 +56,11 @@ def explain(mech, value: float | None = None) -> Document:
         else:
             doc.add(*coupled_section(ctx, loop, n))
     doc.add(*_results(ctx))
-    from .explain_notes import notes_sections
-    doc.add(*notes_sections(ctx))
     if mech.has_mass:
         from .explain_forces import force_sections
         doc.add(*force_sections(ctx))
+    from .explain_notes import notes_sections
+    doc.add(*notes_sections(ctx))
     return doc
 
 

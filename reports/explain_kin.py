@@ -53,6 +53,7 @@ class Ctx:
     known: set = field(default_factory=set)
     const_rate: set = field(default_factory=set)
     hand_ok: bool = True
+    extra: dict = field(default_factory=dict)   # results later sections refer to
 
     @property
     def ng(self) -> int:

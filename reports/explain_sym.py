@@ -25,7 +25,9 @@ from __future__ import annotations
 import math
 
 import sympy as sp
+from sympy.printing.latex import LatexPrinter
 from sympy.printing.mathml import MathMLPresentationPrinter
+from sympy.printing.str import StrPrinter
 
 MU = sp.Function("mu")
 SIGMA = sp.Function("sigma")
@@ -311,7 +313,10 @@ def prod(*factors):
     fs = [f for f in factors if not (isinstance(f, sp.Number) and f == 1)]
     if not fs:
         return sp.Integer(1)
-    out = [fs[0]] + [Paren(f) if isinstance(f, sp.Number) and f < 0 else f for f in fs[1:]]
+    first = fs[0]
+    if isinstance(first, sp.Number) and first < 0 and len(fs) > 1:
+        first = Paren(first)
+    out = [first] + [Paren(f) if isinstance(f, sp.Number) and f < 0 else f for f in fs[1:]]
     if len(out) == 1:
         return out[0]
     return sp.Mul(*out, evaluate=False)
@@ -344,15 +349,58 @@ def diff_angle(a, b):
 
 # -- printers -----------------------------------------------------------------
 
+def _negnum(t) -> bool:
+    return isinstance(t, sp.Number) and t < 0
+
+
+def _split_neg(term):
+    """``(True, t)`` for an unevaluated ``Mul(-1, t...)`` or a negative number."""
+    if isinstance(term, sp.Mul) and term.args and term.args[0] == -1:
+        rest = term.args[1:]
+        return True, rest[0] if len(rest) == 1 else sp.Mul(*rest, evaluate=False)
+    if isinstance(term, sp.Number) and term < 0:
+        return True, -term
+    return False, term
+
+
+class NotesLatex(LatexPrinter):
+    """SymPy's LaTeX printer, keeping sums in the order built and their minus signs
+    without evaluating the negated terms."""
+
+    def _print_Add(self, expr, order=None):
+        out = ""
+        for i, t in enumerate(expr.args):
+            neg, t = _split_neg(t)
+            s = self._print(t)
+            if isinstance(t, sp.Add) or _negnum(t):
+                s = rf"\left({s}\right)"
+            out += (("-" if neg else "") + s if i == 0 else (" - " if neg else " + ") + s)
+        return out
+
+
+class NotesStr(StrPrinter):
+    """SymPy's string printer with the same treatment of sums."""
+
+    def _print_Add(self, expr, order=None):
+        out = ""
+        for i, t in enumerate(expr.args):
+            neg, t = _split_neg(t)
+            s = self._print(t)
+            if isinstance(t, sp.Add) or _negnum(t):
+                s = f"({s})"
+            out += (("-" if neg else "") + s if i == 0 else (" - " if neg else " + ") + s)
+        return out
+
+
 def latex(e) -> str:
     if isinstance(e, str):
         return rf"\text{{{e}}}"
-    return sp.latex(e, order="none")
+    return NotesLatex({"order": "none"}).doprint(e)
 
 
 def text(e) -> str:
     """The plain-text (calculator / ``sympy.parse_expr``) form."""
-    return sp.sstr(e, order="none", full_prec=False)
+    return NotesStr({"order": "none", "full_prec": False}).doprint(e)
 
 
 class NotesMathML(MathMLPresentationPrinter):
@@ -388,9 +436,19 @@ class NotesMathML(MathMLPresentationPrinter):
         m.appendChild(self.dom.createTextNode(t))
         return m
 
+    def _print_Add(self, expr, order=None):
+        row = _mrow(self)
+        for i, t in enumerate(expr.args):
+            neg, t = _split_neg(t)
+            if i or neg:
+                row.appendChild(_mo(self, "\u2212" if neg else "+"))
+            x = self._print(t)
+            row.appendChild(_paren_ml(self, x) if isinstance(t, sp.Add) or _negnum(t) else x)
+        return row
+
     def _print_Mul(self, expr):
         if getattr(expr, "is_commutative", True) and not any(
-                isinstance(a, sp.Number) for a in expr.args) or len(expr.args) < 2:
+                isinstance(a, sp.Number | Paren) for a in expr.args) or len(expr.args) < 2:
             return super()._print_Mul(expr)
         row = _mrow(self)
         for i, a in enumerate(expr.args):  # the notes put a dot between numbers
