@@ -140,21 +140,23 @@ class _Walker:
         t = _tangent(self.eqs, q)
         return self.corrector(q, xn, (q + t * (xn - x), q))
 
-    def crossing(self, x, q, s, xn):
-        """``det`` changes sign between ``x`` and ``xn``: bisect.  Returns the
-        singular input when the branch passes continuously through it (a change
-        point), ``None`` when the corrector jumped to the other half of a fold."""
-        a, qa, b = x, q, xn
+    def crossing(self, x, q, s, xn, qn):
+        """``det`` changes sign between ``(x, q)`` and ``(xn, qn)``: bisect, starting
+        each midpoint on the chord between the bracketing solutions (from one end
+        alone, Newton at a bifurcation may take either branch).  Returns the singular
+        input when the branch passes continuously through it (a change point), ``None``
+        when the corrector had jumped to the other half of a fold (the bracketing
+        solutions then stay apart as the bracket shrinks)."""
+        a, qa, b, qb = x, q, xn, qn
         while abs(b - a) > self.h_min:
             m = 0.5 * (a + b)
-            qm = self.corrector(qa, m, (qa,))
-            if qm is not None and np.sign(_det(self.eqs, qm)) == s:
+            qm = self.corrector(qa, m, (0.5 * (qa + qb), qa))
+            if qm is None:
+                return None
+            if np.sign(_det(self.eqs, qm)) == s:
                 a, qa = m, qm
             else:
-                b = m
-        qb = self.corrector(qa, b, (qa,))
-        if qb is None:
-            return None
+                b, qb = m, qm
         gap = np.max(np.abs(qb - qa) / self.lim)
         return 0.5 * (a + b) if gap < 1e-4 else None
 
@@ -184,7 +186,7 @@ def trace_branch(eqs: LoopEquations, q0: np.ndarray, v0: float, tol: float) -> T
             if qn is not None:
                 sn = np.sign(_det(eqs, qn))
                 if sn != s and s != 0 and sn != 0:
-                    xc = w.crossing(x, q, s, x + d * h)
+                    xc = w.crossing(x, q, s, x + d * h, qn)
                     if xc is None:  # jumped across a fold
                         qn = None
                     else:

@@ -177,6 +177,18 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         if len(x) and np.min(x) - 1e-9 <= c.value <= np.max(x) + 1e-9:
             rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
                          c.describe(fmt).split(": ", 1)[1]))
+    trace = linkage.positions.trace
+    if trace is not None and len(x):
+        for xc in trace.crossings:
+            shifts = [0.0] if trace.period is None else \
+                trace.period * np.arange(np.floor((np.min(x) - xc) / trace.period),
+                                         np.ceil((np.max(x) - xc) / trace.period) + 1)
+            for v in xc + np.asarray(shifts):
+                if np.min(x) - 1e-9 <= v <= np.max(x) + 1e-9:
+                    rows.append(("change_point", "loop Jacobian", float(conv(v)),
+                                 "the assembled branch passes this singular position "
+                                 "continuously (continuation with a tangent predictor: "
+                                 "the branch whose velocity is continuous)"))
     for jn, tr in kin.transmission.items():
         folded = np.minimum(tr, 180.0 - tr)
         i = int(np.argmin(folded))
@@ -361,12 +373,6 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
         notes.append(f"{len(undecided)} change point(s) where continuity of velocity cannot "
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
-    trace = linkage.positions.trace
-    if trace is not None:
-        for xc in trace.crossings:
-            notes.append("the assembled branch passes a singular position at "
-                         + (f"{math.degrees(xc):.6g} deg" if linkage.driver_is_revolute
-                            else f"{xc:.6g} m"))
     events = find_events(linkage, kin, full, None if full else feas, crossings)
     res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
                       full, feas, grashof(linkage), notes, crossings)

@@ -107,3 +107,19 @@ def test_newton_path_angle_hints_pick_the_assembly(newton_only):
         mech = type(mech)(**{**mech.__dict__, "assembly": Assembly({}, {"rocker": want + 0.2})})
         lk = Linkage(mech)
         assert _wrap(lk.kinematics().theta[0, 3] - want) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_newton_path_continues_through_a_change_point(newton_only):
+    """The parallelogram on the Newton path: the continuation crosses its flat positions
+    (180 and 360 deg, located to 1e-9 rad) and stays a parallelogram (rocker parallel to
+    the crank); the sweep lists the crossings as change points."""
+    lk = Linkage(load_case(DATA / "parallelogram-four-bar.toml"))
+    tr = lk.positions.trace
+    assert tr.period == pytest.approx(2 * math.pi) and not tr.limits
+    np.testing.assert_allclose(tr.crossings, [math.pi, 2 * math.pi], atol=LIMIT_TOL)
+    x = np.radians(np.arange(0.5, 1080, 7.0))
+    kin = lk.kinematics_along(x)
+    np.testing.assert_allclose(_wrap(kin.theta[:, 3] - kin.theta[:, 1]), 0.0, atol=1e-9)
+    res = lk.sweep(72, start=0.0)
+    cp = res.events[res.events.kind == "change_point"]["input"].to_numpy()
+    np.testing.assert_allclose(np.sort(np.mod(cp, 360)), [0.0, 180.0], atol=1e-6)
