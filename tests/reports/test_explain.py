@@ -1,0 +1,347 @@
+"""``xval explain``: the worked solution in the notes' method.
+
+Every expected number here is independent of the solver and of the document's
+own derivation: closed forms of the centred slider-crank and of the four-bar
+(circle intersection, Cramer's rule on the loop's x/y components), the figures
+of REFERENCE.md, and the notes' own formulas with their rounded inputs.  The
+document is parsed as a reader would: its tables by their key, its 'calc:'
+lines evaluated by SymPy with degree functions defined here.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import shutil
+import subprocess
+
+import pytest
+import sympy as sp
+
+from analytic import case_names
+from reports.cli import main
+
+# A printed value carries 6 significant figures and the substituted numbers 9: the
+# expression must reproduce the printed value to half a unit of its last digit, plus
+# the rounding of the 9-figure inputs (1e-7 relative covers a condition number of 100).
+INPUT_ROUNDING = 1e-7
+
+
+def explain(capsys, *argv) -> str:
+    code = main(["explain", *argv])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    return out.out
+
+
+def table(md: str, key: str) -> dict[str, list[str]]:
+    """Rows of the Markdown table whose caption starts ``*Table key:``, by the row's
+    first cell (LaTeX symbols kept as written)."""
+    lines = md.splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(f"*Table {key}:"))
+    rows = {}
+    for line in lines[i + 3:]:  # caption, blank, header
+        if not line.startswith("|"):
+            break
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if set(cells[0]) <= {"-"} and cells[0]:
+            continue
+        rows[cells[0]] = cells[1:]
+    return rows
+
+
+def first_number(cell: str) -> float:
+    return float(re.match(r"\s*(?:N = |M = )?(-?[0-9.]+(?:e-?\d+)?)", cell).group(1))
+
+
+def ulp_half(text: str) -> float:
+    """Half a unit in the last printed digit of a number as printed."""
+    mant = text.split("e")[0]
+    dec = len(mant.split(".")[1]) if "." in mant else 0
+    return 0.5 * 10.0 ** -dec
+
+
+def near(printed: str, exact: float) -> bool:
+    return abs(float(printed) - exact) <= ulp_half(printed) * 1.0001
+
+
+def cell_near(cell: str, exact: float) -> bool:
+    m = re.match(r"\s*(?:N = |M = )?(-?[0-9.]+)", cell)
+    return near(m.group(1), exact)
+
+
+# -- independent closed forms --------------------------------------------------------------
+
+def slider_crank_s1():
+    """REFERENCE S1 by hand: crank r2 = 10 cm at 30 deg, 200 rad/s; rod r3 = 20 cm;
+    slider on the x axis through the crank pivot (open branch, C to the right)."""
+    r2, r3, t2, w2 = 10.0, 20.0, math.radians(30), 200.0
+    t3 = -math.asin(r2 * math.sin(t2) / r3)
+    x = r2 * math.cos(t2) + r3 * math.cos(t3)
+    w3 = -r2 * w2 * math.cos(t2) / (r3 * math.cos(t3))
+    v = -r2 * w2 * math.sin(t2) - r3 * w3 * math.sin(t3)
+    a3 = (r2 * w2 ** 2 * math.sin(t2) + r3 * w3 ** 2 * math.sin(t3)) / (r3 * math.cos(t3))
+    a = -r2 * w2 ** 2 * math.cos(t2) - r3 * a3 * math.sin(t3) - r3 * w3 ** 2 * math.cos(t3)
+    return dict(t3=math.degrees(t3), x=x, w3=w3, v=v, a3=a3, a=a)
+
+
+def four_bar_s4():
+    """REFERENCE S4 by hand: O2 = 0, O4 = (400, 0) mm, crank 100 at 60 deg, 15 rad/s,
+    coupler 300, rocker 250; B above the ground line.  theta4 is the loop vector
+    B -> O4.  Rates by Cramer's rule on the x and y components of
+    r3 w3 (-sin t3, cos t3) + r4 w4 (-sin t4, cos t4) = -r2 w2 (-sin t2, cos t2)."""
+    r1, r2, r3, r4, t2, w2 = 400.0, 100.0, 300.0, 250.0, math.radians(60), 15.0
+    A = complex(r2 * math.cos(t2), r2 * math.sin(t2))
+    O4 = complex(r1, 0)
+    d = abs(O4 - A)
+    base = (O4 - A) / d
+    along = (r3 ** 2 - r4 ** 2 + d ** 2) / (2 * d)
+    h = math.sqrt(r3 ** 2 - along ** 2)
+    B = max(A + base * complex(along, h), A + base * complex(along, -h), key=lambda z: z.imag)
+    t3 = math.atan2((B - A).imag, (B - A).real)
+    t4 = math.atan2((O4 - B).imag, (O4 - B).real)
+
+    def solve(c, rhs):
+        det = c[0][0] * c[1][1] - c[0][1] * c[1][0]
+        return ((rhs[0] * c[1][1] - c[0][1] * rhs[1]) / det,
+                (c[0][0] * rhs[1] - rhs[0] * c[1][0]) / det)
+
+    c = [[-r3 * math.sin(t3), -r4 * math.sin(t4)], [r3 * math.cos(t3), r4 * math.cos(t4)]]
+    w3, w4 = solve(c, [r2 * w2 * math.sin(t2), -r2 * w2 * math.cos(t2)])
+    # acceleration: r3 a3 sigma3 + r4 a4 sigma4 = r2 w2^2 mu2 + r3 w3^2 mu3 + r4 w4^2 mu4
+    rx = r2 * w2 ** 2 * math.cos(t2) + r3 * w3 ** 2 * math.cos(t3) + r4 * w4 ** 2 * math.cos(t4)
+    ry = r2 * w2 ** 2 * math.sin(t2) + r3 * w3 ** 2 * math.sin(t3) + r4 * w4 ** 2 * math.sin(t4)
+    a3, a4 = solve(c, [rx, ry])
+    return dict(t3=math.degrees(t3) % 360, t4=math.degrees(t4) % 360, w3=w3, w4=w4,
+                a3=a3, a4=a4)
+
+
+# -- the Must-show figures ------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def s1_md():
+    import io
+    from contextlib import redirect_stdout
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        assert main(["explain", "seed-slider-crank", "--angle", "30"]) == 0
+    return buf.getvalue()
+
+
+@pytest.fixture(scope="module")
+def s4_md():
+    import io
+    from contextlib import redirect_stdout
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        assert main(["explain", "seed-four-bar", "--angle", "60"]) == 0
+    return buf.getvalue()
+
+
+def test_s1_tables_match_the_closed_form(s1_md):
+    ex = slider_crank_s1()
+    pos = table(s1_md, "position-1")
+    assert pos["$r$"][1:] == ["10", "20", "28.0252"]
+    assert cell_near(pos["$r$"][3], ex["x"])
+    t3 = pos["$\\theta$"][2]
+    assert t3 == "345.522 (-14.4775)"           # REFERENCE: -14.4775 deg, i.e. 345.52
+    assert cell_near(t3, ex["t3"] % 360)
+    assert near(re.search(r"\((-?[0-9.]+)\)", t3).group(1), ex["t3"])
+    assert pos["$\\theta$"][3] == "180"
+    vel = table(s1_md, "velocity-1")
+    assert vel["$\\dot{\\theta}$"][1:] == ["200", "-89.4427", "0"]
+    assert cell_near(vel["$\\dot{\\theta}$"][2], ex["w3"])
+    assert cell_near(vel["$\\dot{r}$"][3], ex["v"])       # cm/s
+    acc = table(s1_md, "acceleration-1")
+    assert acc["$\\ddot{\\theta}$"][2] == "8262.36"
+    assert cell_near(acc["$\\ddot{\\theta}$"][2], ex["a3"])
+    assert cell_near(acc["$\\ddot{r}$"][3], ex["a"])
+    # the slider in SI, as REFERENCE gives it
+    sl = table(s1_md, "sliders")["slide"]
+    assert sl[1] == "-1447.21 cm/s = -14.4721 m/s"
+    assert near("-14.4721", ex["v"] / 100)
+    assert sl[2] == "-460018 cm/s² = -4600.18 m/s²"
+    assert near("-4600.18", ex["a"] / 100)
+    assert "lengths in cm, the unit of the description" in s1_md
+
+
+def test_s1_says_where_the_notes_rounded_figures_come_from(s1_md):
+    """28.0 cm, -89.45 rad/s and 8259 rad/s^2: the notes' formulas with their rounded
+    inputs (17.32 for 2*10*cos 30, theta3 = 345.5, omega3 = -89.45)."""
+    sec = s1_md[s1_md.index("## Where the notes' figures come from"):]
+    calcs = dict(re.findall(r"`calc: (.*) = (-?[0-9.e]+)`", sec))
+    values = {float(v) for v in calcs.values()}
+    d = math.radians
+    ac = (17.32 + math.sqrt(17.32 ** 2 + 1200)) / 2
+    w3 = -10 * 200 * math.cos(d(30 - 180)) / (20 * math.cos(d(345.5 - 180)))
+    a3 = ((10 * 200 ** 2 * math.sin(d(-150)) + 20 * 89.45 ** 2 * math.sin(d(165.5)))
+          / (20 * math.cos(d(165.5))))
+    for exact, notes in ((ac, 28.0), (w3, -89.45), (a3, 8259)):
+        printed = min(values, key=lambda v, e=exact: abs(v - e))
+        assert abs(printed - exact) <= 1e-4 * abs(exact)
+        assert round(exact, 1 if notes == 28.0 else 2 if notes == -89.45 else 0) \
+            == pytest.approx(notes, abs=1.0 if notes == 8259 else 1e-9)
+    assert "17.32" in sec and "345.5" in sec and "-89.45" in sec
+
+
+def test_s4_tables_match_the_closed_form(s4_md):
+    ex = four_bar_s4()
+    pos = table(s4_md, "position-1")
+    assert pos["$r$"][1:] == ["400", "100", "300", "250"]
+    assert cell_near(pos["$\\theta$"][3], ex["t3"])
+    assert cell_near(pos["$\\theta$"][4], ex["t4"])
+    assert pos["$\\theta$"][3].startswith("29.3794")       # REFERENCE 29.379
+    assert pos["$\\theta$"][4].startswith("290.753")       # REFERENCE 290.753
+    vel = table(s4_md, "velocity-1")["$\\dot{\\theta}$"]
+    assert cell_near(vel[3], ex["w3"]) and cell_near(vel[4], ex["w4"])
+    assert round(float(vel[3]), 4) == -3.9164 and round(float(vel[4]), 4) == 3.0911
+    acc = table(s4_md, "acceleration-1")["$\\ddot{\\theta}$"]
+    assert cell_near(acc[3], ex["a3"]) and cell_near(acc[4], ex["a4"])
+    assert round(float(acc[3]), 4) == 42.267 and round(float(acc[4]), 4) == 95.5036
+    assert "290.75" in s4_md and "42.27" in s4_md
+
+
+def test_hand_method_printed_beside_the_matrix_method(s1_md, s4_md):
+    for md in (s1_md, s4_md):
+        rows = table(md, "matrix-1")
+        assert len(rows) == 6
+        for _, (unit, hand, matrix, diff) in rows.items():
+            assert abs(float(hand) - float(matrix)) <= ulp_half(hand) * 2
+            assert float(diff) <= 1e-9 * max(1.0, abs(float(hand)))
+
+
+def test_s2_forces_and_power_balance(s1_md):
+    """REFERENCE S2 (g = 0): T = 476.56 N m, P = 95.31 kW, |F_B| = 15720.5 N,
+    |F_C| = 3280.3 N, slider normal force 363.3 N."""
+    f = table(s1_md, "forces")
+    assert float(f["B"][3]) == pytest.approx(15720.5, abs=0.05)
+    assert float(f["A"][3]) == pytest.approx(15720.5, abs=0.05)
+    assert float(f["C"][3]) == pytest.approx(3280.3, abs=0.05)
+    assert float(f["slide"][3]) == pytest.approx(363.3, abs=0.05)
+    t = float(re.search(r"T = (-?[0-9.]+)\\ \\mathrm\{N m\}", s1_md).group(1))
+    assert t == pytest.approx(476.56, abs=0.005)
+    calc = re.findall(r"`calc: (.*) = (-?[0-9.e]+)`", s1_md[s1_md.index("power balance"):])
+    p = float(calc[0][1])
+    assert p == pytest.approx(t * 200, rel=1e-5)         # the balance equals T omega
+    assert p == pytest.approx(95310, abs=10)
+    assert "e_{3}" in s1_md and "0.0662958" in s1_md     # e3 = I3 alpha3 / (m3 a_G3)
+
+
+# -- every substituted expression ------------------------------------------------------------
+
+_x, _y = sp.symbols("x y")
+DEGREE_FUNCTIONS = {"cosd": sp.Lambda(_x, sp.cos(sp.pi * _x / 180)),
+                    "sind": sp.Lambda(_x, sp.sin(sp.pi * _x / 180)),
+                    "asind": sp.Lambda(_x, 180 * sp.asin(_x) / sp.pi),
+                    "acosd": sp.Lambda(_x, 180 * sp.acos(_x) / sp.pi),
+                    "atan2d": sp.Lambda((_y, _x), 180 * sp.atan2(_y, _x) / sp.pi)}
+
+
+def check_calc_lines(md: str) -> int:
+    lines = re.findall(r"`calc: (.*) = (-?[0-9.]+(?:e[-+]?\d+)?)`", md)
+    for expr, printed in lines:
+        v = float(sp.N(sp.parse_expr(expr, local_dict=dict(DEGREE_FUNCTIONS)), 30))
+        tol = ulp_half(printed) + INPUT_ROUNDING * abs(v)
+        assert abs(v - float(printed)) <= tol, (expr, v, printed)
+    return len(lines)
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_every_substituted_expression_evaluates_to_its_printed_value(capsys, case):
+    md = explain(capsys, case)
+    n = check_calc_lines(md)
+    assert n >= 4        # at least the velocity and acceleration eliminations
+    assert re.search(r"\bnan\b|\binf\b", md, re.IGNORECASE) is None
+    assert "Traceback" not in md
+
+
+def test_s1_and_s4_calc_lines(s1_md, s4_md):
+    assert check_calc_lines(s1_md) >= 12
+    assert check_calc_lines(s4_md) >= 12
+
+
+# -- multi-loop, sliders, Coriolis --------------------------------------------------------
+
+def test_multi_loop_worked_loop_by_loop(capsys):
+    md = explain(capsys, "quick-return")
+    assert "## Loop 1" in md and "## Loop 2" in md
+    for n in (1, 2):
+        for _, (unit, hand, matrix, diff) in table(md, f"matrix-{n}").items():
+            assert float(diff) <= 1e-9 * max(1.0, abs(float(hand)))
+
+
+def test_moving_guide_has_the_coriolis_term(capsys):
+    md = explain(capsys, "inverted-slider-crank")
+    assert "2 \\dot{r}_{3} \\dot{\\theta}_{3} \\sigma{\\left(\\theta_{3} \\right)}" in md
+    assert "Coriolis" in md
+    assert r"\ddot{r}_{3}" in md
+
+
+def test_slider_input_and_driver_acceleration(capsys):
+    md = explain(capsys, "hibbeler-16-121")   # crank with alpha = 2 rad/s^2, in inches
+    assert "lengths in in" in md
+    assert r"\ddot{\theta}_{2}" in md          # the input's own acceleration term stays
+    md = explain(capsys, "hibbeler-two-inclines", "--value", "0")
+    assert "input slider" in md
+
+
+# -- formats ----------------------------------------------------------------------------------
+
+def test_markdown_figures_beside_the_file(capsys, tmp_path):
+    out = tmp_path / "s1.md"
+    assert main(["explain", "seed-slider-crank", "--out", str(out)]) == 0
+    capsys.readouterr()
+    svg = (tmp_path / "s1-loop1.svg").read_text()
+    assert "<svg" in svg and "θ" in svg and ">r<" in svg
+    assert "(s1-loop1.svg)" in out.read_text()
+
+
+def test_html_is_offline_mathml(capsys):
+    page = explain(capsys, "seed-four-bar", "--format", "html")
+    assert page.count("<math") > 50 and "<mfrac>" in page and "<munder" in page
+    assert "<script" not in page
+    assert not re.search(r'(src|href)\s*=\s*"https?:', page)
+    assert "<svg" in page
+
+
+def test_latex_is_a_whole_document(capsys):
+    tex = explain(capsys, "seed-slider-crank", "--format", "tex")
+    assert tex.startswith(r"\documentclass") and tex.rstrip().endswith(r"\end{document}")
+    assert r"\begin{tikzpicture}" in tex and r"\underbrace" in tex
+    body = re.sub(r"\\[{}]", "", tex)
+    assert body.count("{") == body.count("}")
+
+
+def test_html_renders_in_headless_chromium(capsys, tmp_path):
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI=true but no Chromium: .ci/run should have installed it")
+        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    page = tmp_path / "s1.html"
+    assert main(["explain", "seed-slider-crank", "--format", "html", "--out", str(page)]) == 0
+    capsys.readouterr()
+    shot = tmp_path / "s1.png"
+    subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu",
+                    "--disable-background-networking", "--disable-component-update",
+                    "--disable-sync", "--no-first-run", f"--user-data-dir={tmp_path / 'p'}",
+                    f"--screenshot={shot}", "--window-size=1200,1600", page.as_uri()],
+                   check=True, timeout=60, capture_output=True)
+    from PIL import Image
+    img = Image.open(shot)
+    assert img.size == (1200, 1600)
+    assert len(img.convert("RGB").getcolors(maxcolors=1 << 20) or []) > 50
+
+
+# -- errors -----------------------------------------------------------------------------------
+
+def test_bad_input_is_one_line_and_status_2(capsys, tmp_path):
+    assert main(["explain", "no-such-case"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no-such-case" in err
+    assert main(["explain", "seed-four-bar", "--value", "0.1"]) == 2
+    assert "--angle" in capsys.readouterr().err
+    assert main(["explain", "hibbeler-two-inclines", "--value", "20"]) == 2  # cannot close
+    err = capsys.readouterr().err
+    assert err.startswith("xval: error:") and err.count("\n") == 1
