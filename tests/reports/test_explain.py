@@ -206,7 +206,7 @@ def test_hand_method_printed_beside_the_matrix_method(s1_md, s4_md):
     for md in (s1_md, s4_md):
         rows = table(md, "matrix-1")
         assert len(rows) == 6
-        for _, (unit, hand, matrix, diff) in rows.items():
+        for _, (_unit, hand, matrix, diff) in rows.items():
             assert abs(float(hand) - float(matrix)) <= ulp_half(hand) * 2
             assert float(diff) <= 1e-9 * max(1.0, abs(float(hand)))
 
@@ -267,7 +267,7 @@ def test_multi_loop_worked_loop_by_loop(capsys):
     md = explain(capsys, "quick-return")
     assert "## Loop 1" in md and "## Loop 2" in md
     for n in (1, 2):
-        for _, (unit, hand, matrix, diff) in table(md, f"matrix-{n}").items():
+        for _, (_unit, hand, _matrix, diff) in table(md, f"matrix-{n}").items():
             assert float(diff) <= 1e-9 * max(1.0, abs(float(hand)))
 
 
