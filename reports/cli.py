@@ -260,6 +260,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _register_more(sub) -> None:
     """Engine and report commands (kept apart so the solver CLI has no engine imports)."""
+    from . import explain  # xval explain: worked solutions in the notes' method
+    explain.register(sub)
     try:
         from . import cli_engines
     except ImportError:  # pragma: no cover - engines not built yet
