@@ -165,6 +165,7 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                             w_in * (size if rev else 1.0)):
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
+    eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
     if not periodic and feasible is not None and len(x):
         for lo, hi in feasible:
             for end in (lo, hi):
@@ -174,7 +175,7 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                                  "on this branch (the drive effort grows without bound "
                                  "toward it)"))
     for c in crossings or []:
-        if len(x) and np.min(x) - 1e-9 <= c.value <= np.max(x) + 1e-9:
+        if len(x) and np.min(x) - eps <= c.value <= np.max(x) + eps:
             rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
                          c.describe(fmt).split(": ", 1)[1]))
     trace = linkage.positions.trace
@@ -184,7 +185,7 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                 trace.period * np.arange(np.floor((np.min(x) - xc) / trace.period),
                                          np.ceil((np.max(x) - xc) / trace.period) + 1)
             for v in xc + np.asarray(shifts):
-                if np.min(x) - 1e-9 <= v <= np.max(x) + 1e-9:
+                if np.min(x) - eps <= v <= np.max(x) + eps:
                     rows.append(("change_point", "loop Jacobian", float(conv(v)),
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
