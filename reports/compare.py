@@ -6,6 +6,7 @@ sampled cycle, so zero crossings do not blow them up.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import asdict, dataclass
 
@@ -128,6 +129,21 @@ def analytic_at(run_, reference=None):
     return lk, kin, frc
 
 
+#: A reference quantity whose peak is below this fraction of the mechanism's scale for
+#: it is identically zero up to round-off, and is judged on that scale instead.
+ZERO_PEAK = 1e-9
+
+
+def mechanism_size(mech) -> float:
+    """Largest distance between two points of one body (m): the mechanism's size."""
+    s = 0.0
+    for b in mech.bodies:
+        P = np.array(list(b.points.values()), float)
+        if len(P) > 1:
+            s = max(s, float(np.max(np.linalg.norm(P[:, None] - P[None], axis=-1))))
+    return s if s > 0 else 1.0
+
+
 class NothingToCompare(LinkageError):
     """No sample of a run can be compared (every one unreached or at a limit position);
     the message says why.  The command line reports it like a refusal (status 2)."""
@@ -167,19 +183,33 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     at = (np.mod(np.round(np.degrees(x), 9), 360.0) if lk.driver_is_revolute else x)[keep]
     out = []
     moving = [b for b, n in enumerate(run_.body_names) if n != mech.ground]
+    # the mechanism's angular-acceleration scale: its largest body alpha, or, when every
+    # body's alpha is identically zero (a parallelogram at constant input speed), the
+    # input's own rate scale (w^2 + |a| of a crank; (v/L)^2 + |a|/L of a slider)
+    L = 1.0 if lk.driver_is_revolute else mechanism_size(mech)
+    rate_scale = float(np.max((kin.velocity[keep] / L) ** 2
+                              + np.abs(kin.acceleration[keep]) / L))
     alpha_peak = float(np.max(np.abs(kin.alpha[keep][:, moving]))) if moving else 0.0
+    alpha_scale = alpha_peak if alpha_peak > ZERO_PEAK * rate_scale else rate_scale
     for b in moving:
         # a body whose exact alpha is identically zero (a constant-speed crank, a piston)
         # has no peak of its own: judge it on the mechanism's angular-acceleration scale
         own = float(np.max(np.abs(kin.alpha[keep, b])))
-        floor = alpha_peak if own <= 1e-9 * alpha_peak else 0.0
+        floor = alpha_scale if own <= ZERO_PEAK * alpha_scale else 0.0
         out.append(compare(f"{run_.body_names[b]}.alpha", kin.alpha[keep, b],
                            run_.alpha[keep, b], at, tol, peak_floor=floor))
     for p, name in enumerate(run_.prismatic_names):
         out.append(compare(f"{name}.a", kin.slider(name)[2][keep], run_.slider_acc[keep, p],
                            at, tol))
     if frc is not None:
-        out.append(compare("drive.effort", frc.effort[keep], run_.drive_effort[keep], at, tol))
+        # an effort identically zero (no load, no gravity, no inertia torque: the
+        # parallelogram) is judged on the joint forces' scale times the lever arm
+        f_peak = max((float(np.max(np.linalg.norm(frc.joint_force[n][keep], axis=1)))
+                      for n in run_.joint_names), default=0.0)
+        e_scale = f_peak * (mechanism_size(mech) if lk.driver_is_revolute else 1.0)
+        e_own = float(np.max(np.abs(frc.effort[keep])))
+        out.append(compare("drive.effort", frc.effort[keep], run_.drive_effort[keep], at, tol,
+                           peak_floor=e_scale if e_own <= ZERO_PEAK * e_scale else 0.0))
         for j, name in enumerate(run_.joint_names):
             out.append(compare(f"{name}.force", frc.joint_force[name][keep],
                                run_.joint_force[keep, j], at, tol))
@@ -200,62 +230,45 @@ NEAR_EVENT_DEG = 5.0
 NEAR_EVENT_STROKE = 0.02
 
 
-def input_events(linkage) -> list[tuple[str, float]]:
-    """The input values (deg for a revolute driver, m for a prismatic one) of the
-    linkage's limit positions (ends of the feasible input range) and singular positions
-    (dead centres, change points), as ``(kind, value)``."""
-    from analytic.sweep import input_values
-    rev = linkage.driver_is_revolute
-    conv = math.degrees if rev else float
-    _, full, feas = input_values(linkage, 2)
-    out = []
-    if not full:
-        for lo, hi in feas:
-            out += [("limit position", conv(lo)), ("limit position", conv(hi))]
-    try:
-        ev = linkage.sweep(720, forces=False).events
-        for v in ev.loc[ev["kind"] == "singular", "input"].to_numpy(float):
-            out.append(("singular position", float(v)))
-    except Exception:  # noqa: BLE001 - events are advice; a sweep that fails gives none
-        pass
-    return out
-
-
 def near_event(comparisons: list[Comparison], linkage) -> str | None:
     """For a failed verdict: where the worst failing quantity's error sits relative to
-    the nearest limit or singular position, when within :data:`NEAR_EVENT_DEG` (or
+    the nearest limit position, singular position or change point of the linkage's sweep
+    (:func:`analytic.sweep.nearest_event`), when within :data:`NEAR_EVENT_DEG` (or
     :data:`NEAR_EVENT_STROKE` of the stroke); else None."""
+    from analytic.sweep import nearest_event
     bad = [c for c in comparisons if not c.passed and not c.quantity.endswith("[engine]")]
     if not bad:
         return None
     worst = max(bad, key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf)
     if not math.isfinite(worst.at):
         return None
-    rev = linkage.driver_is_revolute
-    events = input_events(linkage)
-    if not events:
+    try:
+        res = linkage.sweep(720, forces=False)
+        # input limits, singular positions and change points; not a rocker's extreme
+        # angle (a "limit" of an output, where nothing is singular)
+        e = res.events
+        keep = (e["kind"] != "limit") | e["detail"].str.contains("input limit")
+        ev = nearest_event(dataclasses.replace(res, events=e[keep]), worst.at)
+    except LinkageError:  # events are advice; a linkage whose sweep fails gives none
         return None
-
-    def dist(v):
-        d = worst.at - v
-        return abs((d + 180.0) % 360.0 - 180.0) if rev else abs(d)
-
-    kind, v = min(events, key=lambda e: dist(e[1]))
-    d = dist(v)
-    if rev:
-        if d > NEAR_EVENT_DEG:
+    if ev is None:
+        return None
+    if linkage.driver_is_revolute:
+        if ev.distance > NEAR_EVENT_DEG:
             return None
-        return (f"the worst error ({worst.quantity} at {worst.at:.4g} deg) is {d:.3g} deg "
-                f"from the {kind} at {v % 360.0:.5g} deg: the mechanism is near a position "
-                "where no finite drive effort moves it, so a small engine offset there is a "
-                "large error")
-    from analytic.sweep import input_values
-    _, _, feas = input_values(linkage, 2)
-    stroke = max((hi - lo for lo, hi in feas), default=0.0)
-    if stroke <= 0 or d > NEAR_EVENT_STROKE * stroke:
-        return None
-    return (f"the worst error ({worst.quantity} at {worst.at:.6g} m) is {d:.3g} m from the "
-            f"{kind} at {v:.6g} m")
+        unit, where = "deg", f"{ev.input % 360.0:.5g} deg"
+    else:
+        x = res.frame["input"].to_numpy(float)
+        stroke = float(np.nanmax(x) - np.nanmin(x)) if len(x) else 0.0
+        if stroke <= 0 or ev.distance > NEAR_EVENT_STROKE * stroke:
+            return None
+        unit, where = "m", f"{ev.input:.6g} m"
+    kind = {"limit": "limit position", "singular": "singular position",
+            "change_point": "change point"}.get(ev.kind, ev.kind.replace("_", " "))
+    return (f"the worst error ({worst.quantity} at {worst.at:.5g} {unit}) is "
+            f"{ev.distance:.3g} {unit} from the {kind} at {where} ({ev.detail}): "
+            "the mechanism itself is singular or at a limit there, so a small engine offset "
+            "is a large error")
 
 
 def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:

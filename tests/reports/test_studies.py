@@ -206,3 +206,25 @@ def test_scene_economy_rows():
     # careless contacts (links overlapping at the pins) break the run: a row, no exception
     assert not v.loc["contacts-no-excludes", "ok"]
     assert v.loc["contacts-no-excludes", "reason"]
+
+
+def test_studies_time_and_run_the_verdict_session(monkeypatch):
+    """A grid row's errors and its timing both step the engine's protocol session (the
+    verdict runs' MujocoSession.advance, through engine_base.drive / time_steps)."""
+    from sim_models.mujoco_engine import MujocoSession
+    calls = []
+    real = MujocoSession.advance
+
+    def counted(self, t, h, n):
+        calls.append(n)
+        return real(self, t, h, n)
+
+    monkeypatch.setattr(MujocoSession, "advance", counted)
+    from dataclasses import asdict
+
+    from sim_models.mjcf import MujocoSettings
+    row = S.grid_task("seed-four-bar", "mujoco", asdict(MujocoSettings()), "default",
+                      samples=12, timing_steps=400, timing_repeats=1)
+    assert row["ok"], row["reason"]
+    # the run's steps (to the last sample, 1 + 11/12 revolutions) plus the timing loop's 400
+    assert sum(calls) == pytest.approx(400 + (1 + 11 / 12) * row["steps_per_rev"], abs=2)
