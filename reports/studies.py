@@ -15,6 +15,10 @@ and writes CSV tables and PNG figures.
 
 Measurements
 ------------
+Nothing here steps an engine or imports an engine library: every run and timing goes
+through :mod:`sim_models` (the verdict runs' sessions), long and change-point runs
+through :mod:`reports.study_runs` and :mod:`reports.change_point`.
+
 * **Errors** come from one engine run per setting (:func:`sim_models.engines.run`,
   ``revolutions`` turns, the last sampled at the analytic sweep's input values) and the
   project's comparison helper :func:`reports.compare.compare_run`: every quantity's
@@ -22,9 +26,11 @@ Measurements
   the bodies' angular accelerations and the sliders' accelerations, ``force_error``
   the worst of the drive effort and every joint force (the values this project derives
   from the engine, not the engines' own defective readings); ``error`` is the larger.
-* **Speed** is timed separately, on a bare stepping loop of the same compiled model
-  from Python (``mj_step`` / ``stepSimulation``, no readout), so that the cost of the
-  36-72 samples and their Newton-Euler reconstruction does not swamp coarse steps:
+* **Speed** is timed separately, on the bare stepping loop of the same engine session
+  (:func:`sim_models.engines.time_engine`: the session's own ``advance``, which the run
+  loop :func:`sim_models.engine_base.drive` calls between samples, without readout), so
+  that the cost of the 36-72 samples and their Newton-Euler reconstruction does not
+  swamp coarse steps:
   ``steps_per_second`` over up to one revolution (best of a few repeats) and
   ``seconds_per_rev = steps_per_rev / steps_per_second``.  ``run_seconds_per_rev`` is
   the engine run's own wall time per revolution including the sampling.  Timings are
