@@ -77,9 +77,15 @@ class Trace:
         """
         topo = self.eqs.topo
         values = np.asarray(values, float)
+        u = values
         if self.period is None:
             lo, hi = self.x[0], self.x[-1]
-            out = np.flatnonzero(~((values >= lo) & (values <= hi)))
+            if isinstance(topo.mech.driver_joint, Revolute):
+                # an angle a whole turn off the range is the same position (200 deg is
+                # -160 deg): solve there with the input variable shifted by the turns
+                u = np.where((values >= lo) & (values <= hi), values,
+                             lo + np.mod(values - lo, 2 * math.pi))
+            out = np.flatnonzero(~((u >= lo) & (u <= hi)))
             if out.size:
                 v = float(values[out[0]])
                 raise AssemblyError(
@@ -89,7 +95,9 @@ class Trace:
                     f"{_fmt_value(topo, hi)}] (limit positions)", v, self.feasible)
         if not len(values):
             return np.zeros((0, topo.nq))
-        q0 = self.start(values)
+        q0 = self.start(u)
+        c = topo.driver_row
+        q0 = q0 + np.outer(values - u, c / (c @ c))
         q, ok = newton(self.eqs, q0, values, self.tol)
         # the trace's nodes are dense, so a start converges to its own branch; a start
         # that strays more than a step's worth of the branch is rejected

@@ -74,6 +74,9 @@ def test_newton_path_limited_range_by_bisection(newton_only):
     with pytest.raises(AssemblyError, match=r"cannot close at driver 'O2' = 80 deg.*"
                                             r"feasible input range"):
         lk.kinematics(math.radians(80))
+    # a whole turn off the range is the same position
+    th = lk.kinematics([0.5, 0.5 + 2 * math.pi, 0.5 - 4 * math.pi]).theta
+    np.testing.assert_allclose(_wrap(th[1:] - th[0]), 0.0, atol=1e-12)
     # inside the range, the open branch by hand
     x = np.linspace(-limit + 1e-6, limit - 1e-6, 101)
     kin = lk.kinematics(x, on_singular="flag")
