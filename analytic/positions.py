@@ -491,11 +491,14 @@ def newton(eqs: LoopEquations, q0: np.ndarray, values: np.ndarray, tol: float,
         J = eqs.jacobian(q[idx])
         A = np.concatenate([J, np.broadcast_to(c, (len(idx), 1, eqs.nq))], axis=1)
         with np.errstate(all="ignore"):
-            try:
-                dq = (np.linalg.pinv(A) @ -F[..., None])[..., 0]
-            except np.linalg.LinAlgError:  # non-finite entries: those starts fail
-                active[idx] = False
-                break
+            try:  # square for one degree of freedom; least squares where singular
+                dq = np.linalg.solve(A, -F[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                try:
+                    dq = (np.linalg.pinv(A) @ -F[..., None])[..., 0]
+                except np.linalg.LinAlgError:  # non-finite entries: those starts fail
+                    active[idx] = False
+                    break
         ratio = np.max(np.abs(dq) / lim, axis=1, keepdims=True)
         dq = dq * np.minimum(1.0, 1.0 / np.where(ratio > 0, ratio, 1.0))
         bad = ~np.all(np.isfinite(dq), axis=1)
