@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .errors import AssemblyError
+from .errors import AssemblyError, LinkageError
 from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
@@ -176,8 +176,11 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                                  "toward it)"))
     for c in crossings or []:
         if len(x) and np.min(x) - eps <= c.value <= np.max(x) + eps:
+            mode = parallelogram_mode(linkage, c.value + math.copysign(
+                1e-3, c.value - linkage.mech.driver.value))
             rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
-                         c.describe(fmt).split(": ", 1)[1]))
+                         c.describe(fmt).split(": ", 1)[1]
+                         + (f"; beyond it the linkage is {mode}" if mode else "")))
     trace = linkage.positions.trace
     if trace is not None and len(x):
         for xc in trace.crossings:
@@ -237,6 +240,43 @@ def nearest_event(result: SweepResult, at: float, kinds=None) -> NearestEvent | 
     r = ev.iloc[k]
     return NearestEvent(str(r["kind"]), str(r["where"]), float(r["input"]), str(r["detail"]),
                         float(d[k]))
+
+
+def parallelogram_mode(linkage: Linkage, value: float) -> str | None:
+    """For a four-bar whose opposite links are equal (a change-point linkage of the
+    parallelogram family): ``"a parallelogram"`` when, at the input ``value`` on the
+    continued branch, each link is parallel to its opposite, ``"an anti-parallelogram"``
+    otherwise; ``None`` for any other mechanism."""
+    mech, topo = linkage.mech, linkage.topo
+    if len(mech.bodies) != 4 or len(mech.joints) != 4 or \
+            not all(isinstance(j, Revolute) for j in mech.joints):
+        return None
+    ends = {}
+    for b, name in enumerate(topo.body_names):
+        js = [k for k, j in enumerate(mech.joints) if name in j.bodies]
+        ends[name] = (js, float(np.hypot(*(topo.attach(js[0], b) - topo.attach(js[1], b)))))
+    names = list(ends)
+    opposite = {n: next(m for m in names if m != n and not set(ends[n][0]) & set(ends[m][0]))
+                for n in names}
+    size = max(L for _, L in ends.values())
+    if any(abs(ends[n][1] - ends[opposite[n]][1]) > 1e-9 * size for n in names):
+        return None
+    try:
+        kin = linkage.kinematics_along(np.array([value]))
+    except LinkageError:
+        return None
+
+    def direction(n):  # unit vector between the body's two joints, world frame
+        b = topo.body_names.index(n)
+        j0, j1 = ends[n][0]
+        d = (topo.attach(j1, b) - topo.attach(j0, b)) / ends[n][1]
+        return complex(*d) * kin.E[0, b]
+
+    g = mech.ground
+    crank = next(n for n in names if n != g and set(ends[n][0]) & set(ends[g][0]))
+    c1, c2 = direction(crank), direction(opposite[crank])
+    parallel = abs((c1.conjugate() * c2).imag) < 1e-6
+    return "a parallelogram" if parallel else "an anti-parallelogram"
 
 
 def grashof(linkage: Linkage) -> str | None:

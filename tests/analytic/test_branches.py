@@ -87,7 +87,11 @@ def test_sweep_reports_the_change_points(capsys):
     cp = res.events[res.events.kind == "change_point"]
     assert set(np.round(np.mod(cp["input"].to_numpy(), 360), 6)) <= {0.0, 180.0}
     assert (np.round(cp["input"].to_numpy(), 6) == 180.0).any()
-    assert all("switched" in d and "continuous" in d for d in cp["detail"])
+    assert all("switched" in d and "continuous" in d and d.endswith("a parallelogram")
+               for d in cp["detail"])
+    held = Linkage(load_case(PARA), branch_rule="hold").sweep(360, start=0.0).events
+    assert all(d.endswith("an anti-parallelogram")
+               for d in held[held.kind == "change_point"]["detail"])
     assert all(c.rule == "velocity" and c.switched for c in res.crossings)
     # the nearest event to 182 deg is a singular position or the change point at 180
     ev = nearest_event(res, 182.0)
