@@ -3,14 +3,17 @@
 The closed form follows the structure of the mechanism: the driven link is
 placed from the input, then each dyad (two bodies, three joints, the outer two
 on known bodies) from the bodies already placed; RRR, RRP, RPR and PRP dyads
-have closed-form solutions with a branch sign each.  The signs are chosen once,
-at the driver's reference value, as the combination nearest the assembly hints,
-and kept over a sweep: the solution then changes continuously with the input and
-never jumps branch.  A mechanism that does not decompose into these dyads is
-solved by Newton-Raphson on the vector-loop equations, continued from the
-previous input value.  Either way the result is checked against the loop
-equations (residual below :data:`analytic.tolerances.LOOP_RESIDUAL` times the
-mechanism's size).
+have closed-form solutions with a branch sign each.  The signs are chosen at the
+driver's reference value as the combination nearest the assembly hints
+(:func:`choose_branches`), and then followed along the input
+(:mod:`analytic.branches`): held, except at a change point, where the branch
+whose velocity is continuous is taken.  A mechanism that does not decompose into
+these dyads is assembled by Newton-Raphson nearest the hints (:func:`assemble`)
+and its branch traced along the input (:mod:`analytic.continuation`).  Either
+way the assembly must lie within :data:`HINT_DISTANCE` of the hints
+(:func:`check_hints`) and the result is checked against the loop equations
+(residual below :data:`analytic.tolerances.LOOP_RESIDUAL` times the mechanism's
+size).  Every threshold is relative to the mechanism's size (:func:`size_of`).
 """
 
 from __future__ import annotations
