@@ -73,6 +73,8 @@ def cmd_compare(args) -> int:
                     print("note:", n)
                 print(f"wall time {r.wall_per_rev * 1e3:.1f} ms per revolution, "
                       f"dt {r.timestep:.3g} s")
+    from reports.ci_formats import write_compare_outputs  # --junit, --summary
+    write_compare_outputs(args, mech, out)
     return 0 if all_ok else 1
 
 
@@ -111,7 +113,10 @@ def register(sub) -> None:
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s")
     s.add_argument("--json", action="store_true")
+    from . import baseline_cli, ci_formats
+    ci_formats.add_options(s)
     s.set_defaults(func=cmd_compare)
+    baseline_cli.register(sub)  # xval baseline record|check
     try:
         import reports.report as _  # noqa: F401
     except ImportError:

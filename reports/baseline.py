@@ -1,0 +1,667 @@
+"""Baselines: what each engine run's errors were, so a later run can tell when they drift.
+
+A baseline file records, per (case, engine, quantity), the worst error relative to the
+quantity's peak over the cycle, where in the cycle it occurs, the tolerance, and what is
+needed to re-run the run exactly: the mechanism's source (a built-in case name, or a
+TOML file path relative to the baseline file, each with a SHA-256 of its content so a
+changed model is detected), the run request and the engine's settings object in full.
+It also records the versions the run was made with (engine, linkage-xval, Python,
+numpy, platform).  :func:`check` re-runs every recorded run and judges each quantity
+(:func:`judge`): above its tolerance, grown by more than ``factor`` over its baseline
+(with the absolute floor :data:`DRIFT_FLOOR`), or gone.
+
+File format (``schema = "linkage-xval baseline"``, ``schema_version = 1``); plain JSON,
+keys sorted, two-space indent, one line per quantity, so that a diff shows what moved::
+
+    {
+      "recorded": "2026-11-23T05:00:00Z",
+      "runs": [
+        {
+          "case": "seed-four-bar",                 # the mechanism's name (a label)
+          "engine": "mujoco",                      # a registry name
+          "model": {"builtin": "seed-four-bar", "sha256": "..."}
+                 | {"file": "linkages/four_bar.toml", "sha256": "..."},
+          "quantities": [
+            {"at": 165.0, "at_unit": "deg", "error": 1.48e-08, "max_abs": ..., "peak": ...,
+             "quantity": "B.force", "tolerance": 0.001},
+            ...                                    # sorted by quantity
+          ],
+          "request": {"chords": "moving", "max_speed_error": 0.01, "max_violation": 0.001,
+                      "mode": "run", "revolutions": 2, "samples": 36},
+          "settings": {"class": "MujocoSettings", "engine": "mujoco", "fields": {...}},
+          "versions": {"engine": "mujoco 3.3.7", "linkage-xval": "0.1.0", "numpy": "2.4.0",
+                       "platform": "Linux-...", "python": "3.11.2"}
+        }, ...                                     # sorted by case, then engine
+      ],
+      "schema": "linkage-xval baseline",
+      "schema_version": 1
+    }
+
+``error`` is ``max |engine - analytic| / peak`` (:func:`reports.compare.compare`), stored
+to :data:`ERROR_DIGITS` significant figures; ``at`` is the input value (deg for a
+revolute driver, m for a prismatic one).  The engines' own unjudged readings
+(``[engine]`` rows) are not recorded.  A file that cannot be read, is not this schema,
+or lacks a key raises :class:`BaselineError` (the command line: one line, status 2).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import math
+import os
+import platform
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from analytic.errors import LinkageError, OutputError
+
+SCHEMA = "linkage-xval baseline"
+SCHEMA_VERSION = 1
+
+#: Default drift factor: a quantity fails when its error grows by more than this over
+#: its baseline (issue 13: "MuJoCo's error grew from 1e-8 to 5e-4").
+DEFAULT_FACTOR = 10.0
+
+#: Absolute floor (relative to peak) under the drift check: a quantity fails for drift
+#: only when its error exceeds ``factor * max(baseline, DRIFT_FLOOR)``.  Errors far
+#: below the tolerance include pure round-off (a constant-speed crank's alpha reads
+#: 0 or 1e-22), and a round-off-sized change moves them by a measured amount: scaling
+#: every mass by (1 + 1e-14) changed a recorded error by up to 6.6e-8 of peak (PyBullet,
+#: six-bar link.alpha: its iterative solver; Exudyn six-bar 3.2e-8; MuJoCo 8e-14), over
+#: every built-in case and engine.  With 1e-7 the smallest drift that fails (1e-6 at
+#: factor 10) is 15x that jitter, and still a thousandth of the 1e-3 tolerance.
+DRIFT_FLOOR = 1e-7
+
+#: Significant figures stored for errors (drift is judged by factors, not digits; fewer
+#: digits keep a re-recorded file's diff to the errors that really moved).
+ERROR_DIGITS = 4
+
+
+class BaselineError(LinkageError):
+    """A baseline file cannot be used: names the file, the entry and the problem."""
+
+
+# ============================================================================ records
+@dataclass(frozen=True)
+class ModelSource:
+    """Where a run's mechanism comes from: ``kind`` "builtin" (``name`` a case name) or
+    "file" (``name`` a path relative to the baseline file's folder, POSIX separators);
+    ``sha256`` of the description's bytes when recorded."""
+
+    kind: str
+    name: str
+    sha256: str
+
+    def as_json(self) -> dict:
+        return {self.kind: self.name, "sha256": self.sha256}
+
+    def path(self, base_dir: Path) -> Path:
+        """The description file this source names now."""
+        if self.kind == "builtin":
+            from analytic.cases import case_path
+            return Path(case_path(self.name))
+        return base_dir / self.name
+
+    def describe(self) -> str:
+        return f"built-in case {self.name!r}" if self.kind == "builtin" else f"file {self.name}"
+
+
+@dataclass(frozen=True)
+class QuantityRecord:
+    """One quantity's recorded diagnostic (see :class:`reports.compare.Comparison`)."""
+
+    quantity: str
+    error: float          # max |error| / peak
+    at: float             # input value where it occurs (``at_unit``)
+    at_unit: str          # "deg" or "m"
+    tolerance: float      # relative to peak
+    max_abs: float        # SI units of the quantity
+    peak: float
+
+    def as_json(self) -> dict:
+        return {"quantity": self.quantity, "error": _sig(self.error, ERROR_DIGITS),
+                "at": _sig(self.at, 7), "at_unit": self.at_unit, "tolerance": self.tolerance,
+                "max_abs": _sig(self.max_abs, ERROR_DIGITS), "peak": _sig(self.peak, 6)}
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """One recorded (case, engine) run: enough to re-run it exactly, and its errors."""
+
+    case: str
+    engine: str
+    model: ModelSource
+    request: dict
+    settings: dict        # {"engine", "class", "fields": {name: value}}
+    versions: dict
+    quantities: tuple[QuantityRecord, ...]
+
+    @property
+    def key(self) -> tuple[str, str, str]:
+        return (self.model.kind, self.model.name, self.engine)
+
+    @property
+    def label(self) -> str:
+        return f"{self.case} / {self.engine}"
+
+    def as_json(self) -> dict:
+        return {"case": self.case, "engine": self.engine, "model": self.model.as_json(),
+                "request": dict(self.request), "settings": self.settings,
+                "versions": dict(self.versions),
+                "quantities": [q.as_json() for q in sorted(self.quantities,
+                                                           key=lambda q: q.quantity)]}
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """A baseline file's content; ``path`` is where it was read from or written to."""
+
+    runs: tuple[RunRecord, ...]
+    path: Path
+    recorded: str = ""
+
+    @property
+    def base_dir(self) -> Path:
+        return self.path.resolve().parent
+
+    def as_json(self) -> dict:
+        runs = sorted(self.runs, key=lambda r: (r.case, r.engine, r.model.name))
+        return {"schema": SCHEMA, "schema_version": SCHEMA_VERSION,
+                "recorded": self.recorded, "runs": [r.as_json() for r in runs]}
+
+
+def _sig(x: float, digits: int) -> float | None:
+    """``x`` to ``digits`` significant figures (JSON has no inf/NaN: those become None)."""
+    x = float(x)
+    return float(f"{x:.{digits}g}") if math.isfinite(x) else None
+
+
+# ============================================================================ versions
+def versions(engine: str) -> dict:
+    """The versions a run depends on: the engine's library, this project, Python, numpy
+    and the platform (read from package metadata; no engine library is imported)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    def ver(dist: str) -> str:
+        try:
+            return version(dist)
+        except PackageNotFoundError:
+            return "unknown"
+
+    import numpy as np
+    return {"engine": f"{engine} {ver(engine)}", "linkage-xval": ver("linkage-xval"),
+            "python": platform.python_version(), "numpy": np.__version__,
+            "platform": platform.platform()}
+
+
+# ============================================================================ file I/O
+def file_sha256(path: str | os.PathLike) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def dumps(baseline: Baseline) -> str:
+    """The file text: keys sorted, two-space indent, one line per quantity."""
+    return _dump(baseline.as_json(), 0, None) + "\n"
+
+
+def _dump(obj, level: int, key: str | None) -> str:
+    pad, inner = "  " * level, "  " * (level + 1)
+    if isinstance(obj, dict):
+        if key == "quantity-line":
+            return json.dumps(obj, sort_keys=True)
+        if not obj:
+            return "{}"
+        items = [f"{inner}{json.dumps(k)}: {_dump(obj[k], level + 1, k)}" for k in sorted(obj)]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    if isinstance(obj, list) and obj and isinstance(obj[0], dict):
+        sub = "quantity-line" if key == "quantities" else None
+        items = [f"{inner}{_dump(v, level + 1, sub)}" for v in obj]
+        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
+    return json.dumps(obj, sort_keys=True)
+
+
+def save(baseline: Baseline, path: str | os.PathLike | None = None) -> Path:
+    """Write ``baseline`` (to ``path``, default its own); raises :class:`OutputError`."""
+    p = Path(path or baseline.path)
+    try:
+        p.write_text(dumps(baseline), encoding="utf-8")
+    except OSError as e:
+        raise OutputError(f"cannot write baseline {str(p)!r}: {e.strerror}") from None
+    return p
+
+
+def load(path: str | os.PathLike) -> Baseline:
+    """Read and validate a baseline file; :class:`BaselineError` names what is wrong."""
+    p = Path(path)
+    where = str(path)
+    if p.is_dir():
+        raise BaselineError(f"baseline {where!r} is a folder; give the JSON file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise BaselineError(f"no such baseline file {where!r}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise BaselineError(f"cannot read baseline {where!r}: "
+                            f"{getattr(e, 'strerror', None) or e}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise BaselineError(f"{where}: not JSON: {e.msg} at line {e.lineno} column "
+                            f"{e.colno}") from None
+    return _parse(doc, p)
+
+
+def _parse(doc, p: Path) -> Baseline:
+    where = str(p)
+    if not isinstance(doc, dict) or doc.get("schema") != SCHEMA:
+        raise BaselineError(f"{where}: not a linkage-xval baseline (no \"schema\": "
+                            f"\"{SCHEMA}\")")
+    ver = doc.get("schema_version")
+    if ver != SCHEMA_VERSION:
+        raise BaselineError(f"{where}: schema_version {ver!r} is not supported (this "
+                            f"xval reads {SCHEMA_VERSION})")
+    runs = _get(doc, "runs", list, where)
+    out, seen = [], set()
+    for i, r in enumerate(runs):
+        rec = _parse_run(r, f"{where}: runs[{i}]")
+        if rec.key in seen:
+            raise BaselineError(f"{where}: runs[{i}]: {rec.label} is recorded twice")
+        seen.add(rec.key)
+        out.append(rec)
+    return Baseline(tuple(out), p, str(doc.get("recorded", "")))
+
+
+def _get(d, key: str, typ, where: str):
+    if not isinstance(d, dict):
+        raise BaselineError(f"{where}: expected an object")
+    if key not in d:
+        raise BaselineError(f"{where}: missing key {key!r}")
+    v = d[key]
+    ok = (isinstance(v, (int, float)) and not isinstance(v, bool)) if typ is float \
+        else isinstance(v, typ)
+    if not ok:
+        raise BaselineError(f"{where}: {key!r} must be {_type_name(typ)}, got {v!r:.60}")
+    return float(v) if typ is float else v
+
+
+def _type_name(typ) -> str:
+    return {float: "a number", str: "a string", list: "a list", dict: "an object",
+            int: "a whole number"}.get(typ, typ.__name__)
+
+
+def _parse_run(r, where: str) -> RunRecord:
+    case = _get(r, "case", str, where)
+    engine = _get(r, "engine", str, where)
+    where = f"{where} ({case} / {engine})"
+    model = _get(r, "model", dict, where)
+    kinds = [k for k in ("builtin", "file") if k in model]
+    if len(kinds) != 1:
+        raise BaselineError(f"{where}: model needs exactly one of 'builtin' or 'file'")
+    src = ModelSource(kinds[0], _get(model, kinds[0], str, f"{where}: model"),
+                      _get(model, "sha256", str, f"{where}: model"))
+    request = _get(r, "request", dict, where)
+    for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
+                   ("max_speed_error", float), ("chords", str), ("mode", str)):
+        _get(request, k, typ, f"{where}: request")
+    if request["mode"] != "run":
+        raise BaselineError(f"{where}: request mode {request['mode']!r}: only 'run' is "
+                            "supported")
+    settings = _get(r, "settings", dict, where)
+    _get(settings, "fields", dict, f"{where}: settings")
+    vers = _get(r, "versions", dict, where)
+    qs = []
+    for j, q in enumerate(_get(r, "quantities", list, where)):
+        qw = f"{where}: quantities[{j}]"
+        name = _get(q, "quantity", str, qw)
+        qw = f"{where}: quantity {name!r}"
+        err = q.get("error") if isinstance(q, dict) else None
+        if err is None or isinstance(err, bool) or not isinstance(err, (int, float)) \
+                or not math.isfinite(err) or err < 0:
+            raise BaselineError(f"{qw}: 'error' must be a number >= 0, got {err!r}")
+        tol = _get(q, "tolerance", float, qw)
+        if not tol > 0:
+            raise BaselineError(f"{qw}: 'tolerance' must be > 0, got {tol!r}")
+        qs.append(QuantityRecord(name, float(err), _num(q.get("at")),
+                                 str(q.get("at_unit", "")), tol, _num(q.get("max_abs")),
+                                 _num(q.get("peak"))))
+    if len({q.quantity for q in qs}) != len(qs):
+        raise BaselineError(f"{where}: a quantity is recorded twice")
+    return RunRecord(case, engine, src, dict(request), settings, dict(vers), tuple(qs))
+
+
+def _num(v) -> float:
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
+
+
+# ============================================================================ running
+#: ``runner(mechanism, engine, settings, request) -> (EngineRun, comparisons)``: how a
+#: run is made (the command line runs it; the pytest plugin caches it per session).
+Runner = Callable[..., tuple]
+
+
+def run_and_compare(mech, engine: str, settings, request: dict):
+    """Run ``engine`` on ``mech`` as ``request`` asks and compare every judged quantity
+    with the analytic solution: ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
+    from reports.compare import compare_run
+    from sim_models import compile_linkage
+    from sim_models.engines import run
+    tree = compile_linkage(mech, chords=request.get("chords", "moving"))
+    r = run(tree, engine, settings, revolutions=request["revolutions"],
+            samples=request["samples"], max_violation=request["max_violation"],
+            max_speed_error=request["max_speed_error"])
+    return r, judged(compare_run(r, tree.linkage))
+
+
+def judged(comparisons) -> list:
+    """The quantities this project computes (the engines' own readings left out)."""
+    return [c for c in comparisons if not c.quantity.endswith("[engine]")]
+
+
+def request_dict(revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,
+                 max_speed_error: float = 1e-2, chords: str = "moving") -> dict:
+    return {"revolutions": int(revolutions), "samples": int(samples),
+            "max_violation": float(max_violation), "max_speed_error": float(max_speed_error),
+            "chords": chords, "mode": "run"}
+
+
+def settings_json(engine: str, settings) -> dict:
+    """The settings object in full: engine name, class and every field."""
+    fields = {k: list(v) if isinstance(v, tuple) else v for k, v in settings.as_dict().items()}
+    return {"engine": engine, "class": type(settings).__name__, "fields": fields}
+
+
+def settings_line(engine: str, settings) -> str:
+    """Every field of a settings object as ``key=value``, after the engine's name."""
+    from sim_models.engine_base import EngineSettings
+    return f"{engine}: " + EngineSettings.describe(settings)
+
+
+def settings_from_json(rec: RunRecord, where: str):
+    """The settings object a record was run with (:meth:`EngineSettings.from_overrides`);
+    raises :class:`BaselineError` when the engine no longer accepts a recorded field."""
+    from sim_models.engine_base import SettingsError
+    from sim_models.registry import get_engine
+    eng = get_engine(rec.engine)
+    try:
+        return eng.settings_class.from_overrides(rec.settings["fields"], eng.name)
+    except SettingsError as e:
+        raise BaselineError(f"{where}: {rec.label}: the recorded settings cannot be "
+                            f"rebuilt: {e}") from None
+
+
+# ============================================================================ record
+def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
+    """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
+    paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
+    from analytic import load_case
+    from analytic.cases import case_names, case_path
+    if model in case_names():
+        return ModelSource("builtin", model, file_sha256(case_path(model))), load_case(model)
+    p = Path(model).resolve()
+    mech = load_case(str(p))
+    rel = Path(os.path.relpath(p, base_dir)).as_posix()
+    return ModelSource("file", rel, file_sha256(p)), mech
+
+
+def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike,
+           settings: dict | None = None, request: dict | None = None,
+           tolerance: float | None = None, runner: Runner | None = None) -> Baseline:
+    """Run every model in every engine and return the baseline (not yet written).
+
+    ``settings``: engine name -> settings object (default: the recommended ones);
+    ``request``: :func:`request_dict`; ``tolerance``: relative to peak (default
+    :data:`analytic.tolerances.ENGINE_RELATIVE`).  Raises :class:`EngineRefusal` /
+    :class:`NothingToCompare` (status 2) as ``xval compare`` does."""
+    from analytic.tolerances import ENGINE_RELATIVE
+    from sim_models.registry import get_engine
+    tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
+    req = request or request_dict()
+    runner = runner or run_and_compare
+    base_dir = Path(out).resolve().parent
+    runs = []
+    for model in models:
+        src, mech = source_of(model, base_dir)
+        for engine in engines:
+            s = (settings or {}).get(engine) or get_engine(engine).settings()
+            r, comps = runner(mech, engine, s, req)
+            runs.append(_record_run(mech, src, engine, s, req, r, comps, tol))
+    now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return Baseline(tuple(runs), Path(out), now)
+
+
+def _record_run(mech, src, engine, settings, req, r, comps, tol) -> RunRecord:
+    unit = "deg" if _revolute(mech) else "m"
+    qs = tuple(QuantityRecord(c.quantity, float(c.normalised), float(c.at), unit, tol,
+                              float(c.max_abs), float(c.peak)) for c in comps)
+    return RunRecord(mech.name, engine, src, dict(req), settings_json(engine, settings),
+                     versions(engine), qs)
+
+
+def record_problems(baseline: Baseline) -> list[str]:
+    """Why a fresh baseline should not be written: quantities that are not finite or
+    already above their tolerance (a baseline records a passing state)."""
+    out = []
+    for r in baseline.runs:
+        for q in r.quantities:
+            if not math.isfinite(q.error):
+                out.append(f"{r.label}: {q.quantity} is not finite (the run failed)")
+            elif q.error > q.tolerance:
+                out.append(f"{r.label}: {q.quantity} error {q.error:.3g} of peak exceeds "
+                           f"its tolerance {q.tolerance:g}")
+    return out
+
+
+def _revolute(mech) -> bool:
+    from analytic.mechanism import Prismatic
+    return not isinstance(mech.driver_joint, Prismatic)
+
+
+# ============================================================================ check
+@dataclass(frozen=True)
+class QuantityCheck:
+    """One quantity against its baseline.  ``status``: "ok", "over-tolerance", "drift",
+    "not-finite", "missing" (recorded, no longer compared) or "new" (not recorded;
+    reported, not judged)."""
+
+    quantity: str
+    status: str
+    error: float            # now, relative to peak (NaN when missing)
+    base: float             # recorded (NaN when new)
+    at: float
+    at_unit: str
+    tolerance: float
+    factor: float
+
+    @property
+    def failed(self) -> bool:
+        return self.status not in ("ok", "new")
+
+    @property
+    def ratio(self) -> float:
+        """Growth over the baseline (inf from a zero baseline)."""
+        if not (math.isfinite(self.error) and math.isfinite(self.base)):
+            return math.nan
+        return self.error / self.base if self.base > 0 else \
+            (1.0 if self.error == 0 else math.inf)
+
+    def message(self) -> str:
+        """One line naming the quantity, what happened, by how much and where."""
+        at = f" at {self.at:.6g} {self.at_unit}" if math.isfinite(self.at) else ""
+        if self.status == "missing":
+            return f"{self.quantity}: recorded (error {self.base:.3g} of peak) but no " \
+                   "longer compared"
+        if self.status == "new":
+            return f"{self.quantity}: new, not in the baseline (error {self.error:.3g} of peak)"
+        if self.status == "not-finite":
+            return f"{self.quantity}: error is not finite{at} (the run diverged or failed)"
+        grew = f"{self.base:.3g} -> {self.error:.3g} of peak{at} ({_times(self.ratio)})"
+        if self.status == "over-tolerance":
+            return f"{self.quantity}: error {self.error:.3g} of peak{at} exceeds its " \
+                   f"tolerance {self.tolerance:g} (baseline {self.base:.3g}, {_times(self.ratio)})"
+        if self.status == "drift":
+            floor = "" if self.base >= DRIFT_FLOOR else \
+                f"; baseline below the floor {DRIFT_FLOOR:g}, so the limit is " \
+                f"{self.factor * DRIFT_FLOOR:.3g}"
+            return f"{self.quantity}: drifted {grew}, more than the factor " \
+                   f"{self.factor:g}{floor}"
+        return f"{self.quantity}: {grew}"
+
+
+def _times(r: float) -> str:
+    if not math.isfinite(r):
+        return "from zero"
+    return f"{r:.3g}x" if r < 1e4 else f"{r:.2g}x"
+
+
+def judge(q: QuantityRecord, error: float, at: float, factor: float) -> QuantityCheck:
+    """The verdict of one quantity now (``error`` relative to peak) against its record."""
+    if not math.isfinite(error):
+        status = "not-finite"
+    elif error > q.tolerance:
+        status = "over-tolerance"
+    elif error > factor * max(q.error, DRIFT_FLOOR):
+        status = "drift"
+    else:
+        status = "ok"
+    return QuantityCheck(q.quantity, status, error, q.error, at, q.at_unit, q.tolerance,
+                         factor)
+
+
+@dataclass
+class RunCheck:
+    """One recorded run re-run: its quantities' verdicts and the run-level problems
+    (model changed or gone, engine gone, run refused or failed)."""
+
+    record: RunRecord
+    quantities: list[QuantityCheck] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    versions_now: dict = field(default_factory=dict)
+    settings_text: str = ""
+    wall: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return not self.problems and not any(q.failed for q in self.quantities)
+
+    def failures(self) -> list[QuantityCheck]:
+        """Failed quantities, worst first (by growth over the limit)."""
+        bad = [q for q in self.quantities if q.failed]
+        return sorted(bad, key=_severity, reverse=True)
+
+    def worst(self) -> QuantityCheck | None:
+        """The failing quantity to name first, else the largest error."""
+        bad = self.failures()
+        if bad:
+            return bad[0]
+        done = [q for q in self.quantities if math.isfinite(q.error)]
+        return max(done, key=lambda q: q.error, default=None)
+
+    def versions_changed(self) -> dict[str, tuple[str, str]]:
+        return {k: (str(v), str(self.versions_now.get(k, "unknown")))
+                for k, v in self.record.versions.items()
+                if self.versions_now and str(self.versions_now.get(k, "unknown")) != str(v)}
+
+
+def _severity(q: QuantityCheck) -> tuple:
+    rank = {"not-finite": 4, "over-tolerance": 3, "missing": 2, "drift": 1}.get(q.status, 0)
+    over = q.error / max(q.factor * max(q.base, DRIFT_FLOOR), 1e-300) \
+        if math.isfinite(q.error) and math.isfinite(q.base) else math.inf
+    return (rank, over)
+
+
+def check(baseline: Baseline, factor: float = DEFAULT_FACTOR, runner: Runner | None = None,
+          select: Callable[[RunRecord], bool] | None = None) -> list[RunCheck]:
+    """Re-run every recorded run (those ``select`` keeps) and judge it (see the module
+    docstring).  Raises :class:`BaselineError` only for a file that cannot be applied
+    (e.g. settings the engine no longer accepts); everything about the runs themselves
+    is in the returned :class:`RunCheck`."""
+    if not (factor > 1 and math.isfinite(factor)):
+        raise BaselineError(f"--factor must be a finite number above 1, got {factor!r}")
+    runner = runner or run_and_compare
+    return [check_run(rec, baseline, factor, runner) for rec in baseline.runs
+            if select is None or select(rec)]
+
+
+def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner) -> RunCheck:
+    """One record: rebuild its mechanism and settings, run, judge."""
+    import time
+    out = RunCheck(rec)
+    mech = _mechanism_now(rec, baseline, out)
+    settings = _settings_now(rec, baseline, out)
+    if mech is None or settings is None:
+        return out
+    out.settings_text = settings_line(rec.engine, settings)
+    out.versions_now = versions(rec.engine)
+    t0 = time.perf_counter()
+    try:
+        r, comps = runner(mech, rec.engine, settings, rec.request)
+    except LinkageError as e:  # a refusal, or nothing left to compare
+        out.problems.append(f"the run could not be compared: {e}")
+        out.wall = time.perf_counter() - t0
+        return out
+    out.wall = time.perf_counter() - t0
+    if not r.ok:
+        out.problems.append(f"the run failed: {r.reason}")
+    now = {c.quantity: c for c in comps}
+    for q in rec.quantities:
+        c = now.get(q.quantity)
+        if c is None:
+            out.quantities.append(QuantityCheck(q.quantity, "missing", math.nan, q.error,
+                                                math.nan, q.at_unit, q.tolerance, factor))
+        else:
+            out.quantities.append(judge(q, float(c.normalised), float(c.at), factor))
+    recorded = {q.quantity for q in rec.quantities}
+    unit = "deg" if _revolute(mech) else "m"
+    for c in comps:
+        if c.quantity not in recorded:
+            out.quantities.append(QuantityCheck(c.quantity, "new", float(c.normalised),
+                                                math.nan, float(c.at), unit, c.tolerance,
+                                                factor))
+    return out
+
+
+def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
+    """The recorded model as it is now (None, with a problem, when it is gone)."""
+    from analytic import load_case
+    from analytic.cases import case_names
+    src = rec.model
+    if src.kind == "builtin" and src.name not in case_names():
+        out.problems.append(f"the built-in case {src.name!r} no longer exists")
+        return None
+    p = src.path(baseline.base_dir)
+    if not p.is_file():
+        out.problems.append(f"the model {src.describe()} is gone (looked for {p})")
+        return None
+    sha = file_sha256(p)
+    if sha != src.sha256:
+        out.problems.append(f"the model {src.describe()} changed since the baseline "
+                            f"(sha256 {src.sha256[:12]}... -> {sha[:12]}...); re-record "
+                            "the baseline if the change is intended")
+    return load_case(src.name if src.kind == "builtin" else str(p))
+
+
+def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
+    from sim_models.registry import get_engine
+    from sim_models.tree import SimModelError
+    try:
+        eng = get_engine(rec.engine)
+    except (SimModelError, ImportError) as e:  # not registered, or its library missing
+        out.problems.append(f"engine {rec.engine!r} is not available: {e}")
+        return None
+    s = settings_from_json(rec, str(baseline.path))
+    missing = sorted(set(s.as_dict()) - set(rec.settings["fields"]))
+    if missing:
+        out.notes.append(f"settings not in the baseline, run at {eng.name}'s defaults: "
+                         + ", ".join(f"{k}={getattr(s, k)!r}" for k in missing))
+    return s
+
+
+__all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
+           "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
+           "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
+           "judged", "load", "record", "record_problems", "request_dict", "run_and_compare",
+           "save", "settings_from_json", "settings_line", "settings_json", "source_of", "versions"]

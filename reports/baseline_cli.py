@@ -1,0 +1,181 @@
+"""``xval baseline record`` and ``xval baseline check`` (see :mod:`reports.baseline`).
+
+Exit status of ``check``: 0 every recorded run re-ran within its tolerance and within
+``--factor`` of its baseline; 1 a drift, a quantity over its tolerance, a quantity,
+case, model file or engine gone, a changed model file or a failed run; 2 a baseline
+file that cannot be used (one line naming the file, entry and key).  ``record`` exits 1
+(and writes nothing) when a run already fails its tolerance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections import Counter
+
+from . import baseline as bl
+from . import ci_formats
+from . import cli_options as opt
+
+
+# ============================================================================ record
+def cmd_record(args) -> int:
+    from analytic.cases import case_names
+    from sim_models.registry import get_engine, split_overrides
+    engines = _engines(args.engine)
+    models = []
+    for m in args.models:
+        models += list(case_names()) if m == "all" else [m]
+    per = split_overrides(args.set or (), engines)
+    settings = {e: get_engine(e).settings(per.get(e)) for e in engines}
+    req = bl.request_dict(args.revolutions, args.samples)
+    base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
+                     args.tolerance)
+    problems = bl.record_problems(base)
+    for r in base.runs:
+        w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
+                default=None)
+        worst = f"worst {w.quantity} {w.error:.3g} of peak at {w.at:.6g} {w.at_unit}" \
+            if w else "nothing compared"
+        print(f"{r.label}: {len(r.quantities)} quantities, {worst}")
+    if problems:
+        for p in problems:
+            print(f"not recorded: {p}")
+        print(f"baseline not written: {len(problems)} quantities fail already "
+              "(a baseline records a passing state)")
+        return 1
+    path = bl.save(base)
+    print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})")
+    return 0
+
+
+def _engines(choice: list[str] | None) -> list[str]:
+    from sim_models.registry import engine_names, get_engine
+    if not choice or "all" in choice:
+        return list(engine_names())
+    return list(dict.fromkeys(get_engine(e).name for e in choice))
+
+
+# ============================================================================ check
+def cmd_check(args) -> int:
+    base = bl.load(args.baseline)
+    keep = None
+    if args.case or args.engine:
+        cases, engines = set(args.case or ()), set(args.engine or ())
+
+        def keep(rec):
+            return (not cases or rec.case in cases or rec.model.name in cases) and \
+                (not engines or rec.engine in engines)
+    checks = bl.check(base, args.factor, select=keep)
+    if keep is not None and not checks:
+        raise bl.BaselineError(f"{args.baseline}: no recorded run matches --case/--engine")
+    lines = report_lines(base, checks, args.factor)
+    print("\n".join(lines))
+    ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
+                             ci_formats.from_baseline(checks), intro=lines[:2])
+    return 0 if all(c.passed for c in checks) else 1
+
+
+def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
+    """What ``xval baseline check`` prints: a header, the versions that changed, one line
+    per run, and under each failed run every failing quantity, its settings and versions."""
+    failed = [c for c in checks if not c.passed]
+    out = [f"baseline {base.path}: {len(checks)} runs (recorded {base.recorded or '?'}); "
+           f"drift factor {factor:g}, floor {bl.DRIFT_FLOOR:g} of peak",
+           versions_line(checks)]
+    for c in checks:
+        w = c.worst()
+        if c.passed:
+            ratio = f", {w.ratio:.3g}x" if w and math.isfinite(w.ratio) else ""
+            worst = f"worst {w.quantity} {w.error:.3g} of peak (baseline {w.base:.3g}" \
+                    f"{ratio})" if w else "nothing compared"
+            out.append(f"pass  {c.record.label}: {worst}")
+            continue
+        first = c.problems[0] if c.problems else c.failures()[0].message()
+        out.append(f"FAIL  {c.record.label}: {first}")
+        rest = c.problems[1:] + [q.message() for q in c.failures()][0 if c.problems else 1:]
+        out += [f"        {m}" for m in rest]
+        if c.settings_text:
+            out.append(f"        settings: {c.settings_text}")
+        ch = c.versions_changed()
+        if ch:
+            out.append("        versions changed: " +
+                       ", ".join(f"{k} {a} -> {b}" for k, (a, b) in ch.items()))
+    for c in checks:
+        out += [f"note: {c.record.label}: {q.message()}" for q in c.quantities
+                if q.status == "new"]
+        out += [f"note: {c.record.label}: {n}" for n in c.notes]
+    out.append(f"result: {'FAIL' if failed else 'PASS'}: {len(failed)} of {len(checks)} "
+               "runs failed" + (" (drift, tolerance, or a run, quantity or model gone or "
+                                "changed)" if failed else ""))
+    return out
+
+
+def versions_line(checks) -> str:
+    """Versions that differ from the recorded ones, with how many runs each affects."""
+    changed: Counter = Counter()
+    for c in checks:
+        for k, (a, b) in c.versions_changed().items():
+            changed[(k, a, b)] += 1
+    if not changed:
+        return "versions: unchanged since the baseline"
+    return "versions changed since the baseline: " + "; ".join(
+        f"{k} {a} -> {b} ({n} runs)" for (k, a, b), n in sorted(changed.items()))
+
+
+# ============================================================================ parser
+def _factor(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 1):
+        raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
+                                         "finite number above 1")
+    return v
+
+
+_tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
+                              why="an error relative to the quantity's peak")
+
+
+def _model(text: str) -> str:
+    return text if text == "all" else opt.case_or_file(text)
+
+
+def register(sub) -> None:
+    """``xval baseline record|check``."""
+    from sim_models.registry import engine_names
+    p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
+    bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
+    r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
+    r.add_argument("models", nargs="+", type=_model, metavar="CASE_OR_FILE",
+                   help="built-in case names, TOML files, or 'all' (every built-in case)")
+    r.add_argument("--engine", action="append", choices=[*engine_names(), "all"],
+                   help="an engine (repeatable; default all)")
+    r.add_argument("--out", required=True, type=opt.output_file, metavar="FILE",
+                   help="the baseline file to write (JSON)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
+    r.add_argument("--revolutions", type=opt.revolutions, default=2,
+                   help=f"1 to {opt.MAX_REVOLUTIONS}")
+    r.add_argument("--samples", type=opt.samples, default=36,
+                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
+    r.add_argument("--tolerance", type=_tolerance, default=None,
+                   help="relative to peak, recorded per quantity (default 1e-3)")
+    r.set_defaults(func=cmd_record)
+    c = bsub.add_parser("check", help="re-run a baseline's runs and fail on drift")
+    c.add_argument("baseline", metavar="BASELINE_JSON")
+    c.add_argument("--factor", type=_factor, default=bl.DEFAULT_FACTOR,
+                   help=f"largest allowed growth over the baseline (default "
+                        f"{bl.DEFAULT_FACTOR:g}; errors below {bl.DRIFT_FLOOR:g} of peak "
+                        "count as that floor)")
+    c.add_argument("--case", action="append", metavar="CASE",
+                   help="check only this case (repeatable)")
+    c.add_argument("--engine", action="append", metavar="ENGINE",
+                   help="check only this engine (repeatable)")
+    ci_formats.add_options(c)
+    c.set_defaults(func=cmd_check)
+
+
+__all__ = ["cmd_check", "cmd_record", "register", "report_lines"]

@@ -1,0 +1,259 @@
+"""Verdicts in the formats CI systems read: JUnit XML and a Markdown job summary.
+
+One :class:`CiCase` per (case, engine), built from ``xval compare``'s results
+(:func:`from_compare`) or from ``xval baseline check``'s (:func:`from_baseline`).
+
+JUnit XML (the Ant/Jenkins layout that Jenkins, GitLab, GitHub actions' test reporters,
+Azure Pipelines and CircleCI read)::
+
+    <testsuites name=... tests= failures= errors= time=>
+      <testsuite name=... tests= failures= errors= skipped="0" time= timestamp= hostname=>
+        <properties><property name="python" value="3.11.2"/>...</properties>
+        <testcase classname="xval.<engine>" name="<case>" time="<s>">
+          <failure message="<worst quantity, its error, where>" type="tolerance|drift|...">
+            every quantity, the settings</failure>          (a failed verdict)
+          <error message=... type="refused">...</error>      (the run could not be judged)
+          <system-out>settings and notes</system-out>
+        </testcase> ...
+
+``time`` attributes are seconds with a decimal point (the schema's ``xs:decimal``: no
+exponent).  The Markdown summary is one table, worst first, for a CI job summary page.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import platform
+import socket
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from analytic.errors import OutputError
+
+
+@dataclass(frozen=True)
+class CiCase:
+    """One (case, engine) verdict.
+
+    ``status``: "pass", "fail" (a failed verdict) or "error" (the run could not be
+    judged: refused, nothing to compare, model gone).  ``quantity``/``error``/``at``:
+    the quantity named first (the worst failing one, else the largest error), its error
+    relative to peak and where (text with unit).  ``kind``: why it failed ("tolerance",
+    "drift", "missing", "run failed", "model changed", ...).  ``message``: one line;
+    ``details``: the full listing."""
+
+    case: str
+    engine: str
+    status: str
+    quantity: str = ""
+    error: float = math.nan
+    at: str = ""
+    tolerance: float = math.nan
+    baseline: float = math.nan
+    kind: str = ""
+    message: str = ""
+    details: str = ""
+    settings: str = ""
+    time: float = 0.0
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+# ============================================================================ builders
+def _at(value: float, unit: str) -> str:
+    return f"{value:.6g} {unit}" if math.isfinite(value) else ""
+
+
+def from_compare(case: str, results, revolute: bool) -> list[CiCase]:
+    """``xval compare``'s ``(run, comparisons, ok, near_event)`` tuples."""
+    unit = "deg" if revolute else "m"
+    out = []
+    for r, comps, ok, near in results:
+        judged = [c for c in comps if not c.quantity.endswith("[engine]")]
+        bad = [c for c in judged if not c.passed]
+        pool = bad or judged
+        worst = max(pool, key=lambda c: c.normalised if math.isfinite(c.normalised)
+                    else math.inf, default=None)
+        kind, msg = "", ""
+        if not r.ok:
+            kind = "run failed"
+            msg = f"the run failed: {r.reason}"
+        elif worst is not None and not ok:
+            kind = "tolerance"
+        if worst is not None and not ok:
+            where = f" at {_at(worst.at, unit)}" if math.isfinite(worst.at) else ""
+            msg = (msg + "; " if msg else "") + \
+                f"{worst.quantity}: error {worst.normalised:.3g} of peak{where} exceeds " \
+                f"the tolerance {worst.tolerance:g}"
+            if near:
+                msg += f" ({near})"
+        lines = [str(c) for c in comps] + [f"settings: {r.engine} {r.settings_text}"]
+        lines += [f"note: {n}" for n in r.notes]
+        out.append(CiCase(
+            case=case, engine=r.engine, status="pass" if ok else "fail",
+            quantity=worst.quantity if worst else "",
+            error=worst.normalised if worst else math.nan,
+            at=_at(worst.at, unit) if worst else "",
+            tolerance=worst.tolerance if worst else math.nan, kind=kind, message=msg,
+            details="\n".join(lines), settings=f"{r.engine} {r.settings_text}",
+            time=float(r.wall), notes=tuple(r.notes)))
+    return out
+
+
+def from_baseline(checks) -> list[CiCase]:
+    """``xval baseline check``'s :class:`reports.baseline.RunCheck` list."""
+    out = []
+    for chk in checks:
+        rec = chk.record
+        w = chk.worst()
+        bad = chk.failures()
+        status = "pass" if chk.passed else ("error" if chk.problems and not chk.quantities
+                                            else "fail")
+        kind = ""
+        parts = list(chk.problems)
+        if bad:
+            kind = {"over-tolerance": "tolerance", "not-finite": "run failed"}.get(
+                bad[0].status, bad[0].status)
+            parts.append(bad[0].message())
+        elif chk.problems:
+            kind = "model changed" if "changed" in chk.problems[0] else "run failed"
+        changed = chk.versions_changed()
+        lines = list(chk.problems) + [q.message() for q in chk.quantities]
+        if changed:
+            lines.append("versions changed: " + ", ".join(
+                f"{k} {a} -> {b}" for k, a, b in ((k, *v) for k, v in changed.items())))
+        if chk.settings_text:
+            lines.append(f"settings: {chk.settings_text}")
+        lines += [f"note: {n}" for n in chk.notes]
+        out.append(CiCase(
+            case=rec.case, engine=rec.engine, status=status,
+            quantity=w.quantity if w else "", error=w.error if w else math.nan,
+            at=_at(w.at, w.at_unit) if w else "", tolerance=w.tolerance if w else math.nan,
+            baseline=w.base if w else math.nan, kind=kind, message="; ".join(parts),
+            details="\n".join(lines), settings=chk.settings_text, time=chk.wall,
+            notes=tuple(chk.notes)))
+    return out
+
+
+# ============================================================================ JUnit
+def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = None) -> str:
+    """The JUnit XML document (one ``testsuite`` holding one ``testcase`` per entry)."""
+    fails = sum(c.status == "fail" for c in cases)
+    errors = sum(c.status == "error" for c in cases)
+    total = sum(c.time for c in cases)
+    counts = {"tests": str(len(cases)), "failures": str(fails), "errors": str(errors),
+              "time": _secs(total)}
+    root = ET.Element("testsuites", {"name": suite, **counts})
+    ts = ET.SubElement(root, "testsuite", {
+        "name": suite, **counts, "skipped": "0",
+        "timestamp": _dt.datetime.now().replace(microsecond=0).isoformat(),
+        "hostname": socket.gethostname() or "localhost"})
+    props = ET.SubElement(ts, "properties")
+    for k, v in {"python": platform.python_version(), "platform": platform.platform(),
+                 **(properties or {})}.items():
+        ET.SubElement(props, "property", {"name": str(k), "value": str(v)})
+    for c in cases:
+        tc = ET.SubElement(ts, "testcase", {"classname": f"xval.{c.engine}", "name": c.case,
+                                            "time": _secs(c.time)})
+        if c.status in ("fail", "error"):
+            tag = "failure" if c.status == "fail" else "error"
+            el = ET.SubElement(tc, tag, {"message": _clean(c.message or c.kind),
+                                         "type": c.kind or tag})
+            el.text = _clean(c.details)
+        if c.settings or c.notes:
+            so = ET.SubElement(tc, "system-out")
+            so.text = _clean("\n".join([f"settings: {c.settings}",
+                                        *[f"note: {n}" for n in c.notes]]))
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, "unicode") + "\n"
+
+
+def _secs(t: float) -> str:
+    return f"{max(float(t), 0.0):.3f}" if math.isfinite(t) else "0.000"
+
+
+def _clean(text: str) -> str:
+    """XML 1.0 forbids most control characters (an engine message might carry one)."""
+    return "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20)
+
+
+# ============================================================================ Markdown
+def markdown_summary(title: str, cases: Sequence[CiCase], intro: Sequence[str] = ()) -> str:
+    """A Markdown table of the verdicts, failures first, with the failure messages."""
+    fails = [c for c in cases if c.status != "pass"]
+    head = f"## {title}: {'PASS' if not fails else 'FAIL'} " \
+           f"({len(cases) - len(fails)} of {len(cases)} passed)"
+    has_base = any(math.isfinite(c.baseline) for c in cases)
+    cols = ["case", "engine", "verdict", "worst quantity", "error / peak", "at"]
+    cols += ["baseline", "growth"] if has_base else []
+    cols += ["tolerance"]
+    rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for c in sorted(cases, key=lambda c: (c.status == "pass", c.case, c.engine)):
+        cells = [c.case, c.engine, "pass" if c.status == "pass" else f"**{c.status.upper()}**",
+                 f"`{c.quantity}`" if c.quantity else "", _g(c.error), c.at]
+        if has_base:
+            grow = c.error / c.baseline if math.isfinite(c.error) and c.baseline > 0 \
+                else math.nan
+            cells += [_g(c.baseline), f"{grow:.3g}x" if math.isfinite(grow) else ""]
+        cells.append(_g(c.tolerance))
+        rows.append("| " + " | ".join(_md(x) for x in cells) + " |")
+    out = [head, "", *intro, *([""] if intro else []), *rows]
+    if fails:
+        out += ["", "### Failures", ""]
+        out += [f"- **{c.case} / {c.engine}** ({c.kind or c.status}): {_md(c.message)}"
+                for c in fails]
+    return "\n".join(out) + "\n"
+
+
+def _g(x: float) -> str:
+    return f"{x:.3g}" if math.isfinite(x) else ""
+
+
+def _md(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+# ============================================================================ writing
+def write_text(path: str, text: str, what: str) -> None:
+    """Write ``text`` to ``path`` (``-``: standard output); :class:`OutputError` if not."""
+    if path == "-":
+        import sys
+        sys.stdout.write(text)
+        return
+    try:
+        Path(path).write_text(text, encoding="utf-8")
+    except OSError as e:
+        raise OutputError(f"cannot write {what} {path!r}: {e.strerror}") from None
+
+
+def add_options(parser) -> None:
+    """``--junit FILE`` and ``--summary FILE`` on a command."""
+    from . import cli_options as opt
+    parser.add_argument("--junit", type=opt.output_file, metavar="FILE",
+                        help="write JUnit XML: one test case per case x engine")
+    parser.add_argument("--summary", type=opt.output_file, metavar="FILE",
+                        help="write a Markdown summary (e.g. a CI job summary)")
+
+
+def write_outputs(args, suite: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
+                  properties: dict | None = None) -> None:
+    """Write what ``--junit`` / ``--summary`` ask for (nothing when neither is given)."""
+    if getattr(args, "junit", None):
+        write_text(args.junit, junit_xml(suite, cases, properties), "JUnit file")
+    if getattr(args, "summary", None):
+        write_text(args.summary, markdown_summary(suite, cases, intro), "summary")
+
+
+def write_compare_outputs(args, mech, results) -> None:
+    """``xval compare --junit/--summary`` (called from :func:`reports.cli_engines.cmd_compare`)."""
+    if not (getattr(args, "junit", None) or getattr(args, "summary", None)):
+        return
+    from analytic.mechanism import Prismatic
+    cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic))
+    write_outputs(args, f"xval compare {mech.name}", cases)
+
+
+__all__ = ["CiCase", "add_options", "from_baseline", "from_compare", "junit_xml",
+           "markdown_summary", "write_compare_outputs", "write_outputs", "write_text"]
