@@ -163,3 +163,132 @@ def timeseries_plot(t, series: dict[str, np.ndarray], title: str, ylabel: str) -
     ax.legend(fontsize=7)
     ax.set_title(title, fontsize=10)
     return _png(fig)
+
+
+# ----------------------------------------------------------------------------- case figures
+#: Marker of each engine in the case figures (others cycle through _MORE_MARKERS).
+ENGINE_MARKERS = {"mujoco": dict(marker="o", mfc="none", ms=5),
+                  "pybullet": dict(marker="x", ms=5),
+                  "exudyn": dict(marker="s", mfc="none", ms=4)}
+_MORE_MARKERS = ("^", "v", "D", "P", "*")
+#: A curve axis is clipped only when its full range exceeds this many times the range of
+#: its central 99 % of values (a spike near a limit position flattening the rest).
+CLIP_RATIO = 5.0
+
+
+def engine_marker(engine: str, k: int = 0) -> dict:
+    return ENGINE_MARKERS.get(engine, dict(marker=_MORE_MARKERS[k % len(_MORE_MARKERS)],
+                                           mfc="none", ms=4))
+
+
+def _robust_ylim(values: np.ndarray):
+    """(lo, hi, n_clipped, (min, max)) when a few values dwarf the rest, else None."""
+    v = values[np.isfinite(values)]
+    if v.size < 10:
+        return None
+    lo, hi = np.percentile(v, [0.5, 99.5])
+    full = float(v.max() - v.min())
+    core = float(hi - lo)
+    if core <= 0 or full <= CLIP_RATIO * core:
+        return None
+    pad = 0.3 * core
+    lo, hi = lo - pad, hi + pad
+    return lo, hi, int(np.sum((v < lo) | (v > hi))), (float(v.min()), float(v.max()))
+
+
+def curve_plot(fig_data) -> bytes:
+    """A :class:`reports.case_figures.CurveFigure`: analytic lines (one colour per
+    quantity), engine markers at their samples (grey: samples the verdict does not
+    judge), limit/singular positions, the part of the input range no engine reached
+    shaded, and the axis clipped (and said so) when a spike would flatten the rest."""
+    d = fig_data
+    fig, ax = plt.subplots(figsize=(7.4, 3.3))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    engines: list[str] = []
+    allv = []
+    for i, c in enumerate(d.curves):
+        col = colors[i % len(colors)]
+        ax.plot(c.x, c.y, color=col, lw=1.3, label=c.label)
+        allv.append(np.asarray(c.y, float))
+        for e, (x, y, judged) in c.markers.items():
+            if e not in engines:
+                engines.append(e)
+            y = np.asarray(y, float)
+            ok = np.isfinite(y)
+            mk = engine_marker(e, engines.index(e))
+            ax.plot(np.asarray(x)[ok & judged], y[ok & judged], ls="none", color=col, **mk)
+            if (ok & ~judged).any():
+                ax.plot(np.asarray(x)[ok & ~judged], y[ok & ~judged], ls="none",
+                        color="0.6", **mk)
+            allv.append(y)
+    for k, e in enumerate(engines):
+        ax.plot([], [], ls="none", color="0.3", label=e, **engine_marker(e, k))
+    seen = set()
+    for kind, xv in d.events:
+        lab = kind if kind not in seen else None
+        seen.add(kind)
+        ax.axvline(xv, color="red" if "limit" in kind else "purple", lw=0.8, ls="--",
+                   label=lab)
+    notes = []
+    if d.feasible is not None and d.covered is not None:
+        lo, hi = d.feasible
+        ax.set_xlim(lo - 0.02 * (hi - lo), hi + 0.02 * (hi - lo))
+        for a, b in ((lo, d.covered[0]), (d.covered[1], hi)):
+            if b - a > 1e-3 * (hi - lo):
+                ax.axvspan(a, b, color="0.85", lw=0)
+        if d.covered[1] - d.covered[0] < 0.999 * (hi - lo):
+            notes.append(f"engines covered {d.covered[0]:.4g} to {d.covered[1]:.4g} of "
+                         f"{lo:.4g} to {hi:.4g} (grey: not reached)")
+    clip = _robust_ylim(np.concatenate(allv)) if allv else None
+    if clip is not None:
+        lo, hi, n, (mn, mx) = clip
+        ax.set_ylim(lo, hi)
+        notes.append(f"axis clipped: {n} values beyond it (range {mn:.3g} to {mx:.3g})")
+    if notes:
+        ax.text(0.01, 0.02, "; ".join(notes), transform=ax.transAxes, fontsize=6.5,
+                va="bottom", ha="left", bbox=dict(fc="white", ec="0.7", alpha=0.85, lw=0.5))
+    ax.set_xlabel(d.xlabel)
+    ax.set_ylabel(d.ylabel)
+    ax.set_title(d.title, fontsize=9.5)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
+              title="lines: analytic\nmarkers: engines", title_fontsize=6.5)
+    return _png(fig)
+
+
+_FAMILY_COLOURS = {"body alpha": "tab:blue", "slider s''": "tab:green",
+                   "drive effort": "tab:red", "joint forces": "tab:purple"}
+#: Errors below this are drawn at it (a log axis has no zero).
+ERROR_FLOOR = 1e-16
+
+
+def error_panels(fig_data) -> bytes:
+    """A :class:`reports.case_figures.ErrorFigure`: one panel per engine, the largest
+    normalised error of each judged family against the input (log axis), the tolerance
+    line labelled, the worst quantity named, the transmission angle (or condition
+    number) in grey on a second axis."""
+    d = fig_data
+    n = len(d.panels)
+    fig, axes = plt.subplots(1, n, figsize=(3.9 * n + 0.6, 3.1), sharey=True, squeeze=False)
+    for ax, (engine, p) in zip(axes[0], d.panels.items(), strict=True):
+        for fam, e in p["families"].items():
+            ax.semilogy(p["x"], np.maximum(np.asarray(e, float), ERROR_FLOOR), lw=1,
+                        marker=".", ms=3, color=_FAMILY_COLOURS.get(fam), label=fam)
+        ax.axhline(d.tolerance, color="red", lw=0.9, ls="--",
+                   label=f"tolerance {d.tolerance:g}")
+        q, v, at = p["worst"]
+        ax.set_title(f"{engine}: worst {q} {v:.2g} at {at:.4g}", fontsize=8.5)
+        ax.set_xlabel(d.xlabel)
+        ax.grid(alpha=0.3, which="both")
+        if p.get("twin") is not None:
+            ax2 = ax.twinx()
+            ax2.plot(p["x"], p["twin"][1], color="0.55", lw=0.8, alpha=0.8)
+            ax2.set_ylabel(p["twin"][0], color="0.45", fontsize=7)
+            ax2.tick_params(labelsize=7, colors="0.45")
+    axes[0, 0].set_ylabel("|engine - analytic| / peak (-)")
+    h, lab = axes[0, 0].get_legend_handles_labels()
+    fig.legend(h, lab, fontsize=7, loc="lower center", ncol=len(lab),
+               bbox_to_anchor=(0.5, -0.06))
+    fig.suptitle(d.title, fontsize=9.5)
+    fig.tight_layout()
+    return _png(fig)

@@ -1,0 +1,185 @@
+"""The one analytic reference of an engine run: what the verdict, the error figures and
+the case plots all read.
+
+:func:`analytic_reference` is the analytic solution at the run's own sampled inputs,
+with the driver rate and acceleration the engine was given there (branch-continued:
+:meth:`analytic.Linkage.kinematics_along`); :func:`reports.compare.analytic_at`, which
+the verdict calls, returns it.  :func:`analytic_line` is the same solution on a dense
+set of times along the same prescribed motion, passing through every sample, for the
+lines of the case plots.  :func:`sample_errors` is each judged quantity's error at each
+sample, normalised as the verdict normalises it (:func:`reports.compare.compare_run`):
+its largest value is that quantity's verdict error.
+
+Axes: a run sampled at the sweep's inputs is plotted against its sampled input values
+(``run.values``: rad or m; one turn from the reference value for a full-turn crank); a
+run sampled at equal times (a reversing or accelerating input,
+``run.by_time``) against time, s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Points of the dense analytic line per plotted span (the samples are added to them).
+LINE_POINTS = 361
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The analytic solution at a run's samples.
+
+    ``linkage`` the analytic Linkage; ``kin``/``frc`` Kinematics and Forces (``frc``
+    None without masses or comparable forces) at ``run.values`` with the run's driver
+    rates; ``judged`` (N,) the samples the verdict compares (reached, finite, loop
+    condition number at most :data:`reports.compare.MAX_CONDITION`); ``u`` (N,) the
+    plotted axis value of each sample (deg or m of input, or s for a time-sampled run).
+    """
+
+    linkage: object
+    kin: object
+    frc: object | None
+    judged: np.ndarray
+    u: np.ndarray
+
+
+def _linkage(run_, reference=None):
+    from reports.compare import _linkage_of
+    return _linkage_of(run_, reference)
+
+
+def _kinematics(lk, values, velocity, acceleration):
+    """Branch-continued kinematics at arbitrary inputs (the solver's ``kinematics_along``
+    when present; ``kinematics`` continues the branch by default otherwise)."""
+    along = getattr(lk, "kinematics_along", None)
+    if along is not None:
+        return along(values, velocity, acceleration, on_singular="flag")
+    return lk.kinematics(values, velocity, acceleration, on_singular="flag")
+
+
+def analytic_reference(run_, reference=None):
+    """``(linkage, kin, frc)``: the analytic solution at ``run_``'s sampled inputs with
+    the driver rate and acceleration the engine was given at each (the prescribed
+    motion; the description's rate where a sample has none).  ``reference``: the
+    Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
+    lk = _linkage(run_, reference)
+    mech = lk.mech
+    vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
+                   mech.driver.velocity)
+    kin = _kinematics(lk, run_.values, vel, run_.driver_acceleration)
+    frc = lk.forces(kin) if run_.has_forces and mech.has_mass else None
+    return lk, kin, frc
+
+
+def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
+    """The plotted axis of a run's samples and its label with units."""
+    if run_.by_time:
+        return np.asarray(run_.times, float), "time (s)"
+    if linkage.driver_is_revolute:
+        return np.degrees(run_.values), "input angle (deg)"
+    return np.asarray(run_.values, float), "input (m)"
+
+
+def reference_of(run_, reference=None) -> Reference:
+    """:func:`analytic_reference` with the judged samples and the plotted axis."""
+    from reports.compare import MAX_CONDITION
+    lk, kin, frc = analytic_reference(run_, reference)
+    judged = kin.condition <= MAX_CONDITION
+    if run_.ok:
+        judged &= np.all(np.isfinite(run_.alpha), axis=1)
+    u, _ = axis_of(run_, lk)
+    return Reference(lk, kin, frc, judged, u)
+
+
+def analytic_line(runs, linkage, points: int = LINE_POINTS):
+    """The analytic solution along the prescribed motion between the first and last
+    reached sample of ``runs`` (engine runs of one case on one plan), at ``points``
+    equal times plus every run's sample times: ``(u, kin, frc)`` sorted by ``u`` (the
+    plotted axis, :func:`axis_of`).  At a sample's own time the values are those of
+    :func:`analytic_reference` (same input, rate and acceleration)."""
+    mech = linkage.mech
+    d = mech.driver
+    r0 = runs[0]
+    ts = np.concatenate([np.asarray(r.times, float) for r in runs])
+    ts = ts[np.isfinite(ts)]
+    if not ts.size:
+        return None
+    t = np.linspace(ts.min(), ts.max(), points)
+    value = d.value + d.velocity * t + 0.5 * d.acceleration * t * t
+    vel = d.velocity + d.acceleration * t
+    acc = np.full_like(t, d.acceleration)
+    if r0.by_time:
+        u = t
+    else:
+        full = linkage.driver_is_revolute and np.ptp(r0.values) > math.pi
+        if full:  # the sampled turn's values: one turn from the first sample value
+            v0 = float(np.min(r0.values))
+            value = v0 + np.mod(value - v0, 2 * math.pi)
+        u = np.degrees(value) if linkage.driver_is_revolute else value
+    # the samples themselves, exactly as the reference has them
+    us, vals, vels, accs = [u], [value], [vel], [acc]
+    for r in runs:
+        ok = np.isfinite(r.times)
+        ur, _ = axis_of(r, linkage)
+        us.append(ur[ok])
+        vals.append(np.asarray(r.values, float)[ok])
+        vels.append(np.where(np.isfinite(r.driver_velocity), r.driver_velocity,
+                             d.velocity)[ok])
+        accs.append(np.asarray(r.driver_acceleration, float)[ok])
+    u, value, vel, acc = (np.concatenate(z) for z in (us, vals, vels, accs))
+    order = np.argsort(u, kind="stable")
+    u, value, vel, acc = u[order], value[order], vel[order], acc[order]
+    kin = _kinematics(linkage, value, vel, acc)
+    frc = linkage.forces(kin) if r0.has_forces and mech.has_mass else None
+    return u, kin, frc
+
+
+def family_of(quantity: str) -> str:
+    """The family a judged quantity belongs to (the error plots draw one line each)."""
+    if quantity.endswith(".alpha"):
+        return "body alpha"
+    if quantity.endswith(".a"):
+        return "slider s''"
+    if quantity == "drive.effort":
+        return "drive effort"
+    if quantity.endswith(".force"):
+        return "joint forces"
+    return quantity
+
+
+def sample_errors(run_, ref: Reference, comparisons) -> dict[str, np.ndarray]:
+    """Each judged quantity's ``|engine - analytic|`` at each sample (vector norm for a
+    force), divided by the peak the verdict divided it by (``comparisons``:
+    :func:`reports.compare.compare_run` of this run), NaN at samples the verdict does
+    not judge: the largest value of each is that quantity's verdict error.  Keys are the
+    verdict's quantity names (the engines' own ``[engine]`` readings left out)."""
+    kin, frc, keep = ref.kin, ref.frc, ref.judged
+    peaks = {c.quantity: c.peak for c in comparisons if not c.quantity.endswith("[engine]")}
+    raw: dict[str, np.ndarray] = {}
+    for b, name in enumerate(run_.body_names):
+        raw[f"{name}.alpha"] = np.abs(run_.alpha[:, b] - kin.alpha[:, b])
+    for p, name in enumerate(run_.prismatic_names):
+        raw[f"{name}.a"] = np.abs(run_.slider_acc[:, p] - kin.slider(name)[2])
+    if frc is not None:
+        raw["drive.effort"] = np.abs(run_.drive_effort - frc.effort)
+        for j, name in enumerate(run_.joint_names):
+            raw[f"{name}.force"] = np.linalg.norm(run_.joint_force[:, j]
+                                                  - frc.joint_force[name], axis=1)
+    out = {}
+    for q, peak in peaks.items():
+        if q not in raw:
+            continue
+        e = np.where(keep, raw[q], np.nan)
+        out[q] = e / peak if peak > 0 else np.where(e == 0, 0.0, np.inf)
+    return out
+
+
+def wrap_deg(d):
+    """Angles (deg) to [-180, 180)."""
+    return np.mod(np.asarray(d, float) + 180.0, 360.0) - 180.0
+
+
+__all__ = ["LINE_POINTS", "Reference", "analytic_line", "analytic_reference", "axis_of",
+           "family_of", "reference_of", "sample_errors", "wrap_deg"]

@@ -1,0 +1,131 @@
+"""A case plot can never disagree with its verdict.
+
+For every built-in case and every registered engine, the figures' own plotted arrays
+(:class:`reports.case_figures.CurveFigure`: the analytic line and the engine markers)
+are read back: at each judged marker, the distance to the analytic line at the same
+input, divided by the quantity's peak over the plotted samples, must not exceed that
+quantity's verdict error (:func:`reports.compare.compare_run`), or, for a quantity the
+verdict does not judge (angles, omegas), the run's worst verdict error, plus round-off.
+The error panels' largest value per family must equal the verdict's.  A figure drawn
+against the description's nominal-speed sweep (what ``case_figures`` drew before issue
+10) must fail the same check wherever the input speed is not constant.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from analytic import case_names, load_case
+from reports.case_figures import curve_figures, error_figure
+from reports.compare import compare_run
+from reports.reference import family_of
+from sim_models import compile_linkage
+from sim_models.engines import run
+from sim_models.registry import available_engines
+
+#: Round-off allowed on top of the verdict error: relative (the same numbers reach the
+#: plot through a second, vectorised evaluation of the same analytic solution) and
+#: absolute in units of the peak (the reference's own last digits).
+ROUND_OFF_REL = 1e-6
+ROUND_OFF_ABS = 1e-10
+#: A quantity identically zero over the cycle (a constant-speed crank's alpha, a piston's
+#: angle) is measured on the figure's largest peak, as the verdict does.
+ZERO_PEAK = 1e-9
+
+ENGINES = tuple(available_engines())
+_RUNS: dict = {}
+
+
+def runs_of(case: str):
+    """Every engine's verdict run of ``case`` and its comparisons (cached per module)."""
+    if case not in _RUNS:
+        tree = compile_linkage(load_case(case))
+        runs = {e: run(tree, e, None, revolutions=2, samples=36) for e in ENGINES}
+        comps = {e: compare_run(r, tree.linkage) for e, r in runs.items()}
+        _RUNS[case] = (tree, runs, comps)
+    return _RUNS[case]
+
+
+def plotted_excess(fig, comps: dict) -> list[str]:
+    """Markers farther from the plotted analytic line than the verdict allows."""
+    by_q = {e: {c.quantity: c for c in cs} for e, cs in comps.items()}
+    worst = {e: max(c.normalised for c in cs if not c.quantity.endswith("[engine]"))
+             for e, cs in comps.items()}
+    # the peak of each curve over the plotted judged samples, from the plot itself
+    dist, peaks = {}, {}
+    for c in fig.curves:
+        for e, (x, y, judged) in c.markers.items():
+            if e not in comps:
+                continue
+            x, y = np.asarray(x, float), np.asarray(y, float)
+            ok = judged & np.isfinite(y)
+            k = np.array([int(np.argmin(np.abs(c.x - xv))) for xv in x[ok]], int)
+            span = max(np.ptp(c.x), 1.0)
+            assert np.all(np.abs(c.x[k] - x[ok]) <= 1e-9 * span), \
+                f"{fig.title}: {c.label} {e}: a marker has no line point at its input"
+            ya = np.asarray(c.y, float)[k]
+            dist[c.label, e] = float(np.max(np.abs(y[ok] - ya))) if ok.any() else 0.0
+            peaks[c.label, e] = float(np.max(np.abs(ya))) if ok.any() else 0.0
+    out = []
+    for c in fig.curves:
+        for e in [e for e in c.markers if e in comps]:
+            top = max(v for (lab, ee), v in peaks.items() if ee == e)
+            pk = peaks[c.label, e]
+            pk = top if pk <= ZERO_PEAK * top else pk
+            rel = dist[c.label, e] / pk if pk > 0 else 0.0
+            bound = by_q[e][c.quantity].normalised if c.quantity else worst[e]
+            if not rel <= bound * (1 + ROUND_OFF_REL) + ROUND_OFF_ABS:
+                out.append(f"{fig.title}: {c.label} ({e}) plotted {rel:.3g} of peak, "
+                           f"verdict {bound:.3g}")
+    return out
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_plots_agree_with_verdict(case):
+    tree, runs, comps = runs_of(case)
+    figs = curve_figures(case, runs, tree.linkage)
+    assert {f.name for f in figs} >= {"angle", "omega", "alpha"}
+    bad = [m for f in figs for m in plotted_excess(f, comps)]
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_error_panels_are_the_verdict(case):
+    """Every judged family is drawn, and its largest plotted error is the verdict's."""
+    tree, runs, comps = runs_of(case)
+    ef = error_figure(case, runs, comps, tree.linkage, 1e-3)
+    for e, cs in comps.items():
+        judged = [c for c in cs if not c.quantity.endswith("[engine]")]
+        panel = ef.panels[e]
+        for fam in {family_of(c.quantity) for c in judged}:
+            want = max(c.normalised for c in judged if family_of(c.quantity) == fam)
+            got = float(np.nanmax(panel["families"][fam]))
+            assert math.isclose(got, want, rel_tol=1e-9, abs_tol=1e-15), (e, fam, got, want)
+        w = max(judged, key=lambda c: c.normalised)
+        assert panel["worst"][0] == w.quantity
+
+
+def nominal_line(runs, linkage):
+    """The reference case_figures drew before: the description's nominal driver speed
+    at every input (``lk.sweep(360)``), here at the plotted inputs."""
+    from reports.reference import analytic_line
+    u, kin, _ = analytic_line(runs, linkage)
+    nominal = linkage.kinematics(kin.value, on_singular="flag")
+    frc = linkage.forces(nominal) if linkage.mech.has_mass else None
+    return u, nominal, frc
+
+
+@pytest.mark.parametrize("case", [c for c in case_names()
+                                  if load_case(c).driver.acceleration != 0.0])
+def test_nominal_speed_reference_is_caught(case):
+    """Where the input accelerates, lines at the nominal speed fail the check for every
+    engine (the defect of issue 10: hibbeler-16-121's crank omega line at 3 rad/s,
+    markers at 6 to 7.5)."""
+    tree, runs, comps = runs_of(case)
+    figs = curve_figures(case, runs, tree.linkage, line=nominal_line)
+    for e in runs:
+        bad = [m for f in figs for m in plotted_excess(f, {e: comps[e]})]
+        assert bad, f"{case} / {e}: the nominal-speed figure passed the check"
