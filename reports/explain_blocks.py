@@ -38,7 +38,7 @@ class Math:
     value: str | None = None
     unit: str = ""
     check: str | None = None
-    note: str = ""
+    note: Any = ""   # a string, or parts as in Para
 
 
 @dataclass

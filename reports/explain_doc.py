@@ -13,6 +13,8 @@ import math
 import tomllib
 from pathlib import Path
 
+import sympy as sp
+
 from analytic import Linkage
 from analytic.mechanism import Revolute
 from analytic.toml_io import LENGTH_UNITS
@@ -73,8 +75,8 @@ def _problem(ctx, rev: bool) -> list:
                f"ω = {kin.velocity[0]:.6g} rad/s, α = {kin.acceleration[0]:.6g} rad/s²")
     else:
         inp = (f"input slider {d.joint}: s = {kin.value[0] / ctx.L:.6g} {unit}, "
-               f"ṡ = {kin.velocity[0] / ctx.L:.6g} {unit}/s, "
-               f"s̈ = {kin.acceleration[0] / ctx.L:.6g} {unit}/s²")
+               f"velocity {kin.velocity[0] / ctx.L:.6g} {unit}/s, "
+               f"acceleration {kin.acceleration[0] / ctx.L:.6g} {unit}/s²")
     src = f" (file {mech.source})" if mech.source else ""
     return [
         Heading(2, "The problem"),
@@ -118,5 +120,6 @@ def _results(ctx) -> list:
     if srows:
         out.append(Table("sliders", "Sliders: displacement s along the line from its origin "
                          "point, its velocity and acceleration, in the file's unit and in SI",
-                         ["joint", "s", "ṡ", "s̈"], srows))
+                         ["joint", sp.Symbol("s"), sp.Symbol("sdot"), sp.Symbol("sddot")],
+                         srows))
     return out

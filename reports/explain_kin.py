@@ -33,6 +33,14 @@ from .explain_terms import (
 )
 
 RR, TH = sp.Symbol("r"), sp.Symbol("theta")
+MATRIX_V = sp.Eq(sp.Mul(sp.Symbol("J"), sp.Symbol("qdot"), evaluate=False), 0, evaluate=False)
+MATRIX_A = sp.Eq(sp.Mul(sp.Symbol("J"), sp.Symbol("qddot"), evaluate=False),
+                 S.Neg(sp.Symbol("gamma")), evaluate=False)
+DMU = sp.Eq(S.DDt(S.MU(TH)), S.prod(sp.Symbol("thetadot"), S.SIGMA(TH)), evaluate=False)
+DSIGMA = sp.Eq(S.DDt(S.SIGMA(TH)), S.Neg(S.prod(sp.Symbol("thetadot"), S.MU(TH))),
+               evaluate=False)
+CORI1 = S.prod(sp.Symbol("rdot"), sp.Symbol("thetadot"), sp.Symbol("sigma"))
+CORI2 = S.prod(2, sp.Symbol("rdot"), sp.Symbol("thetadot"), S.SIGMA(TH))
 RDOT, THDOT = sp.Symbol("rdot"), sp.Symbol("thetadot")
 RDDOT, THDDOT = sp.Symbol("rddot"), sp.Symbol("thetaddot")
 
@@ -215,8 +223,8 @@ def _mark(ctx, loop, v, which) -> str:
 def velocity_equation(ctx: Ctx, loop: Loop) -> tuple[list, list]:
     terms = velocity_terms(loop, ctx.ng)
     out = [Heading(3, "Velocity equation"),
-           Para(["Differentiate each vector with d μ(θ)/dt = θ̇ σ(θ); a constant (S) "
-                 "factor has no derivative:"])]
+           Para(["Differentiate each vector with ", DMU, "; a constant (S) factor has no "
+                 "derivative:"])]
     for v in loop.vectors:
         mine = [t for t in terms if t.angle == v.label]
         rhs = S.signed_sum([(t.sign, term_sym(t)) for t in mine]) if mine else sp.Integer(0)
@@ -285,8 +293,8 @@ def velocity_section(ctx: Ctx, loop: Loop, n: int) -> list:
                      "the loops before)."]))
     out += _solve_for(ctx, loop, terms, numbers(ctx, loop), "velocity")
     nn = numbers(ctx, loop)
-    out.append(Table(f"velocity-{n}", f"Velocity table, loop {n} (ṙ in {ctx.unit}/s, "
-                     "θ̇ in rad/s)", ["", "unit"] + _cols(loop),
+    out.append(Table(f"velocity-{n}", f"Velocity table, loop {n} (rates of lengths in "
+                     f"{ctx.unit}/s, of angles in rad/s)", ["", "unit"] + _cols(loop),
                      [[RDOT, f"{ctx.unit}/s"] + [S.fmt(nn.rdot[v.label]) for v in loop.vectors],
                       [THDOT, "rad/s"] + [_rate_cell(loop, v, nn.w, ctx, "w")
                                        for v in loop.vectors]]))
@@ -312,20 +320,20 @@ def acceleration_section(ctx: Ctx, loop: Loop, n: int) -> list:
     aterms = acceleration_terms(loop, ctx.ng, ctx.const_rate)
     out = [Heading(3, "Acceleration equation"),
            Para(["Differentiate each velocity term by the product rule; a factor marked "
-                 "S or S* in the second table has no derivative, dσ(θ)/dt = −θ̇ μ(θ):"])]
+                 "S or S* in the second table has no derivative, ", DSIGMA, ":"])]
     for t in vterms:
         out.append(Math([S.DDt(term_sym(t)), _derivative(ctx, loop, t)],
                         note=_why(ctx, loop, t)))
     if any(f[0] == "two" for t in aterms for f in t.factors):
         out.append(Para(["Where a vector changes both its length and its angle (a slider on "
-                         "a turning guide), the two ṙ θ̇ σ terms add up to the Coriolis term "
-                         "2 ṙ θ̇ σ(θ)."]))
+                         "a turning guide), the two ", CORI1, " terms add up to the Coriolis term ",
+                         CORI2, "."]))
     out.append(Para(["The acceleration equation:"]))
     out.append(Math([equation_sym(aterms), sp.Integer(0)]))
     out += _solve_for(ctx, loop, aterms, numbers(ctx, loop), "acceleration")
     nn = numbers(ctx, loop)
-    out.append(Table(f"acceleration-{n}", f"Acceleration table, loop {n} (r̈ in "
-                     f"{ctx.unit}/s², θ̈ in rad/s²)", ["", "unit"] + _cols(loop),
+    out.append(Table(f"acceleration-{n}", f"Acceleration table, loop {n} ("
+                     f"lengths in {ctx.unit}/s², angles in rad/s²)", ["", "unit"] + _cols(loop),
                      [[RDDOT, f"{ctx.unit}/s²"] + [S.fmt(nn.rddot[v.label])
                                                 for v in loop.vectors],
                       [THDDOT, "rad/s²"] + [_rate_cell(loop, v, nn.al, ctx, "al")
@@ -354,13 +362,14 @@ def _derivative(ctx, loop, t):
     return S.signed_sum(parts) if parts else sp.Integer(0)
 
 
-def _why(ctx, loop, t) -> str:
+def _why(ctx, loop, t) -> list:
     v = next(u for u in loop.vectors if u.label == t.angle)
     if t.unit == "mu":
-        return (f"ṙ{v.label} {_mark(ctx, loop, v, 'r')}, "
-                f"μ(θ{v.label}) {'D' if v.var_angle else 'S'}")
-    return (f"r{v.label} {'D' if v.var_length else 'S'}, "
-            f"θ̇{loop.rate_label[v.group]} {_mark(ctx, loop, v, 't')}, σ(θ{v.label}) D")
+        return [S.r(v.label, 1), f" {_mark(ctx, loop, v, 'r')}, ", S.MU(S.th(v.label)),
+                f" {'D' if v.var_angle else 'S'}"]
+    return [S.r(v.label), f" {'D' if v.var_length else 'S'}, ",
+            S.th(loop.rate_label[v.group], 1), f" {_mark(ctx, loop, v, 't')}, ",
+            S.SIGMA(S.th(v.label)), " D"]
 
 
 def matrix_section(ctx: Ctx, loop: Loop, n: int) -> list:
@@ -383,9 +392,10 @@ def matrix_section(ctx: Ctx, loop: Loop, n: int) -> list:
                              (nm[2], ctx.qdd[u.q] * sc, kin.qdd[0, u.q] * sc, unit_a)):
             rows.append([q_, un, S.fmt(h), S.fmt(m), f"{abs(h - m):.2g}"])
     return [Heading(3, "Hand method beside the matrix method"),
-            Para(["The solver writes all loops at once as J q̇ = 0 and J q̈ = −γ(q, q̇) "
-                  "(J the loop Jacobian) and solves the linear systems; its values beside "
-                  "the hand method's:"]),
+            Para(["The solver writes all loops at once as ", MATRIX_V, " and ", MATRIX_A,
+                  " (J the loop Jacobian, q the unknown angles and lengths, γ the velocity-"
+                  "product terms) and solves the "
+                  "linear systems; its values beside the hand method's:"]),
             Table(f"matrix-{n}", f"Loop {n}: hand method and matrix method",
                   ["quantity", "unit", "hand method", "matrix method", "|difference|"], rows)]
 

@@ -73,12 +73,13 @@ def _slider_crank(ctx) -> list:
                  f"({S.fmt(exact_t3 - 360)}°) rounded; the notes then use 345.5°. "
                  "ω3 = −89.45 rad/s is the notes' closed form with θ3 = 345.5°:"]),
            _calc(w3, "rad/s", f"exact {S.fmt(ctx.qd[1])} rad/s"),
-           Para(["ṙ4: the notes print −1447.93 cm/s; their closed form with θ3 = 345.5°:"]),
+           Para([S.r("4", 1), ": the notes print −1447.93 cm/s; their closed form with "
+                 "θ3 = 345.5°:"]),
            _calc(v4, "cm/s", f"exact {S.fmt(ctx.qd[2] / ctx.L)} cm/s"),
            Para(["α3 = 8259 rad/s² (8259.7 cut to four figures): the closed form with "
                  "θ3 = 345.5° and ω3 = −89.45 rad/s:"]),
            _calc(a3, "rad/s^2", f"exact {S.fmt(ctx.qdd[1])} rad/s²"),
-           Para(["r̈4 = −459977.6 cm/s² ≈ −4600 m/s²: the same rounded inputs:"]),
+           Para([S.r("4", 2), " = −459977.6 cm/s² ≈ −4600 m/s²: the same rounded inputs:"]),
            _calc(a4, "cm/s^2", f"exact {S.fmt(ctx.qdd[2] / ctx.L)} cm/s²")]
     if "effort" in ctx.extra:
         f = ctx.extra["forces"]
@@ -118,7 +119,7 @@ def _four_bar(ctx) -> list:
     sw4 = S.prod(S.num(5471.96), S.Frac(sp.pi, 180))
     return [Heading(2, "Where the notes' figures come from"),
             Para(["The notes (machine dynamics, week 6) print θ3 = 29.38°, θ4 = 290.75°, "
-                  "θ̇3 = −3.916, θ̇4 = 3.091 rad/s: the exact values above rounded. Their "
+                  "ω3 = −3.916, ω4 = 3.091 rad/s: the exact values above rounded. Their "
                   "acceleration formulas with those rounded inputs give their α3 = 42.27 and "
                   "α4 = 95.5 rad/s²:"]),
             _calc(a3, "rad/s^2", f"exact {S.fmt(ctx.qdd[1])} rad/s²"),

@@ -21,6 +21,25 @@ from . import explain_sym as S
 from .explain_blocks import Document, Figure, Heading, Math, Para, Table
 
 
+def _parts(parts, math, text) -> str:
+    """Running text: strings through ``text``, expressions through ``math``."""
+    if isinstance(parts, str):
+        parts = [parts]
+    return "".join(text(p) if isinstance(p, str) else math(p) for p in parts)
+
+
+def _md_parts(parts) -> str:
+    return _parts(parts, lambda e: f"${S.latex(e)}$", lambda s: s)
+
+
+def _html_parts(parts) -> str:
+    return _parts(parts, _ml, _html.escape)
+
+
+def _tex_parts(parts) -> str:
+    return _parts(parts, lambda e: f"${S.latex(e)}$", _tex_text)
+
+
 def _calc(b: Math) -> str:
     return f"calc: {b.check} = {b.value}"
 
@@ -53,12 +72,11 @@ def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain"
         if isinstance(b, Heading):
             out += ["#" * b.level + " " + b.text, ""]
         elif isinstance(b, Para):
-            out += ["".join(p if isinstance(p, str) else f"${S.latex(p)}$" for p in b.parts),
-                    ""]
+            out += [_md_parts(b.parts), ""]
         elif isinstance(b, Math):
             out += ["$$", _chain_tex(b), "$$", ""]
             if b.note:
-                out += [f"*{b.note}*", ""]
+                out += [f"*{_md_parts(b.note)}*", ""]
             if b.check is not None:
                 out += [f"`{_calc(b)}`", ""]
         elif isinstance(b, Table):
@@ -86,11 +104,11 @@ _CSS = """
 body { font-family: Georgia, 'DejaVu Serif', serif; max-width: 1100px; margin: 2em auto;
        padding: 0 1em; color: #222; line-height: 1.45; }
 h1 { font-size: 1.6em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
-math[display=block] { display: block; margin: 0.6em 0; overflow-x: auto; font-size: 1.1em; }
-.eq { overflow-x: auto; }
+math[display=block] { display: block; margin: 0.6em 0; font-size: 1.1em; }
+.eq { overflow-x: auto; overflow-y: hidden; padding: 0.2em 0; }
+p.caption { font-style: italic; margin: 1em 0 0.2em; }
 table { border-collapse: collapse; margin: 0.5em 0 1em; }
 td, th { border: 1px solid #bbb; padding: 0.25em 0.7em; text-align: right; }
-caption { caption-side: top; text-align: left; font-style: italic; padding: 0.3em 0; }
 code.calc { display: block; color: #555; font-size: 0.85em; margin: -0.2em 0 0.8em 1em; }
 .note { color: #555; font-style: italic; margin: -0.3em 0 0.6em 1em; }
 figure { margin: 1em 0; } figcaption { font-style: italic; color: #444; }
@@ -111,9 +129,16 @@ def _chain_ml(b: Math) -> str:
                                          f"{_html.escape(b.unit.replace('^2', '²'))}</mtext>"
                                          if b.unit else "")
         items.append(f"<mrow><mn>{b.value}</mn>{unit}</mrow>")
-    body = "<mo>=</mo>".join(items)
-    return (f'<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">'
-            f"<mrow>{body}</mrow></math>")
+    head = '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">'
+    if len(items) <= 2:
+        return f"{head}<mrow>{'<mo>=</mo>'.join(items)}</mrow></math>"
+    # a chain: one '=' per row, aligned as LaTeX's aligned
+    items = [f'<mrow displaystyle="true">{it}</mrow>' for it in items]
+    rows = [f"<mtr><mtd style='text-align: right'>{items[0]}</mtd><mtd><mo>=</mo></mtd>"
+            f"<mtd style='text-align: left'>{items[1]}</mtd></mtr>"]
+    rows += [f"<mtr><mtd></mtd><mtd><mo>=</mo></mtd><mtd style='text-align: left'>{it}</mtd>"
+             "</mtr>" for it in items[2:]]
+    return f"{head}<mtable>{''.join(rows)}</mtable></math>"
 
 
 def to_html(doc: Document) -> str:
@@ -124,16 +149,16 @@ def to_html(doc: Document) -> str:
         if isinstance(b, Heading):
             out.append(f"<h{b.level}>{_html.escape(b.text)}</h{b.level}>")
         elif isinstance(b, Para):
-            out.append("<p>" + "".join(_ml(p) for p in b.parts) + "</p>")
+            out.append("<p>" + _html_parts(b.parts) + "</p>")
         elif isinstance(b, Math):
             out.append(f'<div class="eq">{_chain_ml(b)}</div>')
             if b.note:
-                out.append(f'<p class="note">{_html.escape(b.note)}</p>')
+                out.append(f'<p class="note">{_html_parts(b.note)}</p>')
             if b.check is not None:
                 out.append(f'<code class="calc">{_html.escape(_calc(b))}</code>')
         elif isinstance(b, Table):
-            out.append(f'<table id="{b.key}"><caption>Table {b.key}: '
-                       f"{_html.escape(b.caption)}</caption><tr>"
+            out.append(f'<p class="caption">Table {b.key}: {_html.escape(b.caption)}</p>'
+                       f'<table id="{b.key}"><tr>'
                        + "".join(f"<th>{_ml(c)}</th>" for c in b.header) + "</tr>")
             for row in b.rows:
                 out.append("<tr>" + "".join(f"<td>{_ml(c)}</td>" for c in row) + "</tr>")
@@ -180,12 +205,11 @@ def to_latex(doc: Document) -> str:
             out.append({2: r"\subsection*{%s}", 3: r"\subsubsection*{%s}"}.get(
                 b.level, r"\paragraph{%s}") % _tex_text(b.text))
         elif isinstance(b, Para):
-            out.append("".join(_tex_text(p) if isinstance(p, str) else f"${S.latex(p)}$"
-                               for p in b.parts) + "\n")
+            out.append(_tex_parts(b.parts) + "\n")
         elif isinstance(b, Math):
             out.append(r"\[" + _chain_tex(b) + r"\]")
             if b.note:
-                out.append(r"{\small\itshape " + _tex_text(b.note) + "}\n")
+                out.append(r"{\small\itshape " + _tex_parts(b.note) + "}\n")
             if b.check is not None:
                 out.append(r"{\footnotesize\texttt{" + _tex_text(_calc(b)) + "}}\n")
         elif isinstance(b, Table):

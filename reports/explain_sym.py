@@ -245,12 +245,12 @@ class Brace(Node):
         return p._print(self.args[0])
 
     def _mathml_presentation(self, p):
-        inner = p.dom.createElement("munder")
-        inner.setAttribute("accentunder", "true")
-        inner.appendChild(_mrow(p, p._print(self.args[0])))
-        inner.appendChild(_mo(p, "\u23df"))
+        # a rule under the term (a CSS border: a stretched brace needs a MATH font,
+        # which an offline page cannot count on), the label in script size below it
+        body = _mrow(p, p._print(self.args[0]))
+        body.setAttribute("style", "border-bottom: 1px solid #777; padding-bottom: 1px")
         outer = p.dom.createElement("munder")
-        outer.appendChild(inner)
+        outer.appendChild(body)
         outer.appendChild(p._print(self.args[1]))
         return outer
 
@@ -419,8 +419,9 @@ class NotesMathML(MathMLPresentationPrinter):
         base = _GREEK.get(base, base)
         x = _mi(self, base)
         if dots:
+            # no accent="true": without an OpenType MATH font Chromium then sinks the
+            # dot into the letter; as a plain over-script it sits visibly above
             over = self.dom.createElement("mover")
-            over.setAttribute("accent", "true")
             over.appendChild(x)
             over.appendChild(_mo(self, dots))
             x = over
