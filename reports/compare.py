@@ -120,13 +120,8 @@ def analytic_at(run_, reference=None):
     """The analytic kinematics (and forces, when the case has masses) at a run's samples,
     with the driver rates the engine was given: ``(linkage, kin, frc)``.  ``reference``:
     the Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
-    lk = _linkage_of(run_, reference)
-    mech = lk.mech
-    vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
-                   mech.driver.velocity)
-    kin = lk.kinematics(run_.values, vel, run_.driver_acceleration, on_singular="flag")
-    frc = lk.forces(kin) if run_.has_forces and mech.has_mass else None
-    return lk, kin, frc
+    from reports.reference import analytic_reference  # the one reference: figures read it too
+    return analytic_reference(run_, reference)
 
 
 #: A reference quantity whose peak is below this fraction of the mechanism's scale for
