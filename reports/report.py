@@ -22,6 +22,7 @@ import html
 import math
 import os
 import platform
+import re
 import time
 import traceback
 from concurrent.futures import Executor, ProcessPoolExecutor
@@ -355,6 +356,24 @@ def _align(x, xe, ye):
 
 
 # ----------------------------------------------------------------------------- rendering
+_MD_SPECIAL = re.compile(r"([\\`*_\[\]<>|#~!&])")
+_MD_LINE_START = re.compile(r"^(\s*|\s*\d+)([-+=]|(?<=\d)[.)])")
+
+
+def md_escape(text, block: bool = False) -> str:
+    """Text as literal Markdown, as ``html.escape`` makes it literal HTML: the
+    characters that start emphasis, code, links, tags, entities or table cells are
+    backslash-escaped, and newlines (which would end a table row) become spaces.
+    For a paragraph (``block``), a line-start list marker is escaped too."""
+    s = _MD_SPECIAL.sub(r"\\\1", str(text).replace("\r", " ").replace("\n", " "))
+    return _MD_LINE_START.sub(lambda m: m.group(1) + "\\" + m.group(2), s) if block else s
+
+
+def file_stem(name: str) -> str:
+    """A file-name-safe stem for ``name`` (a case may be a path such as sub/f.toml)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._") or "x"
+
+
 class Document:
     """Collects sections; renders self-contained HTML and Markdown with PNG files."""
 
@@ -383,7 +402,7 @@ class Document:
 
     def image(self, png: bytes, name: str, caption: str = ""):
         (self.out / "img").mkdir(exist_ok=True)
-        (self.out / "img" / f"{name}.png").write_bytes(png)
+        (self.out / "img" / f"{file_stem(name)}.png").write_bytes(png)
         self.parts.append(("img", (png, name, caption)))
 
     @staticmethod
@@ -435,22 +454,22 @@ class Document:
         for kind, data in self.parts:
             if kind == "h":
                 lv, text = data
-                out += ["#" * (lv + 1) + " " + text, ""]
+                out += ["#" * (lv + 1) + " " + md_escape(text), ""]
             elif kind == "p":
-                out += [data, ""]
+                out += [md_escape(data, block=True), ""]
             elif kind == "table":
                 df, name, cap, digits = data
                 if cap:
-                    out += [f"*{cap}*", ""]
-                out.append("| " + " | ".join(str(c) for c in df.columns) + " |")
+                    out += [f"*{md_escape(cap)}*", ""]
+                out.append("| " + " | ".join(md_escape(c) for c in df.columns) + " |")
                 out.append("|" + "---|" * len(df.columns))
                 for _, row in df.iterrows():
-                    out.append("| " + " | ".join(self._fmt(v, digits).replace("|", "/")
+                    out.append("| " + " | ".join(md_escape(self._fmt(v, digits))
                                                  for v in row) + " |")
-                out += ["", f"([{name}.csv]({name}.csv))", ""]
+                out += ["", f"([{md_escape(name)}.csv]({name}.csv))", ""]
             elif kind == "img":
                 _, name, cap = data
-                out += [f"![{cap}](img/{name}.png)", ""]
+                out += [f"![{md_escape(cap)}](img/{file_stem(name)}.png)", ""]
         return "\n".join(out)
 
 

@@ -392,3 +392,39 @@ def test_one_line_error_through_the_console_script(tmp_path):
     r = _xval(f"xval solve {p}")
     assert r.stderr.count("\n") == 1 and "UTF-16" in r.stderr
     assert r.stdout.strip() == "rc=2"
+
+
+# ----------------------------------------------------------------------------- report names
+NASTY = "a|b*c_d<e>[f](g)`h`#1. &amp; ~i~ \\j"
+
+
+def test_report_markdown_shows_names_literally(tmp_path):
+    """A case name with Markdown's special characters renders as itself in report.md,
+    as it does in index.html (rendered here by CommonMark with tables)."""
+    import html as _html
+
+    import pandas as pd
+    from markdown_it import MarkdownIt
+
+    from reports.report import Document
+    doc = Document(tmp_path)
+    doc.h(2, NASTY)
+    doc.p(NASTY)
+    doc.p("1. not a list: " + NASTY)
+    doc.table(pd.DataFrame({"case": [NASTY], "x": [1.5]}), "t", caption=NASTY)
+    rendered = MarkdownIt("commonmark").enable("table").render(doc.markdown("t"))
+    literal = _html.escape(NASTY, quote=False)
+    assert f"<h3>{literal}</h3>" in rendered
+    assert f"<p>{literal}</p>" in rendered and "<ol" not in rendered
+    assert f"<td>{literal}</td>" in rendered and "<td>1.5</td>" in rendered
+    assert f"<em>{literal}</em>" in rendered  # the caption, in italics as before
+
+
+def test_report_image_of_a_case_given_as_a_path(tmp_path):
+    """--cases sub/f.toml: the case's figures are written under a file-safe name."""
+    from reports.report import Document
+    doc = Document(tmp_path)
+    doc.image(b"\x89PNG", "sub/f.toml-angle", "sub/f.toml: angle")
+    md = doc.markdown("t")
+    rel = next(line for line in md.splitlines() if line.startswith("![")).split("](")[1][:-1]
+    assert (tmp_path / rel).is_file() and "/" not in rel[len("img/"):]
