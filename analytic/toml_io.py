@@ -295,3 +295,60 @@ def load_mechanism(path: str | Path) -> Mechanism:
     except tomllib.TOMLDecodeError as e:
         raise DescriptionError(f"malformed TOML: {e}", str(path)) from None
     return mechanism_from_dict(doc, str(path))
+
+
+def mechanism_to_toml(mech: Mechanism) -> str:
+    """The TOML text of a description (SI lengths, degrees), readable by
+    :func:`load_mechanism`; floats are written with ``repr`` so lengths, masses and
+    rates read back exactly (angles to the rounding of the degree conversion)."""
+    def f(x: float) -> str:
+        return repr(float(x))
+
+    def pair(v) -> str:
+        return f"[{f(v[0])}, {f(v[1])}]"
+
+    def q(s: str) -> str:
+        return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+    deg = math.degrees
+    out = [f"name = {q(mech.name)}", f"ground = {q(mech.ground)}",
+           f"gravity = {pair(mech.gravity)}"]
+    if mech.loops is not None:
+        out.append("loops = [" + ", ".join("[" + ", ".join(q(n) for n in lp) + "]"
+                                           for lp in mech.loops) + "]")
+    out += ["", "[units]", 'length = "m"']
+    for b in mech.bodies:
+        out += ["", f"[bodies.{q(b.name)}]",
+                "points = { " + ", ".join(f"{q(k)} = {pair(v)}" for k, v in b.points.items())
+                + " }"]
+        if b.mass is not None:
+            out += [f"mass = {f(b.mass)}", f"com = {pair(b.com)}", f"inertia = {f(b.inertia)}"]
+    for j in mech.joints:
+        out += ["", "[[joints]]", f"name = {q(j.name)}"]
+        if isinstance(j, Revolute):
+            out += ['type = "revolute"', f"bodies = [{q(j.body_a)}, {q(j.body_b)}]",
+                    f"points = [{q(j.point_a)}, {q(j.point_b)}]"]
+        else:
+            out += ['type = "prismatic"', f"guide = {q(j.guide)}", f"origin = {q(j.origin)}",
+                    f"direction = {f(deg(j.direction))}", f"slider = {q(j.slider)}",
+                    f"point = {q(j.point)}", f"angle = {f(deg(j.angle))}"]
+    d = mech.driver
+    rev = isinstance(mech.joint(d.joint), Revolute)
+    out += ["", "[driver]", f"joint = {q(d.joint)}",
+            f"value = {f(deg(d.value) if rev else d.value)}",
+            f"velocity = {f(d.velocity)}", f"acceleration = {f(d.acceleration)}"]
+    for ld in mech.loads:
+        out += ["", "[[loads]]", f"body = {q(ld.body)}"]
+        if ld.point is not None:
+            out.append(f"point = {q(ld.point)}")
+        out += [f"force = {pair(ld.force)}", f"torque = {f(ld.torque)}"]
+    a = mech.assembly
+    if a.points or a.angles:
+        out += ["", "[assembly]"]
+        if a.points:
+            out.append("points = { " + ", ".join(f"{q(k)} = {pair(v)}"
+                                                  for k, v in a.points.items()) + " }")
+        if a.angles:
+            out.append("angles = { " + ", ".join(f"{q(k)} = {f(deg(v))}"
+                                                  for k, v in a.angles.items()) + " }")
+    return "\n".join(out) + "\n"

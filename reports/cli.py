@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import json
 import math
 import os
@@ -270,14 +271,16 @@ def _register_more(sub) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from analytic.perf import tune_allocator
-    tune_allocator()  # large temporaries recycled, not re-mapped (see analytic/perf.py)
+    _setup_once()
     try:
-        args = build_parser().parse_args(argv)
+        args = _parser().parse_args(argv)
         args.stdout = sys.stdout
         # with the table on standard output, the summary goes to standard error
         to_err = getattr(args, "csv", None) == "-"
-        with contextlib.redirect_stdout(sys.stderr) if to_err else contextlib.nullcontext():
+        # numpy's floating-point warnings are not messages for a user: a non-finite
+        # result is caught where it is written (JSON refuses NaN) or by the solver's checks
+        with contextlib.redirect_stdout(sys.stderr) if to_err else contextlib.nullcontext(), \
+                np.errstate(all="ignore"):
             code = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the handler
         return code
@@ -287,6 +290,19 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader stopped reading (| head): end quietly
         _stdout_to_devnull()
         return 141
+
+
+@functools.cache
+def _setup_once() -> None:
+    """Once per process (``main`` may run many times in one, as in the tests)."""
+    from analytic.perf import tune_allocator
+    tune_allocator()  # large temporaries recycled, not re-mapped (see analytic/perf.py)
+
+
+@functools.cache
+def _parser() -> argparse.ArgumentParser:
+    """The parser, built once (parsing leaves no state in it)."""
+    return build_parser()
 
 
 def _stdout_to_devnull() -> None:
