@@ -54,13 +54,13 @@ def explain(mech, value: float | None = None) -> Document:
     doc.add(*_problem(ctx, rev))
     for n, loop in enumerate(polys.loops, start=1):
         if loop.unknowns:
-            doc.add(*loop_sections(ctx, loop, n))
+            doc.add(*S.build_checked(loop_sections, ctx, loop, n))
         else:
             doc.add(*coupled_section(ctx, loop, n))
     doc.add(*_results(ctx))
     if mech.has_mass:
         from .explain_forces import force_sections
-        doc.add(*force_sections(ctx))
+        doc.add(*S.build_checked(force_sections, ctx))
     from .explain_notes import notes_sections
     doc.add(*notes_sections(ctx))
     return doc

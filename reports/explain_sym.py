@@ -22,6 +22,8 @@ printed under each substituted equation.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 
 import sympy as sp
@@ -53,10 +55,26 @@ def name(base: str, sub: str) -> sp.Symbol:
 
 # -- numbers ------------------------------------------------------------------
 
-def num(v: float, sig: int = 9):
+_SIG: contextvars.ContextVar[int] = contextvars.ContextVar("explain_digits", default=9)
+DIGITS_TRIED = (9, 12, 15, 17)
+"""Significant digits of the numbers in a substituted expression: 9 unless the
+expression is ill-conditioned there (near a limit position, or a small result of
+large terms) and needs more to evaluate to the 6-figure value printed beside it."""
+
+
+@contextlib.contextmanager
+def digits(n: int):
+    token = _SIG.set(n)
+    try:
+        yield
+    finally:
+        _SIG.reset(token)
+
+
+def num(v: float, sig: int | None = None):
     """A number as printed in a substituted expression: integers stay integers,
-    others carry ``sig`` significant digits (enough that the expression evaluates
-    to the 6-figure value printed beside it)."""
+    others carry ``sig`` significant digits (default: the current :func:`digits`)."""
+    sig = sig or _SIG.get()
     v = float(v)
     s = f"{v:.{sig}g}"
     if float(s) == round(float(s)) and abs(v) < 1e9:
@@ -74,13 +92,33 @@ def fmt(v: float, sig: int = 6) -> str:
         return str(v)
     if v == 0 or abs(v) < 1e-9:
         return "0"
-    s = f"{v:.{sig}g}"
-    if "e" in s:
-        m, e = s.split("e")
-        e = int(e)
-        if -7 < e < 12:
-            s = f"{v:.{max(0, sig - 1 - e)}f}"
-    return s
+    return f"{v:.{sig}g}"
+
+
+def ulp_half(printed: str) -> float:
+    """Half a unit in the last digit of a number printed by :func:`fmt`."""
+    mant, _, exp = printed.partition("e")
+    dec = len(mant.split(".")[1]) if "." in mant else 0
+    return 0.5 * 10.0 ** (int(exp or 0) - dec)
+
+
+def reproduces(check: str, printed: str, rel: float = 1e-9) -> bool:
+    """Does the plain-text expression ``check`` evaluate to ``printed`` (to half a unit
+    of its last digit)?"""
+    v = float(sp.N(sp.parse_expr(check, local_dict=dict(CHECK_FUNCTIONS)), 30))
+    return abs(v - float(printed)) <= ulp_half(printed) + rel * abs(v)
+
+
+def build_checked(build, *args):
+    """``build(*args)`` -> blocks, rebuilt with more digits until every 'calc:' line in
+    them evaluates to the value printed beside it (see :data:`DIGITS_TRIED`)."""
+    for n in DIGITS_TRIED:
+        with digits(n):
+            blocks = build(*args)
+        if all(reproduces(b.check, b.value) for b in blocks
+               if getattr(b, "check", None) is not None and b.value is not None):
+            break
+    return blocks
 
 
 # -- printing nodes -----------------------------------------------------------

@@ -51,15 +51,15 @@ def table(md: str, key: str) -> dict[str, list[str]]:
     return rows
 
 
-def first_number(cell: str) -> float:
-    return float(re.match(r"\s*(?:N = |M = )?(-?[0-9.]+(?:e-?\d+)?)", cell).group(1))
+NUMBER = r"-?[0-9.]+(?:e[-+]?\d+)?"
 
 
 def ulp_half(text: str) -> float:
-    """Half a unit in the last printed digit of a number as printed."""
-    mant = text.split("e")[0]
+    """Half a unit in the last printed digit of a number as printed (6 figures, in
+    exponent form outside 1e-4..1e6)."""
+    mant, _, exp = text.partition("e")
     dec = len(mant.split(".")[1]) if "." in mant else 0
-    return 0.5 * 10.0 ** -dec
+    return 0.5 * 10.0 ** (int(exp or 0) - dec)
 
 
 def near(printed: str, exact: float) -> bool:
@@ -67,7 +67,7 @@ def near(printed: str, exact: float) -> bool:
 
 
 def cell_near(cell: str, exact: float) -> bool:
-    m = re.match(r"\s*(?:N = |M = )?(-?[0-9.]+)", cell)
+    m = re.match(rf"\s*(?:N = |M = )?({NUMBER})", cell)
     return near(m.group(1), exact)
 
 
@@ -170,7 +170,7 @@ def test_s1_says_where_the_notes_rounded_figures_come_from(s1_md):
     """28.0 cm, -89.45 rad/s and 8259 rad/s^2: the notes' formulas with their rounded
     inputs (17.32 for 2*10*cos 30, theta3 = 345.5, omega3 = -89.45)."""
     sec = s1_md[s1_md.index("## Where the notes' figures come from"):]
-    calcs = dict(re.findall(r"`calc: (.*) = (-?[0-9.e]+)`", sec))
+    calcs = dict(re.findall(rf"`calc: (.*) = ({NUMBER})`", sec))
     values = {float(v) for v in calcs.values()}
     d = math.radians
     ac = (17.32 + math.sqrt(17.32 ** 2 + 1200)) / 2
@@ -221,7 +221,7 @@ def test_s2_forces_and_power_balance(s1_md):
     assert float(f["slide"][3]) == pytest.approx(363.3, abs=0.05)
     t = float(re.search(r"T = (-?[0-9.]+)\\ \\mathrm\{N m\}", s1_md).group(1))
     assert t == pytest.approx(476.56, abs=0.005)
-    calc = re.findall(r"`calc: (.*) = (-?[0-9.e]+)`", s1_md[s1_md.index("power balance"):])
+    calc = re.findall(rf"`calc: (.*) = ({NUMBER})`", s1_md[s1_md.index("power balance"):])
     p = float(calc[0][1])
     assert p == pytest.approx(t * 200, rel=1e-5)         # the balance equals T omega
     assert p == pytest.approx(95310, abs=10)
@@ -239,7 +239,7 @@ DEGREE_FUNCTIONS = {"cosd": sp.Lambda(_x, sp.cos(sp.pi * _x / 180)),
 
 
 def check_calc_lines(md: str) -> int:
-    lines = re.findall(r"`calc: (.*) = (-?[0-9.]+(?:e[-+]?\d+)?)`", md)
+    lines = re.findall(rf"`calc: (.*) = ({NUMBER})`", md)
     for expr, printed in lines:
         v = float(sp.N(sp.parse_expr(expr, local_dict=dict(DEGREE_FUNCTIONS)), 30))
         tol = ulp_half(printed) + INPUT_ROUNDING * abs(v)
@@ -254,6 +254,40 @@ def test_every_substituted_expression_evaluates_to_its_printed_value(capsys, cas
     assert n >= 4        # at least the velocity and acceleration eliminations
     assert re.search(r"\bnan\b|\binf\b", md, re.IGNORECASE) is None
     assert "Traceback" not in md
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_calc_lines_over_the_cycle(case):
+    """Four inputs over the cycle (or the feasible range, up to its ends, where the
+    expressions are ill-conditioned and need more digits)."""
+    from analytic import Linkage, load_case
+    from analytic.sweep import input_values
+    from reports.explain_doc import explain as explain_doc
+    from reports.explain_render import render
+    mech = load_case(case)
+    for v in input_values(Linkage(mech), 4)[0]:
+        md = render(explain_doc(mech, float(v)), "md")
+        assert check_calc_lines(md) >= 4
+        assert re.search(r"\bnan\b|\binf\b", md, re.IGNORECASE) is None
+
+
+def test_a_description_file_and_its_units(capsys, tmp_path):
+    from analytic.cases import case_path
+    f = tmp_path / "my crank.toml"
+    f.write_text(case_path("seed-four-bar").read_text().replace('length = "mm"',
+                                                                 'length = "cm"')
+                 .replace("[400, 0]", "[40, 0]").replace("[100, 0]", "[10, 0]")
+                 .replace("[300, 0]", "[30, 0]").replace("[250, 0]", "[25, 0]")
+                 .replace("[50, 0]", "[5, 0]").replace("[150, 0]", "[15, 0]")
+                 .replace("[125, 0]", "[12.5, 0]").replace("[310, 230]", "[31, 23]"))
+    md = explain(capsys, str(f), "--angle", "60")
+    assert "lengths in cm, the unit of the description" in md and str(f) in md
+    ex = four_bar_s4()
+    row = table(md, "position-1")
+    assert row["$r$"][1:] == ["40", "10", "30", "25"]
+    assert cell_near(row["$\\theta$"][3], ex["t3"])
+    vel = table(md, "velocity-1")["$\\dot{\\theta}$"]
+    assert cell_near(vel[3], ex["w3"])     # angular rates do not depend on the unit
 
 
 def test_s1_and_s4_calc_lines(s1_md, s4_md):
