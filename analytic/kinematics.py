@@ -24,7 +24,8 @@ from .errors import SingularConfigurationError
 from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
-from .positions import PositionSolver, as_xy, cplx
+from .position_solver import PositionSolver
+from .positions import as_xy, cplx
 from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
 
@@ -160,7 +161,7 @@ class Linkage:
 
     def __init__(self, mech: Mechanism, branch_rule: str = "continuous"):
         """``branch_rule``: what the solution does at a change point, where two
-        assembly branches cross (:class:`analytic.positions.PositionSolver`):
+        assembly branches cross (:class:`analytic.position_solver.PositionSolver`):
         ``"continuous"`` (default) continues the branch whose velocity is continuous,
         as the physical linkage and the engines do, holding the dyad signs where
         continuity cannot decide; ``"hold"`` holds the signs; ``"switch"`` switches."""

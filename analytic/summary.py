@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .mechanism import Revolute
+
 
 @dataclass(frozen=True)
 class Stroke:
@@ -147,9 +149,9 @@ def _reversals(y: np.ndarray) -> int:
     return int(np.sum(s != np.roll(s, 1))) if len(s) else 0
 
 
-def summarise(result) -> Summary:
-    """The :class:`Summary` of a :class:`analytic.sweep.SweepResult`."""
-    from .sweep import nearest_event
+def summarise(result, nearest_event=None) -> Summary:
+    """The :class:`Summary` of a :class:`analytic.sweep.SweepResult`; ``nearest_event``
+    (:func:`analytic.sweep.nearest_event`) names the event beside the peak effort."""
     kin = result.kinematics
     lk = kin.linkage
     mech, topo = lk.mech, lk.topo
@@ -211,10 +213,10 @@ def summarise(result) -> Summary:
             summ.effort_name = "drive torque" if rev else "drive force"
             summ.effort_unit = "N m" if rev else "N"
             summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
-            summ.peak_event = nearest_event(result, float(x[i]))
+            if nearest_event is not None:
+                summ.peak_event = nearest_event(result, float(x[i]))
     return summ
 
 
 def _is_revolute(jt) -> bool:
-    from .mechanism import Revolute
     return isinstance(jt, Revolute)

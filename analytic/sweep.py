@@ -35,6 +35,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import size_of
+from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
 
 
@@ -417,6 +418,5 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
     events = find_events(linkage, kin, full, None if full else feas, crossings)
     res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
                       full, feas, grashof(linkage), notes, crossings)
-    from .summary import summarise
-    res.summary = summarise(res)
+    res.summary = summarise(res, nearest_event)
     return res

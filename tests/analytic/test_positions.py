@@ -80,7 +80,7 @@ def test_newton_fallback_matches_closed_form():
     newton_mech = replace(mech, assembly=Assembly({}, hints))
     nl = Linkage(newton_mech)
     nl.topo.plan = None  # force the general path
-    from analytic.positions import PositionSolver
+    from analytic.position_solver import PositionSolver
     nl.positions = PositionSolver(nl.topo, nl.eqs)
     kin = nl.kinematics(x)
     np.testing.assert_allclose(kin.theta, ref.theta, atol=1e-10)
