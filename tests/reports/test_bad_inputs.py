@@ -24,6 +24,13 @@ from reports.cli import main
 
 SEED = case_path("seed-four-bar").read_text()
 HARD = Path(__file__).resolve().parents[2] / "reports" / "hard_cases"
+# the seed four-bar at 1e-8 scale (a 4 nm linkage; the file is in mm)
+NANOMETRE = SEED
+for _k in ("400", "100", "300", "250", "310", "230", "50", "150", "125"):
+    NANOMETRE = NANOMETRE.replace(f"[{_k}, ", f"[{_k}e-8, ").replace(f", {_k}]", f", {_k}e-8]")
+NANOMETRE = NANOMETRE.replace("inertia = 1.6666666666666667e-4", "inertia = 1.67e-20").replace(
+    "inertia = 4.5e-3", "inertia = 4.5e-19").replace("inertia = 2.6041666666666665e-3",
+                                                      "inertia = 2.6e-19")
 # ../shared/bugs/loops-not-a-cycle.toml: the seed four-bar with a two-joint "loop"
 LOOPS_NOT_A_CYCLE = 'loops = [["O2", "A"]]\n' + SEED
 
@@ -254,6 +261,8 @@ ARGV_ROWS = [
      r"argument --engine: invalid choice: 'gazebo'"),
     ("compare-mode-unknown", ["compare", "seed-four-bar", "--mode", "fast"],
      r"argument --mode: invalid choice: 'fast'"),
+    ("compare-nanometre-linkage", ["compare", "{tiny}", "--engine", "mujoco"],
+     r"mechanism 'seed-four-bar' \(size 4e-09 m\): MuJoCo cannot compile its model"),
     ("report-workers-negative", ["report", "--workers", "-1"],
      r"argument --workers: -1 is out of range: the accepted range is 1 to 64"),
     ("report-workers-0", ["report", "--workers", "0"], r"argument --workers: 0 is out of range"),
@@ -276,8 +285,10 @@ def test_bad_command_line(capsys, tmp_path, read_only_dir, argv, message):
     (tmp_path / "dir.toml").mkdir()
     (tmp_path / "f.txt").write_text("x")
     (tmp_path / "loops-not-a-cycle.toml").write_text(LOOPS_NOT_A_CYCLE)
+    (tmp_path / "tiny.toml").write_text(NANOMETRE)
     subs = {"{tmp}": str(tmp_path), "{file}": str(tmp_path / "f.txt"),
-            "{loops}": str(tmp_path / "loops-not-a-cycle.toml")}
+            "{loops}": str(tmp_path / "loops-not-a-cycle.toml"),
+            "{tiny}": str(tmp_path / "tiny.toml")}
     if any("{ro}" in a for a in argv):
         subs["{ro}"] = str(read_only_dir())
     argv = [_sub(a, subs) for a in argv]
