@@ -170,8 +170,13 @@ class BranchSchedule:
                     s[k] = -s[k]
             cands.append(tuple(s))
         switch = tuple(-s if k in dyads else s for k, s in enumerate(signs))
-        h = 1e-5 * (1.0 if self.revolute else self.size)
-        left, _ = self._pose(t - d * np.array([2 * h, h]), signs)
+        # a step clear of the +-sqrt(TOGGLE_SNAP / curvature) where the closed form snaps
+        # the dyad to its toggle (both candidates would look alike there)
+        unit = 1.0 if self.revolute else self.size
+        for h in unit * np.array([1e-4, 1e-3, 1e-2]):
+            left, dl = self._pose(t - d * np.array([2 * h, h]), signs)
+            if np.all(np.abs(dl[:, list(dyads)]) > 1e3 * TOGGLE_SNAP):
+                break
         slope_l = (left[1] - left[0]) / h
         # the pose angles may wrap by 2 pi between the two samples: compare them unwrapped
         jumps = {}

@@ -102,6 +102,6 @@ CHANGE_POINT_DISC = 1e-12
 #: Continuity of velocity decides the branch after a change point when the best
 #: candidate's jump in d(pose)/d(input) is below this fraction of the next best's; the
 #: held (kinked) branch jumps by about twice the rocker's speed ratio, the continued one
-#: by O(step * curvature) ~ 1e-5 of it.  Otherwise continuity cannot decide and the
+#: by O(step * curvature) ~ 1e-3 of it (step 1e-4).  Otherwise continuity cannot decide and the
 #: ``branch_rule`` option does.
 CONTINUITY_RATIO = 0.1
