@@ -156,3 +156,18 @@ def test_random_change_point_linkages_move_smoothly_through():
             assert np.max(np.abs(fd - 0.5 * (rate[0] + rate[1]))) < 1e-3 * peak
             assert c.rule == "velocity" and c.switched
     assert n_cross >= 12
+
+
+def test_where_continuity_cannot_decide_the_signs_are_held_and_said(monkeypatch):
+    """With the decision threshold at 0 no candidate is clear: the signs are held, each
+    crossing says why, the sweep adds a note naming the option, and ``branch_rule
+    'switch'`` takes the other branch (the parallelogram again)."""
+    import analytic.branches as branches
+    monkeypatch.setattr(branches, "CONTINUITY_RATIO", 0.0)
+    res = Linkage(load_case(PARA)).sweep(360, start=0.0)
+    assert res.crossings and all(c.rule.startswith("held: ") and not c.switched
+                                 for c in res.crossings)
+    assert any("branch_rule='switch'" in n for n in res.notes)
+    kin = Linkage(load_case(PARA), branch_rule="switch").kinematics_along(
+        np.radians([100.0, 200.0, 300.0, 400.0]))
+    np.testing.assert_allclose(_wrap(kin.theta[:, 3] - kin.theta[:, 1]), 0.0, atol=ANGLE_TOL)
