@@ -16,7 +16,7 @@ from .explain_loops import angle, length
 COLOURS = ["#c0392b", "#2471a3", "#1e8449", "#7d3c98", "#b9770e", "#117a65", "#a04000",
            "#34495e"]
 WIDTH = 560.0
-PAD = 70.0
+PAD = 90.0
 
 
 def _geometry(ctx, loop):
@@ -90,7 +90,7 @@ def _svg(geo, segs) -> str:
     for i, (lab, tail, tip, th, r, tn, _hn) in enumerate(geo):
         c = COLOURS[i % len(COLOURS)]
         (tx, ty), (hx, hy) = P(tail), P(tip)
-        rad = 26 + 12 * i
+        rad = min(22 + 8 * i, 64)
         out.append(f'<line x1="{tx:.1f}" y1="{ty:.1f}" x2="{tx + rad + 14:.1f}" y2="{ty:.1f}" '
                    f'stroke="{c}" stroke-dasharray="4 3" stroke-width="1"/>')
         t = math.radians(th)
@@ -116,7 +116,19 @@ def _svg(geo, segs) -> str:
         out.append(f'<circle cx="{tx:.1f}" cy="{ty:.1f}" r="3" fill="#222"/>')
         out.append(f'<text x="{tx - 14:.1f}" y="{ty + 18:.1f}" font-size="13">{tn}</text>')
     out.append("</svg>")
-    return "\n".join(out)
+    return _clamp_text("\n".join(out), W, H)
+
+
+def _clamp_text(svg: str, W: float, H: float) -> str:
+    """Keep every label inside the picture (angle labels of long arcs can fall
+    outside)."""
+    import re
+
+    def fix(m):
+        x = min(max(float(m.group(1)), 4.0), W - 90.0)
+        y = min(max(float(m.group(2)), 14.0), H - 4.0)
+        return f'<text x="{x:.1f}" y="{y:.1f}"'
+    return re.sub(r'<text x="(-?[0-9.]+)" y="(-?[0-9.]+)"', fix, svg)
 
 
 def _tikz(geo, segs) -> str:

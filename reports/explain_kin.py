@@ -231,6 +231,14 @@ def velocity_equation(ctx: Ctx, loop: Loop) -> tuple[list, list]:
         why = (f"r{v.label} {'D' if v.var_length else 'S'}, "
                f"θ{v.label} {'D' if v.var_angle else 'S'}")
         out.append(Math([S.DDt(S.prod(S.r(v.label), S.MU(S.th(v.label)))), rhs], note=why))
+    for v in loop.vectors:
+        rl = loop.rate_label.get(v.group)
+        if rl is not None and rl != v.label:
+            w = next(u for u in loop.vectors if u.label == rl)
+            off = math.degrees(v.beta - w.beta) % 360.0
+            out.append(Para([S.th(v.label), " = ", S.th(rl), f" + {S.fmt(off)}°: r{v.label} "
+                             f"and r{rl} turn together (one rotation), so ",
+                             S.th(v.label, 1), " = ", S.th(rl, 1), "."]))
     out.append(Para(["The velocity equation:"]))
     out.append(Math([equation_sym(terms), sp.Integer(0)]))
     return out, terms

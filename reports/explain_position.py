@@ -204,8 +204,9 @@ def _angle_and_length(loop, va, vs, r, th, want):
         Math([S.signed_sum([(1, S.prod(S.r(v.label), S.sin(S.diff_angle(S.th(v.label), tsym))))
                             for v in allk]), sp.Integer(0)]),
         Math([S.th(a), ta_sym, ta_num], S.fmt(ta_raw), "deg", S.text(ta_num),
-             note=(f"= {S.fmt(ta)}° in [0°, 360°), i.e. {S.fmt(ta - 360 if ta > 180 else ta)}°;"
-                   f" the other root, θ{a} = {S.fmt(cands[1 - k])}°, is the other branch")),
+             note=(f"= {S.fmt(ta)}° in [0°, 360°)"
+                   + (f", i.e. {S.fmt(ta - 360)}°" if ta > 180 else "")
+                   + f"; the other root, θ{a} = {S.fmt(cands[1 - k])}°, is the other branch")),
         Para([f"Dot the loop equation with μ(θ{s}) (μ(θk)·μ(θ{s}) = cos(θk − θ{s})) for "
               f"r{s}:"]),
         Math([S.r(s), cos_sym, cos_num], S.fmt(rs), "", S.text(cos_num)),

@@ -180,7 +180,8 @@ _TEX_UNICODE = [("θ̇", r"$\dot\theta$"), ("θ̈", r"$\ddot\theta$"), ("ṙ", r
                 ("θ", r"$\theta$"), ("μ", r"$\mu$"), ("σ", r"$\sigma$"), ("ω", r"$\omega$"),
                 ("α", r"$\alpha$"), ("δ", r"$\delta$"), ("γ", r"$\gamma$"), ("°", r"$^\circ$"),
                 ("²", r"$^2$"), ("−", "-"), ("·", r"$\cdot$"), ("→", r"$\to$"),
-                ("∞", r"$\infty$"), ("≈", r"$\approx$"), ("×", r"$\times$")]
+                ("∞", r"$\infty$"), ("≈", r"$\approx$"), ("×", r"$\times$"),
+                ("Σ", r"$\Sigma$"), ("⟂", r"$\perp$")]
 
 
 def _tex_text(s: str) -> str:
@@ -197,7 +198,7 @@ def _tex_cell(c) -> str:
 
 def to_latex(doc: Document) -> str:
     out = [r"\documentclass[11pt]{article}", r"\usepackage[utf8]{inputenc}",
-           r"\usepackage{amsmath,amssymb}", r"\usepackage{tikz}",
+           r"\usepackage{amsmath,amssymb,graphicx}", r"\usepackage{tikz}",
            r"\usepackage[margin=2cm]{geometry}", r"\allowdisplaybreaks",
            r"\begin{document}", rf"\section*{{{_tex_text(doc.title)}}}"]
     for b in doc.blocks:
@@ -207,7 +208,9 @@ def to_latex(doc: Document) -> str:
         elif isinstance(b, Para):
             out.append(_tex_parts(b.parts) + "\n")
         elif isinstance(b, Math):
-            out.append(r"\[" + _chain_tex(b) + r"\]")
+            # shrunk to the line width when longer (graphicx's \width), never enlarged
+            out.append(r"\[\resizebox{\ifdim\width>\linewidth\linewidth\else\width\fi}{!}"
+                       r"{$\displaystyle " + _chain_tex(b) + r"$}\]")
             if b.note:
                 out.append(r"{\small\itshape " + _tex_parts(b.note) + "}\n")
             if b.check is not None:
