@@ -34,7 +34,7 @@ from .errors import AssemblyError, LinkageError
 from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
-from .positions import size_of
+from .positions import input_span, size_of
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
 
@@ -170,7 +170,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     if not periodic and feasible is not None and len(x):
         for lo, hi in feasible:
             for end in (lo, hi):
-                if np.min(np.abs(x - end)) <= 1e-3 * max(hi - lo, 1e-300):
+                if np.min(np.abs(x - end)) <= 1e-3 * max(hi - lo, 1e-300) and \
+                        is_input_limit(linkage, end):
                     rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
                                  "input limit position: the loops cannot close beyond it "
                                  "on this branch (the drive effort grows without bound "
@@ -207,6 +208,22 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     if len(ev):
         ev["input"] = np.round(ev["input"].to_numpy(dtype=float), 9) + 0.0
     return ev.sort_values("input", kind="stable").reset_index(drop=True) if len(ev) else ev
+
+
+def is_input_limit(linkage: Linkage, end: float) -> bool:
+    """Whether the end ``end`` (SI) of a feasible range is a limit position of the input
+    (the loops cannot close beyond it), not merely the end of the interval searched
+    (:func:`analytic.positions.input_span`: one turn, or +-2 sizes for a slider)."""
+    trace = linkage.positions.trace
+    if trace is not None:
+        tol = 1e-9 * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))
+        return any(abs(end - v) <= tol for v in trace.limits)
+    lo, hi = input_span(linkage.topo)
+    tol = 1e-9 * (hi - lo)
+    if linkage.driver_is_revolute:  # a seam of the searched turn is no limit
+        r = (end - lo) % (2 * math.pi)
+        return tol < r < 2 * math.pi - tol
+    return lo + tol < end < hi - tol
 
 
 @dataclass(frozen=True)
