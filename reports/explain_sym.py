@@ -311,17 +311,17 @@ class DDt(Node):
     """The time derivative ``d/dt (x)``."""
     nargs = 1
 
+    def _op(self):
+        return Frac(sp.Symbol("d"), sp.Symbol("dt"))
+
     def _latex(self, p):
-        return rf"\frac{{d}}{{dt}}\left({p._print(self.args[0])}\right)"
+        return rf"{p._print(self._op())}\left({p._print(self.args[0])}\right)"
 
     def _sympystr(self, p):
         return f"d/dt({p._print(self.args[0])})"
 
     def _mathml_presentation(self, p):
-        f = p.dom.createElement("mfrac")
-        f.appendChild(_mi(p, "d"))
-        f.appendChild(_mi(p, "dt"))
-        return _mrow(p, f, _paren_ml(p, p._print(self.args[0])))
+        return _mrow(p, p._print(self._op()), _paren_ml(p, p._print(self.args[0])))
 
 
 class Bracket(Node):

@@ -269,6 +269,12 @@ def test_calc_lines_over_the_cycle(case):
         md = render(explain_doc(mech, float(v)), "md")
         assert check_calc_lines(md) >= 4
         assert re.search(r"\bnan\b|\binf\b", md, re.IGNORECASE) is None
+        for n in range(1, md.count("*Table matrix-") + 1):
+            for _, (_u, hand, _m, diff) in table(md, f"matrix-{n}").items():
+                assert float(diff) <= 1e-8 * max(1.0, abs(float(hand)))
+        if mech.has_mass:   # the per-body equilibrium against the solver's tree method
+            for _, row in table(md, "forces").items():
+                assert float(row[-1]) <= 1e-8 * max(1.0, float(row[-2]))
 
 
 def test_a_description_file_and_its_units(capsys, tmp_path):
