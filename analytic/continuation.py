@@ -137,7 +137,7 @@ class _Walker:
 
     def corrector(self, q, xn, guesses):
         for g in guesses:
-            qn, ok = newton(self.eqs, g[None], np.array([xn]), self.tol, max_iter=20)
+            qn, ok = newton(self.eqs, g[None], np.array([xn]), self.tol, max_iter=8)
             if ok[0] and np.max(np.abs(qn[0] - q) / self.lim) <= 1.0:
                 return qn[0]
         return None
