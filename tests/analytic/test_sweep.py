@@ -71,3 +71,16 @@ def test_change_point_is_flagged_singular_without_noise():
     assert np.all(np.minimum(np.abs(sing - 180), np.minimum(sing, 360 - sing)) < 1.5)
     coupler = (res.events.kind == "limit") & (res.events["where"] == "coupler")
     assert coupler.sum() <= 4
+
+
+def test_nearest_event_wraps_a_full_cycle():
+    """The crank-rocker's limit positions (law of cosines, as above); an input 2 deg past
+    one of them, given one turn later, is 2 deg from it."""
+    from analytic.sweep import nearest_event
+    a, b, c, d = 0.1, 0.3, 0.25, 0.4
+    lk = Linkage(four_bar(d, a, b, c, masses=None))
+    res = lk.sweep(3600, start=0.0)
+    phi = math.acos(((b + a) ** 2 + d ** 2 - c ** 2) / (2 * (b + a) * d))  # extended
+    ev = nearest_event(res, math.degrees(phi) + 362.0, kinds=("limit",))
+    assert ev.where == "rocker" and ev.distance == pytest.approx(2.0, abs=1e-3)
+    assert nearest_event(res, 10.0, kinds=("singular",)) is None
