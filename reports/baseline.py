@@ -454,6 +454,48 @@ def record_problems(baseline: Baseline) -> list[str]:
     return out
 
 
+def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> str:
+    """The ``xval baseline record`` command that records ``baseline``'s runs again (file
+    paths relative to ``cwd``, default the current folder); settings that differ from
+    an engine's defaults are named as ``--set ENGINE.KEY=VALUE``."""
+    from analytic.cases import case_names
+    models, engines, sets = [], [], []
+    for r in baseline.runs:
+        m = r.model.name if r.model.kind == "builtin" else \
+            os.path.relpath(r.model.path(baseline.base_dir), cwd or os.getcwd())
+        models += [m] if m not in models else []
+        engines += [r.engine] if r.engine not in engines else []
+        sets += [s for s in _overrides(r) if s not in sets]
+    if set(case_names()) <= set(models):
+        models = ["all"] + [m for m in models if m not in case_names()]
+    req = baseline.runs[0].request if baseline.runs else request_dict()
+    words = ["xval baseline record", *models, *(f"--engine {e}" for e in engines),
+             *(f"--set {s}" for s in sets)]
+    words += [f"--revolutions {req['revolutions']}"] if req["revolutions"] != 2 else []
+    words += [f"--samples {req['samples']}"] if req["samples"] != 36 else []
+    tols = {q.tolerance for r in baseline.runs for q in r.quantities}
+    if len(tols) == 1 and (t := tols.pop()) != 1e-3:
+        words.append(f"--tolerance {t:g}")
+    out = os.path.relpath(baseline.path.resolve(), cwd or os.getcwd())
+    return " ".join([*words, f"--out {out}"])
+
+
+def _overrides(rec: RunRecord) -> list[str]:
+    """``ENGINE.KEY=VALUE`` for each recorded setting that is not the engine's default."""
+    from sim_models.engine_base import _fmt_setting
+    from sim_models.registry import get_engine
+    try:
+        default = get_engine(rec.engine).settings().as_dict()
+    except Exception:  # noqa: BLE001 - an engine gone: the check reports it
+        return []
+    out = []
+    for k, v in sorted(rec.settings["fields"].items()):
+        v = tuple(v) if isinstance(v, list) else v
+        if k in default and default[k] != v:
+            out.append(f"{rec.engine}.{k}={_fmt_setting(v).strip('()')}")
+    return out
+
+
 def _revolute(mech) -> bool:
     from analytic.mechanism import Prismatic
     return not isinstance(mech.driver_joint, Prismatic)
@@ -663,5 +705,6 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
            "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
-           "judged", "load", "record", "record_problems", "request_dict", "run_and_compare",
-           "save", "settings_from_json", "settings_line", "settings_json", "source_of", "versions"]
+           "judged", "load", "record", "record_command", "record_problems", "request_dict",
+           "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
+           "source_of", "versions"]

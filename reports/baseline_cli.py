@@ -71,6 +71,8 @@ def cmd_check(args) -> int:
         raise bl.BaselineError(f"{args.baseline}: no recorded run matches --case/--engine")
     lines = report_lines(base, checks, args.factor)
     print("\n".join(lines))
+    if not all(c.passed for c in checks):
+        print(f"if the change is intended, record the baseline again: {bl.record_command(base)}")
     ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
                              ci_formats.from_baseline(checks), intro=lines[:2])
     return 0 if all(c.passed for c in checks) else 1

@@ -1,0 +1,310 @@
+"""Baselines (issue 13): record, check, drift, disappearance, bad files, JUnit and Markdown.
+
+Independent expectations: the drift verdicts follow from numbers this file writes into
+the baseline (an error divided by 100 must read as a 100x growth; a tolerance set below
+the recorded error must be exceeded); the JUnit documents are validated against a schema
+written from the format's own description (``junit.xsd`` beside this file) and their
+counts against the cases run.  Runs go through the session cache of the pytest plugin
+(:func:`reports.pytest_plugin.cached_runner`), shared with the engine tests and the
+committed-baseline check, so most cost nothing extra; the command-line checks re-run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from analytic.cases import case_names, case_path
+from reports import baseline as bl
+from reports.cli import main
+from reports.pytest_plugin import baseline_params, cached_runner
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILTIN = ROOT / "tests" / "baselines" / "builtin.json"
+XSD = Path(__file__).with_name("junit.xsd")
+RE_RECORD = ("xval baseline record all --engine exudyn --engine mujoco --engine pybullet "
+             "--samples 24 --out tests/baselines/builtin.json")
+
+
+# ============================================================== the committed baseline
+@pytest.mark.parametrize("case, engine", baseline_params(BUILTIN))
+def test_builtin_baseline(xval, case, engine):
+    """The built-in cases at the recommended settings have not drifted tenfold, exceeded
+    their tolerance, or lost a quantity since tests/baselines/builtin.json was recorded.
+    An intended change (a new engine version, a better model) is re-recorded with the
+    command the failure message ends with (RE_RECORD)."""
+    xval.assert_baseline(BUILTIN, case=case, engine=engine)
+
+
+def test_builtin_baseline_names_its_re_record_command():
+    assert bl.record_command(bl.load(BUILTIN), ROOT) == RE_RECORD
+
+
+def test_builtin_baseline_covers_every_case_and_engine():
+    from sim_models.registry import engine_names
+    base = bl.load(BUILTIN)
+    assert {(r.case, r.engine) for r in base.runs} >= \
+        {(c, e) for c in case_names() for e in ("mujoco", "pybullet")}
+    assert {r.engine for r in base.runs} <= set(engine_names())
+    for r in base.runs:  # the recommended settings, in full
+        from sim_models.registry import get_engine
+        assert r.settings["fields"] == bl.settings_json(r.engine, get_engine(r.engine)
+                                                        .settings())["fields"], r.label
+
+
+# ============================================================== record, then check
+@pytest.fixture(scope="module")
+def mujoco_baseline(tmp_path_factory):
+    """Every built-in case in MuJoCo, recorded through the session cache (the runs of
+    the committed-baseline check and the engine tests: same request and settings)."""
+    out = tmp_path_factory.mktemp("baseline") / "mujoco.json"
+    base = bl.record(case_names(), ["mujoco"], out, request=bl.request_dict(samples=24),
+                     runner=cached_runner)
+    assert not bl.record_problems(base)
+    bl.save(base)
+    return out
+
+
+def _edited(src: Path, dst: Path, edit) -> Path:
+    doc = json.loads(src.read_text())
+    edit(doc)
+    dst.write_text(json.dumps(doc, indent=2, sort_keys=True))
+    return dst
+
+
+def _run(doc, case, engine="mujoco"):
+    return next(r for r in doc["runs"] if r["case"] == case and r["engine"] == engine)
+
+
+def _worst(run):
+    return max(run["quantities"], key=lambda q: q["error"])
+
+
+def test_record_then_check_passes_on_rerun(mujoco_baseline, tmp_path, capsys):
+    """Recorded on every built-in case, then checked by the command line (real re-runs):
+    status 0, every run 'pass', nothing grown."""
+    doc = json.loads(mujoco_baseline.read_text())
+    assert doc["schema"] == bl.SCHEMA and doc["schema_version"] == bl.SCHEMA_VERSION
+    assert {r["case"] for r in doc["runs"]} == set(case_names())
+    junit, summary = tmp_path / "j.xml", tmp_path / "s.md"
+    code = main(["baseline", "check", str(mujoco_baseline), "--junit", str(junit),
+                 "--summary", str(summary)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert out.count("pass  ") == len(case_names()) and "result: PASS" in out
+    assert "FAIL" not in out
+    _validate_junit(junit, tests=len(case_names()), failures=0)
+    assert "PASS (10 of 10 passed)" in summary.read_text()
+
+
+def test_an_error_divided_by_100_fails_naming_quantity_and_factor(mujoco_baseline, tmp_path,
+                                                                   capsys):
+    """The must-show: one recorded error divided by 100 reads as a 100x growth, above the
+    factor 10: status 1, the message names the quantity, the growth and the factor."""
+    picked = {}
+
+    def edit(doc):
+        run = _run(doc, "quick-return")
+        q = _worst(run)
+        assert q["error"] > bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR  # drift is measurable
+        picked.update(q)
+        q["error"] /= 100
+    edited = _edited(mujoco_baseline, tmp_path / "edited.json", edit)
+    junit, summary = tmp_path / "j.xml", tmp_path / "s.md"
+    code = main(["baseline", "check", str(edited), "--case", "quick-return", "--case",
+                 "seed-four-bar", "--junit", str(junit), "--summary", str(summary)])
+    out = capsys.readouterr().out
+    assert code == 1, out
+    line = next(ln for ln in out.splitlines() if ln.startswith("FAIL"))
+    assert line.startswith(f"FAIL  quick-return / mujoco: {picked['quantity']}: drifted ")
+    assert "(100x)" in line and "more than the factor 10" in line, line
+    assert "pass  seed-four-bar / mujoco" in out and "1 of 2 runs failed" in out
+    _validate_junit(junit, tests=2, failures=1)
+    failure = ET.parse(junit).getroot().find(".//failure")
+    assert failure.get("type") == "drift" and picked["quantity"] in failure.get("message")
+    md = summary.read_text()
+    assert "**FAIL**" in md and f"`{picked['quantity']}`" in md and "100x" in md
+
+
+def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
+    """An error below the floor divided by 100 is not drift (1e-8 -> 1e-10 is round-off
+    territory: the limit is factor x floor); the same error set to 0 is not either."""
+    base = bl.load(mujoco_baseline)
+    run = next(r for r in base.runs if r.case == "seed-four-bar")
+    small = [q for q in run.quantities if 0 < q.error < bl.DRIFT_FLOOR]
+    assert small
+    for q in small:
+        for recorded in (q.error / 100, 0.0):
+            rec = bl.QuantityRecord(q.quantity, recorded, q.at, q.at_unit, q.tolerance,
+                                    q.max_abs, q.peak)
+            assert bl.judge(rec, q.error, q.at, bl.DEFAULT_FACTOR).status == "ok"
+    # just above the limit it is drift, and the message states the floor
+    rec = bl.QuantityRecord("x.alpha", 1e-12, 0.0, "deg", 1e-3, 0.0, 1.0)
+    v = bl.judge(rec, 1.01 * bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR, 30.0, bl.DEFAULT_FACTOR)
+    assert v.status == "drift" and "below the floor 1e-07" in v.message()
+
+
+def test_over_tolerance_missing_quantity_and_missing_case_fail(mujoco_baseline, tmp_path):
+    def edit(doc):
+        q = _worst(_run(doc, "seed-four-bar"))
+        q["tolerance"] = q["error"] / 2           # now above its tolerance
+        _run(doc, "six-bar")["quantities"].append(
+            {"quantity": "ghost.alpha", "error": 1e-8, "tolerance": 1e-3, "at": 0.0,
+             "at_unit": "deg", "max_abs": 0.0, "peak": 1.0})
+        gone = _run(doc, "quick-return")
+        gone["model"] = {"builtin": "no-such-case", "sha256": "0" * 64}
+    base = bl.load(_edited(mujoco_baseline, tmp_path / "e.json", edit))
+    checks = {c.record.case: c for c in bl.check(base, runner=cached_runner)}
+    four = checks["seed-four-bar"]
+    assert not four.passed and four.failures()[0].status == "over-tolerance"
+    assert "exceeds its tolerance" in four.failures()[0].message()
+    six = checks["six-bar"]
+    assert [q.quantity for q in six.failures()] == ["ghost.alpha"]
+    assert "no longer compared" in six.failures()[0].message()
+    assert not checks["quick-return"].passed
+    assert "'no-such-case' no longer exists" in checks["quick-return"].problems[0]
+    assert sum(not c.passed for c in checks.values()) == 3
+
+
+def test_a_model_file_is_stored_relative_and_a_change_is_detected(tmp_path):
+    """A TOML model is stored by its path relative to the baseline file (the folder can
+    move) with its SHA-256; editing the file fails the check and says so."""
+    proj = tmp_path / "proj"
+    (proj / "linkages").mkdir(parents=True)
+    model = proj / "linkages" / "four.toml"
+    shutil.copy(case_path("seed-four-bar"), model)
+    out = proj / "ci" / "baseline.json"
+    out.parent.mkdir()
+    base = bl.record([str(model)], ["mujoco"], out, request=bl.request_dict(samples=12),
+                     runner=cached_runner)
+    bl.save(base)
+    doc = json.loads(out.read_text())
+    assert doc["runs"][0]["model"]["file"] == "../linkages/four.toml"
+    moved = tmp_path / "moved"
+    shutil.copytree(proj, moved)
+    assert all(c.passed for c in bl.check(bl.load(moved / "ci" / "baseline.json"),
+                                          runner=cached_runner))
+    text = model.read_text()
+    model.write_text(text.replace("mass = 0.6", "mass = 0.61", 1))
+    assert text != model.read_text()
+    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    assert not chk.passed and "changed since the baseline" in chk.problems[0]
+    model.unlink()
+    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    assert not chk.passed and "is gone" in chk.problems[0]
+
+
+def test_changed_versions_are_named(mujoco_baseline, tmp_path, capsys):
+    def edit(doc):
+        for r in doc["runs"]:
+            r["versions"]["engine"] = "mujoco 0.0.1"
+    edited = _edited(mujoco_baseline, tmp_path / "v.json", edit)
+    assert main(["baseline", "check", str(edited), "--case", "seed-four-bar"]) == 0
+    out = capsys.readouterr().out
+    assert "versions changed since the baseline: engine mujoco 0.0.1 -> mujoco " in out
+
+
+# ============================================================== the file format
+def test_file_is_sorted_and_one_line_per_quantity(mujoco_baseline):
+    text = mujoco_baseline.read_text()
+    doc = json.loads(text)
+    assert text == bl.dumps(bl.load(mujoco_baseline)).replace(
+        bl.load(mujoco_baseline).recorded, doc["recorded"])
+    lines = [ln.strip() for ln in text.splitlines()]
+    for run in doc["runs"]:
+        names = [q["quantity"] for q in run["quantities"]]
+        assert names == sorted(names)
+        for q in run["quantities"]:
+            assert json.dumps(q, sort_keys=True) + "," in lines or \
+                json.dumps(q, sort_keys=True) in lines
+    keys = [(r["case"], r["engine"]) for r in doc["runs"]]
+    assert keys == sorted(keys)
+
+
+BAD_FILES = {
+    "not json": ("{", "not JSON: Expecting property name"),
+    "another schema": ('{"schema": "x"}', "not a linkage-xval baseline"),
+    "newer schema": ('{"schema": "linkage-xval baseline", "schema_version": 2, "runs": []}',
+                     "schema_version 2 is not supported"),
+    "no runs": ('{"schema": "linkage-xval baseline", "schema_version": 1}',
+                "missing key 'runs'"),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD_FILES))
+def test_bad_baseline_files_are_one_line_status_2(name, tmp_path, capsys):
+    text, msg = BAD_FILES[name]
+    p = tmp_path / "b.json"
+    p.write_text(text)
+    assert main(["baseline", "check", str(p)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("xval: error: ") and msg in err, err
+
+
+@pytest.mark.parametrize("edit, msg", [
+    (lambda r: r.pop("settings"), "runs[0] (hibbeler-16-121 / mujoco): missing key 'settings'"),
+    (lambda r: r["quantities"][0].update(error=-1), "'error' must be a number >= 0"),
+    (lambda r: r["quantities"][0].update(error="small"), "'error' must be a number >= 0"),
+    (lambda r: r["request"].update(samples="many"), "'samples' must be a whole number"),
+    (lambda r: r["model"].update(file="x.toml"), "exactly one of 'builtin' or 'file'"),
+    (lambda r: r["settings"]["fields"].update(warp=9), "no setting 'warp'"),
+    (lambda r: r["settings"]["fields"].update(timestep="fast"), "timestep='fast'"),
+])
+def test_bad_entries_name_the_run_and_key(edit, msg, mujoco_baseline, tmp_path, capsys):
+    p = _edited(mujoco_baseline, tmp_path / "b.json", lambda d: edit(d["runs"][0]))
+    assert main(["baseline", "check", str(p), "--case", "hibbeler-16-121"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and msg in err and str(p) in err, err
+
+
+def test_missing_file_and_bad_options(tmp_path, capsys):
+    assert main(["baseline", "check", str(tmp_path / "none.json")]) == 2
+    assert "no such baseline file" in capsys.readouterr().err
+    assert main(["baseline", "check", str(BUILTIN), "--factor", "1"]) == 2
+    assert "factor must be a finite number above 1" in capsys.readouterr().err
+    assert main(["baseline", "record", "no-such-case", "--out", str(tmp_path / "b.json")]) == 2
+    assert "no built-in case 'no-such-case'" in capsys.readouterr().err
+    assert main(["baseline", "check", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
+
+
+# ============================================================== JUnit from xval compare
+def _validate_junit(path: Path, tests: int, failures: int, errors: int = 0) -> None:
+    """Valid against the JUnit schema, with the expected counts on both levels."""
+    xmlschema = pytest.importorskip("xmlschema")
+    xmlschema.XMLSchema(str(XSD)).validate(str(path))
+    root = ET.parse(path).getroot()
+    suite = root.find("testsuite")
+    for el in (root, suite):
+        assert (int(el.get("tests")), int(el.get("failures")), int(el.get("errors"))) == \
+            (tests, failures, errors)
+    cases = suite.findall("testcase")
+    assert len(cases) == tests
+    assert sum(c.find("failure") is not None for c in cases) == failures
+
+
+def test_compare_junit_and_summary(tmp_path, capsys):
+    """A failed compare (stock MuJoCo loop softness on the quick-return, 3.5e-3 of peak
+    measured, README "Engines") carries its worst quantity and error in the JUnit
+    failure; the schema validates it."""
+    junit, summary = tmp_path / "c.xml", tmp_path / "c.md"
+    code = main(["compare", "quick-return", "--engine", "mujoco", "--set",
+                 "invweight_scale=1", "--samples", "12", "--junit", str(junit),
+                 "--summary", str(summary)])
+    capsys.readouterr()
+    assert code == 1
+    _validate_junit(junit, tests=1, failures=1)
+    case = ET.parse(junit).getroot().find(".//testcase")
+    assert case.get("classname") == "xval.mujoco" and case.get("name") == "quick-return"
+    msg = case.find("failure").get("message")
+    q, err = msg.split(": error ")[0], float(msg.split(": error ")[1].split()[0])
+    assert err > 1e-3 and "of peak at" in msg and "exceeds the tolerance 0.001" in msg
+    assert q in case.find("failure").text and "invweight_scale=1" in case.find("failure").text
+    md = summary.read_text()
+    assert "| quick-return | mujoco | **FAIL** |" in md and f"`{q}`" in md
+    assert not math.isnan(err)

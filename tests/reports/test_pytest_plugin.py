@@ -1,0 +1,234 @@
+"""The pytest plugin (issue 13): a throwaway user project runs under pytest with it.
+
+Independent expectations: the failing assertion is given a tolerance (1e-9 of peak)
+below MuJoCo's measured error on that linkage (~1e-8, README "Engines"), the passing one
+the project's 1e-3; the cache is judged by identity of the run objects and by the
+plugin's own count of runs printed at the end of the session.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from reports import baseline as bl
+from reports import pytest_plugin
+from reports.pytest_plugin import cached_runner
+
+#: A user's own crank-rocker (Grashof: 40 + 150 <= 120 + 100), with gravity, in mm.
+USER_TOML = """\
+name = "my-four-bar"
+description = "A user's crank-rocker: crank 40 mm, coupler 120 mm, rocker 100 mm."
+gravity = [0.0, -9.81]
+
+[units]
+length = "mm"
+
+[bodies.ground]
+points = { O2 = [0, 0], O4 = [150, 0] }
+
+[bodies.crank]
+points = { O2 = [0, 0], A = [40, 0] }
+mass = 0.1
+com = [20, 0]
+inertia = 1.333e-5
+
+[bodies.coupler]
+points = { A = [0, 0], B = [120, 0] }
+mass = 0.3
+com = [60, 0]
+inertia = 3.6e-4
+
+[bodies.rocker]
+points = { O4 = [0, 0], B = [100, 0] }
+mass = 0.25
+com = [50, 0]
+inertia = 2.083e-4
+
+[[joints]]
+name = "O2"
+type = "revolute"
+bodies = ["ground", "crank"]
+points = ["O2", "O2"]
+
+[[joints]]
+name = "A"
+type = "revolute"
+bodies = ["crank", "coupler"]
+points = ["A", "A"]
+
+[[joints]]
+name = "B"
+type = "revolute"
+bodies = ["coupler", "rocker"]
+points = ["B", "B"]
+
+[[joints]]
+name = "O4"
+type = "revolute"
+bodies = ["ground", "rocker"]
+points = ["O4", "O4"]
+
+[driver]
+joint = "O2"
+value = 30.0
+velocity = 20.0
+
+[assembly]
+points = { "coupler.B" = [110, 90] }
+"""
+
+USER_TESTS = '''\
+def test_four_bar_agrees(xval):
+    xval.assert_agrees("linkages/four_bar.toml", engine="mujoco", tolerance=1e-3)
+
+
+def test_four_bar_to_a_billionth(xval):  # deliberately too tight: MuJoCo sits near 1e-8
+    xval.assert_agrees("linkages/four_bar.toml", engine="mujoco", tolerance=1e-9)
+
+
+def test_no_drift(xval_baseline):  # the baseline named in pytest.ini
+    xval_baseline()
+'''
+
+
+@pytest.fixture(scope="module")
+def user_project(tmp_path_factory):
+    """A temporary user project: one TOML, one test file, a pytest.ini naming a
+    baseline recorded here (the same run request the plugin makes by default)."""
+    root = tmp_path_factory.mktemp("user-project")
+    (root / "linkages").mkdir()
+    (root / "tests").mkdir()
+    (root / "linkages" / "four_bar.toml").write_text(USER_TOML)
+    (root / "tests" / "test_linkages.py").write_text(USER_TESTS)
+    (root / "pytest.ini").write_text("[pytest]\nxval_baseline = tests/baseline.json\n")
+    base = bl.record([str(root / "linkages" / "four_bar.toml")], ["mujoco"],
+                     root / "tests" / "baseline.json", runner=cached_runner)
+    bl.save(base)
+    return root
+
+
+def _pytest(root: Path, *args: str, **env: str) -> subprocess.CompletedProcess:
+    e = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST_")}
+    e.update(env)
+    return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider",
+                           "-p", "no:randomly", *args], cwd=root, env=e,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_user_project_one_pass_one_failure(user_project):
+    """Through the installed ``pytest11`` entry point (autoloaded): the passing and the
+    baseline assertions pass, the too-tight one fails with a message naming the
+    quantity, the error, where in the cycle and the settings; the three assertions on
+    one run cost one engine run."""
+    p = _pytest(user_project, "-q")
+    out = p.stdout
+    print(out)  # the failure message, for the record (pytest -s)
+    assert p.returncode == 1, out + p.stderr
+    assert re.search(r"1 failed, 2 passed", out), out
+    msg = out[out.index("AssertionError: "):]
+    assert msg.startswith("AssertionError: my-four-bar (linkages/four_bar.toml) / mujoco: ")
+    assert "disagree with the analytic solution by more than 1e-09 of peak" in msg
+    # a quantity, its error relative to peak, where in the cycle, with units
+    assert re.search(r"coupler\.alpha: error \d\.\d+e-0\d of peak at input [\d.]+ deg "
+                     r"\(max \|error\| [\d.e-]+ rad/s\^2", msg), msg
+    assert re.search(r"O4\.force: error [\d.e-]+ of peak at input [\d.]+ deg", msg)
+    assert "settings: mujoco: timestep=0.00025 integrator=RK4" in msg
+    assert "armature=1e+08" in msg and "run: 2 revolutions, 36 samples" in msg
+    assert "xval: 1 engine runs" in out and "2 served from the session cache" in out
+
+
+def test_user_project_with_autoload_off_and_dash_p(user_project):
+    """``-p xval`` (the entry point's name) loads the plugin when autoloading is off."""
+    p = _pytest(user_project, "-q", "-p", "xval", "-k", "agrees",
+                PYTEST_DISABLE_PLUGIN_AUTOLOAD="1")
+    assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout + p.stderr
+    p = _pytest(user_project, "-q", "-k", "agrees", PYTEST_DISABLE_PLUGIN_AUTOLOAD="1")
+    assert p.returncode != 0 and "fixture 'xval' not found" in p.stdout
+
+
+def test_user_baseline_drift_fails_with_re_record_hint(user_project, xval, tmp_path):
+    """The baseline assertion in-process (the session cache): a recorded error divided by
+    100 fails naming the quantity, and the message ends with the command to re-record."""
+    import json
+    doc = json.loads((user_project / "tests" / "baseline.json").read_text())
+    q = max(doc["runs"][0]["quantities"], key=lambda q: q["error"])
+    assert q["error"] < bl.DRIFT_FLOOR  # MuJoCo: ~1e-8, under the floor: /100 is no drift
+    xval.assert_baseline(user_project / "tests" / "baseline.json")
+    q["error"] = q["error"] / 100
+    q["tolerance"] = q["error"] * 50     # but over a tolerance it fails
+    p = tmp_path / "b.json"
+    p.write_text(json.dumps(doc))
+    (tmp_path / "linkages").mkdir()
+    (tmp_path / "linkages" / "four_bar.toml").write_text(USER_TOML)
+    doc["runs"][0]["model"]["file"] = "linkages/four_bar.toml"
+    p.write_text(json.dumps(doc))
+    with pytest.raises(AssertionError) as e:
+        xval.assert_baseline(p)
+    text = str(e.value)
+    assert f"FAIL  my-four-bar / mujoco: {q['quantity']}: error " in text
+    assert "exceeds its tolerance" in text
+    assert "record the baseline again" in text and "linkages/four_bar.toml" in text
+
+
+# ============================================================== in this session
+def test_plugin_registered_through_the_entry_point(pytestconfig):
+    plugin = pytestconfig.pluginmanager.get_plugin("xval")
+    assert plugin is pytest_plugin, "pip install -e '.[test]' registers the pytest11 entry"
+
+
+def test_assertions_share_one_cached_run(xval):
+    before = dict(pytest_plugin._STATS)
+    r1 = xval.run("seed-four-bar", "mujoco", samples=24)
+    comps = xval.assert_agrees("seed-four-bar", engine="mujoco", samples=24)
+    r2, _ = xval.compare("seed-four-bar", "mujoco", tolerance=1e-3, samples=24,
+                         quantities=["B.force"])
+    assert r1 is r2
+    assert pytest_plugin._STATS["runs"] - before["runs"] <= 1
+    assert {c.quantity for c in comps} >= {"coupler.alpha", "rocker.alpha", "B.force"}
+    with pytest.raises(KeyError, match="no quantity 'B.torque'"):
+        xval.compare("seed-four-bar", "mujoco", samples=24, quantities=["B.torque"])
+
+
+def test_failure_names_quantity_error_where_and_settings(xval):
+    with pytest.raises(AssertionError) as e:
+        xval.assert_agrees("seed-four-bar", engine="mujoco", tolerance=1e-12, samples=24,
+                           settings={"timestep": "0.00025"})
+    text = str(e.value)
+    lines = text.splitlines()
+    assert lines[0].startswith("seed-four-bar / mujoco: ")
+    worst = lines[1].strip()
+    assert re.match(r"\S+: error \d\.\d+e-\d+ of peak at input [\d.]+ deg \(max \|error\| ",
+                    worst), worst
+    assert lines[-2].strip().startswith("settings: mujoco: timestep=0.00025 ")
+
+
+def test_a_refusal_is_cached_and_raised(xval):
+    from dataclasses import replace
+
+    from analytic import load_case
+    from sim_models.engine_base import EngineRefusal
+    mech = load_case("seed-four-bar")
+    still = replace(mech, driver=replace(mech.driver, velocity=0.0, acceleration=0.0))
+    for _ in range(2):
+        with pytest.raises(EngineRefusal, match="no motion"):
+            xval.assert_agrees(still, engine="mujoco")
+
+
+def test_plugin_imports_nothing_heavy():
+    """Every pytest run in the environment loads the plugin: it must not import numpy or
+    an engine until a fixture is used."""
+    code = textwrap.dedent("""
+        import sys, reports.pytest_plugin
+        heavy = {"numpy", "mujoco", "pybullet", "exudyn", "analytic", "sim_models"}
+        print(sorted(heavy & set(sys.modules)))
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
