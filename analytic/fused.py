@@ -1,0 +1,364 @@
+"""The fused solver kernel: positions, rates, tree walk and forces in one pass.
+
+For a mechanism with a dyad plan (every built-in case), :class:`FusedKernel`
+compiles the plan into one numba function (:mod:`analytic.kernels.codegen`) that
+runs over the input values once, each configuration in registers, writing only the
+outputs.  A mechanism solved by Newton-Raphson (no dyad plan) has no kernel:
+:func:`kernel_for` returns ``None`` and the numpy path is used.
+
+The kernel is compiled once per mechanism *structure* (the geometry is a parameter
+array) and cached on disk by numba (``cache=True``) under :func:`cache_dir`, so a
+second process pays only the load.  The numpy path stays the reference:
+``XVAL_FUSED=0`` (or :func:`kernel_for` ``(..., enabled=False)``) forces it, and
+``tests/analytic/test_fused.py`` checks the two agree to 1e-13 of peak on every
+built-in case.
+
+Branch signs are an input, one row per configuration or one row for all, so the
+branch continuation of :class:`analytic.positions.PositionSolver` (signs that
+change after a change point) is evaluated unchanged.
+
+Memory: the kernel allocates nothing per configuration.  Its outputs are the whole
+cost: :meth:`FusedKernel.state` (``q, q', q''``, every joint force, the drive
+effort and the power terms) is ``8 (3 nq + 2 J + 2 P + 5)`` bytes per configuration,
+176 B for a four-bar; :meth:`FusedKernel.kinematics` materialises the full
+:class:`analytic.kinematics.Kinematics` arrays (poses, origin rates, Jacobian,
+joint points), about 600 B for a four-bar.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import AssemblyError, SingularConfigurationError
+from .tolerances import SINGULAR_CONDITION
+
+#: how many suspect (near-singular) configurations one call records; past it the
+#: screen is repeated in numpy over the stored Jacobians
+SUSPECT_CAP = 4096
+#: compile seconds of each kernel module loaded or built in this process, by name
+COMPILE_LOG: dict[str, float] = {}
+_MODULES: dict[str, object] = {}
+
+
+def enabled() -> bool:
+    """The fused path is on unless ``XVAL_FUSED=0`` or numba is missing."""
+    if os.environ.get("XVAL_FUSED", "1").strip() in ("0", "off", "no", "false"):
+        return False
+    return importlib.util.find_spec("numba") is not None
+
+
+def cache_dir() -> Path:
+    """Where generated kernel modules and numba's compiled cache live:
+    ``$XVAL_KERNEL_CACHE``, else ``$XDG_CACHE_HOME/linkage-xval/kernels``."""
+    d = os.environ.get("XVAL_KERNEL_CACHE")
+    if not d:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache")
+        d = os.path.join(base, "linkage-xval", "kernels")
+    p = Path(d)
+    p.mkdir(parents=True, exist_ok=True)
+    return p
+
+
+def _load(source: str):
+    """Import the generated module (written once under its content hash; numba
+    keys its on-disk cache on the file, so an unchanged file is never rewritten)."""
+    key = hashlib.sha256(source.encode()).hexdigest()[:20]
+    name = f"xval_kernel_{key}"
+    if name in _MODULES:
+        return _MODULES[name]
+    path = cache_dir() / f"{name}.py"
+    if not path.is_file() or path.read_text() != source:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(source)
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    _MODULES[name] = mod
+    return mod
+
+
+@dataclass
+class State:
+    """The compact result of one pass (SI, world axes), from which every other
+    quantity follows: ``q, qd, qdd (N, nq)``; ``joint_force (N, J, 2)`` by body_a on
+    body_b; ``normal_moment (N, P, 2)`` of the prismatic joints; ``scalars (N, 5)``:
+    effort, power, kinetic_rate, load_power, power_residual (``None`` without forces)."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    joint_force: np.ndarray | None
+    normal_moment: np.ndarray | None
+    scalars: np.ndarray | None
+
+
+class FusedKernel:
+    """The compiled kernel of one :class:`analytic.kinematics.Linkage`."""
+
+    def __init__(self, linkage):
+        from .kernels.codegen import KernelSource
+        if linkage.topo.plan is None:
+            raise ValueError(f"mechanism {linkage.mech.name!r} has no dyad plan: no kernel")
+        self.lk = linkage
+        self.with_forces = linkage.mech.has_mass
+        ks = KernelSource(linkage, self.with_forces)
+        self.source = ks
+        self.pf, self.pc = ks.params()
+        t0 = time.perf_counter()
+        self.module = _load(ks.source)
+        self.fn = self.module.kernel
+        self.compile_seconds = None  # measured at the first call
+        self._t_load = time.perf_counter() - t0
+        topo = linkage.topo
+        self.B, self.nq, self.J = len(topo.body_names), topo.nq, len(linkage.mech.joints)
+        self.n = self.nq - 1
+        self.P = len(topo.prismatic)
+        self.T = ks.n_dyad_trans
+        self.trans_names = [t[0] for t in ks.trans]
+        self.n_branch = ks.n_branch
+
+    # -- raw evaluation ---------------------------------------------------------
+    def signs_for(self, values: np.ndarray, branch: str = "continued") -> np.ndarray:
+        """Branch signs ``(1 or N, n_branch)`` for ``values``: the position solver's
+        schedule (signs that change after change points) or its held signs."""
+        ps = self.lk.positions
+        sch = getattr(ps, "schedule", None) if branch != "held" else None
+        if sch is None or getattr(sch, "constant", True) or not len(values):
+            return np.array([ps.signs], float).reshape(1, self.n_branch)
+        combos, idx = sch.signs_for(values)
+        if len(combos) == 1:
+            return np.array([combos[0]], float).reshape(1, self.n_branch)
+        return np.asarray(combos, float)[idx].reshape(len(values), self.n_branch)
+
+    def alloc(self, N: int, level: int = 3, full: bool = False) -> dict:
+        """Output arrays for ``N`` configurations, zero-sized where not wanted.
+
+        ``level`` 0: poses; 1: + angles and ``q``; 2: + rates and the tree walk;
+        3: + forces.  ``full`` adds what :class:`Kinematics` holds besides ``q, q',
+        q''`` (angles, poses, origin rates, Jacobian, transmission and joint points).
+        """
+        def n_(ok):
+            return N if ok else 0
+        B, J = self.B, self.J
+        return dict(
+            q=np.empty((n_(level >= 1), self.nq)), qd=np.empty((n_(level >= 2), self.nq)),
+            qdd=np.empty((n_(level >= 2), self.nq)),
+            theta=np.empty((n_(full and level >= 1), B)),
+            omega=np.empty((n_(full and level >= 2), B)),
+            alpha=np.empty((n_(full and level >= 2), B)),
+            E=np.empty((n_(full), B), complex), zO=np.empty((n_(full), B), complex),
+            zv=np.empty((n_(full and level >= 2), B), complex),
+            za=np.empty((n_(full and level >= 2), B), complex),
+            A=np.empty((n_(full and level >= 2), self.n, self.n)),
+            det=np.empty(n_(full and level >= 2)),
+            trv=np.empty((n_(full and level >= 2), 2 * self.T), complex),
+            jp=np.empty((n_(full and level >= 2), J), complex),
+            jf=np.empty((n_(level >= 3), J, 2)), nm=np.empty((n_(level >= 3), self.P, 2)),
+            sc=np.empty((n_(level >= 3), 5)))
+
+    def run(self, values, velocity, acceleration, signs, out: dict, level: int = 3,
+            carry=None):
+        """Evaluate into ``out`` (see :meth:`alloc`; its first dimension may exceed
+        ``len(values)``: the leading rows are written).  ``carry`` (``1 + 2 n_groups``)
+        continues the angle unwrapping of a previous block.  Returns ``(first
+        infeasible index or -1, index of the worst loop residual, worst residual (m),
+        suspect indices)``."""
+        if level >= 3 and not self.with_forces:
+            raise ValueError("forces need masses")
+        N = len(values)
+        if carry is None:
+            carry = np.zeros(1 + 2 * self.lk.topo.n_groups)
+        stat = np.zeros(3, np.int64)
+        statf = np.zeros(1)
+        cap = min(N, SUSPECT_CAP)
+        susp = np.empty(max(cap, 1), np.int64)
+        o = out
+        # views of N rows; zero-sized arrays stay zero-sized
+        v = {k: (a[:N] if a.shape[0] else a) for k, a in o.items()}
+        t0 = time.perf_counter() if self.compile_seconds is None else None
+        self.fn(level, values, velocity, acceleration, signs, self.pf, self.pc, carry, stat, statf,
+                susp, v["q"], v["qd"], v["qdd"], v["theta"], v["omega"], v["alpha"], v["E"],
+                v["zO"], v["zv"], v["za"], v["A"], v["det"], v["trv"], v["jp"], v["jf"],
+                v["nm"], v["sc"])
+        if t0 is not None:
+            self.compile_seconds = time.perf_counter() - t0 + self._t_load
+            COMPILE_LOG[self.module.__name__] = self.compile_seconds
+        nsus = int(stat[2])
+        return int(stat[0]), int(stat[1]), float(statf[0]), (susp[:nsus] if nsus <= cap
+                                                              else None)
+
+    # -- the solver's results -------------------------------------------------------
+    def _inputs(self, values, velocity, acceleration):
+        d = self.lk.mech.driver
+        values = np.ascontiguousarray(np.atleast_1d(np.asarray(
+            d.value if values is None else values, float)))
+        N = len(values)
+        vel = np.broadcast_to(np.asarray(d.velocity if velocity is None else velocity, float),
+                              (N,)).copy()
+        acc = np.broadcast_to(np.asarray(d.acceleration if acceleration is None
+                                         else acceleration, float), (N,)).copy()
+        return values, vel, acc
+
+    def _check(self, values, bad, worst_i, worst):
+        from . import positions as P
+        lk = self.lk
+        if bad >= 0:
+            raise P._infeasible(lk.topo, float(values[bad]))
+        tol = lk.positions.tol
+        if lk.topo.n_loops and len(values) and not worst <= tol:
+            raise AssemblyError(
+                f"mechanism {lk.mech.name!r}: loop residual {worst:.3g} m "
+                f"at driver = {P._fmt_value(lk.topo, float(values[worst_i]))} exceeds "
+                f"{tol:.3g} m", float(values[worst_i]))
+
+    def _singular(self, values, susp, A, on_singular):
+        """Raise as the numpy path does at the first configuration whose loop Jacobian
+        is singular (condition number from the stored Jacobians)."""
+        if on_singular != "raise" or self.n == 0:
+            return
+        from .linalg import condition
+        if susp is None:  # more suspects than recorded: screen them all again
+            susp = np.arange(len(values))
+        if not len(susp):
+            return
+        cond = condition(A[susp])
+        badm = ~(cond < SINGULAR_CONDITION)
+        if not badm.any():
+            return
+        k = int(np.flatnonzero(badm)[0])
+        v = float(values[susp[k]])
+        lk = self.lk
+        vs = f"{math.degrees(v):.6g} deg" if lk.driver_is_revolute else f"{v:.6g} m"
+        raise SingularConfigurationError(
+            f"mechanism {lk.mech.name!r}: singular configuration (dead centre or change "
+            f"point) at driver {lk.mech.driver.joint!r} = {vs}: loop Jacobian condition "
+            f"number {float(cond[k]):.3g}; velocities are not determined by the input there",
+            v)
+
+    def solve(self, values=None, velocity=None, acceleration=None, on_singular="raise",
+              branch="continued", forces: bool = False):
+        """``(Kinematics, Forces or None)`` in one pass, as
+        ``Linkage.kinematics`` and ``Linkage.forces`` compute them."""
+        values, vel, acc = self._inputs(values, velocity, acceleration)
+        if forces:
+            self._require_mass()
+        level = 3 if forces else 2
+        out = self.alloc(len(values), level, full=True)
+        bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
+                                        level)
+        self._check(values, bad, wi, worst)
+        self._singular(values, susp, out["A"], on_singular)
+        return self._wrap(values, vel, acc, out, branch, forces)
+
+    def solve_block(self, values, velocity, acceleration, out: dict, carry: np.ndarray,
+                    level: int = 3, branch: str = "continued", on_singular="flag"):
+        """As :meth:`solve` for one block of a longer run, into the preallocated
+        ``out`` (:meth:`alloc` with ``full=True``) with the unwrapping ``carry`` of the
+        previous block; the results are views of ``out``."""
+        values, vel, acc = self._inputs(values, velocity, acceleration)
+        if level >= 3:
+            self._require_mass()
+        bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
+                                        level, carry)
+        N = len(values)
+        cut = {k: (a[:N] if a.shape[0] else a) for k, a in out.items()}
+        self._check(values, bad, wi, worst)
+        self._singular(values, susp, cut["A"], on_singular)
+        return self._wrap(values, vel, acc, cut, branch, level >= 3)
+
+    def _wrap(self, values, vel, acc, out, branch, forces):
+        from .kinematics import Kinematics
+        trans = [(name, out["trv"][:, 2 * d], out["trv"][:, 2 * d + 1])
+                 for d, name in enumerate(self.trans_names)]
+        jp = {j: out["jp"][:, j] for j in range(self.J)}
+        kin = Kinematics(
+            linkage=self.lk, value=values, velocity=vel, acceleration=acc, q=out["q"],
+            qd=out["qd"], qdd=out["qdd"], theta=out["theta"], omega=out["omega"],
+            alpha=out["alpha"], E=out["E"], zO=out["zO"], zv=out["zv"], za=out["za"],
+            jacobian=out["A"], determinant=out["det"], transmission_vectors=trans,
+            joint_point=jp)
+        kin._fused_branch = branch
+        return kin, (self._forces(out) if forces else None)
+
+    def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",
+                   branch="continued"):
+        """As :meth:`analytic.kinematics.Linkage.kinematics`."""
+        return self.solve(values, velocity, acceleration, on_singular, branch)[0]
+
+    def forces(self, kin):
+        """As :func:`analytic.kinetostatics.solve_forces`: one more pass of the kernel
+        at ``kin``'s inputs, writing only the forces."""
+        self._require_mass()
+        N = kin.n
+        out = self.alloc(N, 3)
+        branch = getattr(kin, "_fused_branch", "continued")
+        self.run(kin.value, kin.velocity, kin.acceleration,
+                 self.signs_for(kin.value, branch), out, 3)
+        return self._forces(out)
+
+    def _require_mass(self):
+        if not self.with_forces:
+            from .kinetostatics import solve_forces
+            solve_forces(self.lk, None)  # raises the typed MissingMassError
+            raise AssertionError("unreachable")
+
+    def _forces(self, out):
+        from .kinetostatics import Forces
+        mech, topo = self.lk.mech, self.lk.topo
+        jf, nm, sc = out["jf"], out["nm"], out["sc"]
+        joint_force = {jt.name: jf[:, j] for j, jt in enumerate(mech.joints)}
+        normal = {mech.joints[j].name: nm[:, i, 0] for i, j in enumerate(topo.prismatic)}
+        moment = {mech.joints[j].name: nm[:, i, 1] for i, j in enumerate(topo.prismatic)}
+        return Forces(joint_force, normal, moment, sc[:, 0], sc[:, 1], sc[:, 2], sc[:, 3],
+                      sc[:, 4])
+
+    def state(self, values=None, velocity=None, acceleration=None, level: int = 3,
+              branch: str = "continued", out: dict | None = None) -> State:
+        """The compact result (:class:`State`) in one pass: ``q`` (level 1), with
+        ``q', q''`` (level 2), with the forces (level 3).  ``out`` (from
+        :meth:`alloc` ``(N, level)``) reuses preallocated outputs."""
+        values, vel, acc = self._inputs(values, velocity, acceleration)
+        if level >= 3:
+            self._require_mass()
+        if out is None:
+            out = self.alloc(len(values), level)
+        bad, wi, worst, _ = self.run(values, vel, acc, self.signs_for(values, branch), out,
+                                     level)
+        self._check(values, bad, wi, worst)
+        N = len(values)
+        cut = {k: (a[:N] if a.shape[0] else None) for k, a in out.items()}
+        return State(cut["q"], cut["qd"], cut["qdd"], cut["jf"], cut["nm"], cut["sc"])
+
+    def poses(self, values, branch: str = "continued", out: dict | None = None):
+        """Body poses only (level 0): ``exp(i theta)`` and origins, complex ``(N, B)``
+        each, from which every point follows (angles are not computed)."""
+        values = np.ascontiguousarray(np.atleast_1d(np.asarray(values, float)))
+        if out is None:
+            out = self.alloc(len(values), 0, full=True)
+        z = np.zeros(1)
+        bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0)
+        self._check(values, bad, wi, worst)
+        return out["E"][:len(values)], out["zO"][:len(values)]
+
+
+def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:
+    """The linkage's fused kernel (built once and kept on the linkage), or ``None``
+    on the Newton path, when disabled (``XVAL_FUSED=0``) or without numba."""
+    if not (enabled() if enabled_ is None else enabled_) or linkage.topo.plan is None:
+        return None
+    fk = linkage.__dict__.get("_fused_kernel")
+    if fk is None:
+        fk = FusedKernel(linkage)
+        linkage.__dict__["_fused_kernel"] = fk
+    return fk

@@ -1,0 +1,110 @@
+"""Small dense linear algebra for the fused kernels, one matrix at a time.
+
+The same formulas as :mod:`analytic.linalg` (explicit Cramer's rule up to 3x3, so
+the compiled and numpy paths agree to rounding); larger systems by LU with partial
+pivoting, as LAPACK's ``getrf``/``getrs`` do for ``numpy.linalg.solve``.  Scratch
+matrices are passed in, so nothing is allocated per configuration.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _det3(A00, A01, A02, A10, A11, A12, A20, A21, A22):
+    return (A00 * (A11 * A22 - A12 * A21)
+            - A01 * (A10 * A22 - A12 * A20)
+            + A02 * (A10 * A21 - A11 * A20))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _lu(A, n, lu, piv):
+    """LU factors of ``A[:n, :n]`` in ``lu`` (unit lower L below the diagonal), row
+    pivots in ``piv``; returns the permutation's sign."""
+    for r in range(n):
+        for c in range(n):
+            lu[r, c] = A[r, c]
+    sign = 1.0
+    for j in range(n):
+        p = j
+        big = abs(lu[j, j])
+        for r in range(j + 1, n):
+            if abs(lu[r, j]) > big:
+                big = abs(lu[r, j])
+                p = r
+        piv[j] = p
+        if p != j:
+            sign = -sign
+            for c in range(n):
+                t = lu[j, c]
+                lu[j, c] = lu[p, c]
+                lu[p, c] = t
+        d = lu[j, j]
+        if d != 0.0:
+            for r in range(j + 1, n):
+                lu[r, j] = lu[r, j] / d
+                f = lu[r, j]
+                for c in range(j + 1, n):
+                    lu[r, c] -= f * lu[j, c]
+    return sign
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def det_small(A, n, lu, piv):
+    """Determinant of ``A[:n, :n]``."""
+    if n == 1:
+        return A[0, 0]
+    if n == 2:
+        return A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    if n == 3:
+        return _det3(A[0, 0], A[0, 1], A[0, 2], A[1, 0], A[1, 1], A[1, 2],
+                     A[2, 0], A[2, 1], A[2, 2])
+    d = _lu(A, n, lu, piv)
+    for j in range(n):
+        d *= lu[j, j]
+    return d
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def solve_small(A, b, n, out, lu, piv):
+    """Solve ``A[:n, :n] x = b[:n]`` into ``out[:n]`` (inf/nan where singular)."""
+    if n == 0:
+        return
+    if n == 1:
+        out[0] = b[0] / A[0, 0]
+        return
+    if n == 2:
+        d = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+        out[0] = (b[0] * A[1, 1] - A[0, 1] * b[1]) / d
+        out[1] = (A[0, 0] * b[1] - b[0] * A[1, 0]) / d
+        return
+    if n == 3:
+        d = _det3(A[0, 0], A[0, 1], A[0, 2], A[1, 0], A[1, 1], A[1, 2],
+                  A[2, 0], A[2, 1], A[2, 2])
+        out[0] = _det3(b[0], A[0, 1], A[0, 2], b[1], A[1, 1], A[1, 2],
+                       b[2], A[2, 1], A[2, 2]) / d
+        out[1] = _det3(A[0, 0], b[0], A[0, 2], A[1, 0], b[1], A[1, 2],
+                       A[2, 0], b[2], A[2, 2]) / d
+        out[2] = _det3(A[0, 0], A[0, 1], b[0], A[1, 0], A[1, 1], b[1],
+                       A[2, 0], A[2, 1], b[2]) / d
+        return
+    _lu(A, n, lu, piv)
+    for r in range(n):
+        out[r] = b[r]
+    for j in range(n):  # apply the row swaps, then forward substitution (unit L)
+        p = piv[j]
+        if p != j:
+            t = out[j]
+            out[j] = out[p]
+            out[p] = t
+    for r in range(n):
+        s = out[r]
+        for c in range(r):
+            s -= lu[r, c] * out[c]
+        out[r] = s
+    for r in range(n - 1, -1, -1):
+        s = out[r]
+        for c in range(r + 1, n):
+            s -= lu[r, c] * out[c]
+        out[r] = s / lu[r, r]
