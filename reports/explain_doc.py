@@ -109,7 +109,9 @@ def _results(ctx) -> list:
                      S.fmt(ctx.qd[g]), S.fmt(ctx.qdd[g])])
     out = [Heading(2, "Results"),
            Table("links", "Links: the angle of each body's own x axis (deg), ω (rad/s), "
-                 "α (rad/s²), from the hand method",
+                 "α (rad/s²), from the hand method"
+                 + ("" if ctx.hand_ok and not ctx.polys.coupled else
+                    " (the matrix method's where the loops above say so)"),
                  ["link", "angle (deg)", "ω (rad/s)", "α (rad/s²)"], rows)]
     srows = []
     for j in topo.prismatic:

@@ -28,6 +28,7 @@ from .explain_terms import (
     dotted_equation,
     eliminate,
     equation_sym,
+    rate_symbol,
     term_sym,
     velocity_terms,
 )
@@ -254,9 +255,13 @@ def _solve_for(ctx, loop, terms, nn, what: str) -> list:
             ctx.hand_ok = False
             out.append(Para(["The terms of ", ctx.vname(loop, y), " are not along one unit "
                              "vector here, so one dot product cannot remove them; the "
-                             "solver's matrix method gives this loop."]))
+                             "solver's matrix method gives this loop's ", what, "."]))
+            src = ctx.kin.qd if what == "velocity" else ctx.kin.qdd
+            store = ctx.qd if what == "velocity" else ctx.qdd
+            for u in loop.unknowns:
+                store[u.q] = src[0, u.q]
             return out
-        ysym = _rate_sym(loop, terms, y)
+        ysym = rate_symbol(y, loop, terms)
         e = S.MU(S.th(el.e_label)) if el.e_unit == "mu" else S.SIGMA(S.th(el.e_label))
         other_unit = "σ" if el.e_unit == "mu" else "μ"
         e_name = "μ" if el.e_unit == "mu" else "σ"
@@ -278,13 +283,6 @@ def _solve_for(ctx, loop, terms, nn, what: str) -> list:
         store = ctx.qd if what == "velocity" else ctx.qdd
         store[x.q] = el.value * (ctx.L if x.kind == "s" else 1.0)
     return out
-
-
-def _rate_sym(loop, terms, var):
-    t = next(t for t in terms if t.var == var)
-    from .explain_terms import factor_sym
-    k, lab = next((k, lab) for k, lab in t.factors if k == t.rate_kind)
-    return factor_sym(k, lab)
 
 
 def _unit_of(ctx, var, what) -> str:
@@ -428,4 +426,18 @@ def coupled_section(ctx: Ctx, loop: Loop, n: int) -> list:
     for u in [w for w in ctx.polys.variables if w not in ctx.known]:
         ctx.qd[u.q], ctx.qdd[u.q] = kin.qd[0, u.q], kin.qdd[0, u.q]
         ctx.known.add(u)
+    nn = numbers(ctx, loop)
+    src = " (matrix method)"
+    out += [Table(f"position-{n}", f"Position table, loop {n}{src}", ["", "unit"] + _cols(loop),
+                  [[RR, ctx.unit] + [S.fmt(nn.r[v.label]) for v in loop.vectors],
+                   [TH, "deg"] + [_deg_cell(nn.theta[v.label]) for v in loop.vectors]]),
+            Table(f"velocity-{n}", f"Velocity table, loop {n}{src}", ["", "unit"] + _cols(loop),
+                  [[RDOT, f"{ctx.unit}/s"] + [S.fmt(nn.rdot[v.label]) for v in loop.vectors],
+                   [THDOT, "rad/s"] + [_rate_cell(loop, v, nn.w, ctx, "w")
+                                       for v in loop.vectors]]),
+            Table(f"acceleration-{n}", f"Acceleration table, loop {n}{src}",
+                  ["", "unit"] + _cols(loop),
+                  [[RDDOT, f"{ctx.unit}/s²"] + [S.fmt(nn.rddot[v.label]) for v in loop.vectors],
+                   [THDDOT, "rad/s²"] + [_rate_cell(loop, v, nn.al, ctx, "al")
+                                         for v in loop.vectors]])]
     return out

@@ -296,6 +296,22 @@ def test_a_description_file_and_its_units(capsys, tmp_path):
     assert cell_near(vel[3], ex["w3"])     # angular rates do not depend on the unit
 
 
+def test_loops_the_elimination_cannot_take_are_given_by_the_matrix_method(capsys, tmp_path):
+    """A driver between two moving links (the coupler's angle to the crank) leaves
+    three unknowns in the four-bar's loop: the document says so and gives the
+    solver's values, finite, with the forces still by the equilibrium equations."""
+    from analytic.cases import case_path
+    f = tmp_path / "relative-driver.toml"
+    f.write_text(case_path("seed-four-bar").read_text()
+                 .replace('joint = "O2"', 'joint = "A"').replace("value = 60.0", "value = -30.0"))
+    md = explain(capsys, str(f))
+    assert "cannot be solved alone" in md
+    assert table(md, "velocity-1")["$\\dot{\\theta}$"]
+    assert re.search(r"\bnan\b", md, re.IGNORECASE) is None
+    for _, row in table(md, "forces").items():
+        assert float(row[-1]) <= 1e-8 * max(1.0, float(row[-2]))
+
+
 def test_s1_and_s4_calc_lines(s1_md, s4_md):
     assert check_calc_lines(s1_md) >= 12
     assert check_calc_lines(s4_md) >= 12
