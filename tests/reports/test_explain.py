@@ -199,7 +199,18 @@ def test_s4_tables_match_the_closed_form(s4_md):
     acc = table(s4_md, "acceleration-1")["$\\ddot{\\theta}$"]
     assert cell_near(acc[3], ex["a3"]) and cell_near(acc[4], ex["a4"])
     assert round(float(acc[3]), 4) == 42.267 and round(float(acc[4]), 4) == 95.5036
-    assert "290.75" in s4_md and "42.27" in s4_md
+    # the notes' 42.27 and 95.5: their formulas with their rounded 29.38, 290.75, -3.916,
+    # 3.091; SolidWorks' 2421.706 and 5471.96 deg/s^2 in rad/s^2
+    sec = s4_md[s4_md.index("## Where the notes' figures come from"):]
+    got = [float(v) for _, v in re.findall(rf"`calc: (.*) = ({NUMBER})`", sec)]
+    d = math.radians
+    a3 = ((100 * 225 * math.cos(d(60 - 290.75)) + 300 * 3.916 ** 2 * math.cos(d(29.38 - 290.75))
+           + 250 * 3.091 ** 2) / (300 * math.sin(d(290.75 - 29.38))))
+    a4 = ((100 * 225 * math.cos(d(60 - 29.38)) + 300 * 3.916 ** 2
+           + 250 * 3.091 ** 2 * math.cos(d(290.75 - 29.38))) / (250 * math.sin(d(29.38 - 290.75))))
+    expected = [a3, a4, d(2421.706), d(5471.96)]
+    assert got == pytest.approx(expected, rel=1e-5)
+    assert round(a3, 2) == 42.27 and round(a4, 1) == 95.5
 
 
 def test_hand_method_printed_beside_the_matrix_method(s1_md, s4_md):
