@@ -304,7 +304,8 @@ class Dot(Node):
         return "{}.{}".format(*tuple(p._print(a) for a in self.args))
 
     def _mathml_presentation(self, p):
-        return _mrow(p, p._print(self.args[0]), _mo(p, "\u22c5"), p._print(self.args[1]))
+        return _paren_ml(p, _mrow(p, p._print(self.args[0]), _mo(p, "\u22c5"),
+                                  p._print(self.args[1])))
 
 
 class DDt(Node):
