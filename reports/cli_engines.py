@@ -91,7 +91,7 @@ def cmd_report(args) -> int:
 
 def register(sub) -> None:
     s = sub.add_parser("models", help="write the MJCF/URDF files of every built-in case")
-    s.add_argument("--out", help="directory (default sim_models/models)")
+    s.add_argument("--out", type=opt.output_dir, help="directory (default sim_models/models)")
     s.set_defaults(func=cmd_models)
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -129,7 +129,7 @@ def register(sub) -> None:
                    help="only these cases (built-in names or TOML files)")
     s.add_argument("--workers", type=opt.workers,
                    help=f"process-pool size, 1 to {opt.MAX_WORKERS} (default: cores)")
-    s.add_argument("--dask", metavar="SCHEDULER_ADDRESS",
+    s.add_argument("--dask", metavar="SCHEDULER_ADDRESS", type=opt.scheduler_address,
                    help="run the study tasks on an existing Dask distributed scheduler")
     s.set_defaults(func=cmd_report)
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -163,7 +164,17 @@ def output_dir(text: str) -> str:
     except OSError as e:
         raise argparse.ArgumentTypeError(f"cannot create folder {text!r}: "
                                          f"{e.strerror}") from None
-    _probe_dir(p, "the report")
+    _probe_dir(p, "files")
+    return text
+
+
+def scheduler_address(text: str) -> str:
+    """An argparse type: a Dask scheduler address, ``[PROTOCOL://]HOST:PORT``."""
+    m = re.fullmatch(r"(?:(tcp|tls|inproc|ucx|ws|wss)://)?([^:/\s]+|\[[0-9a-fA-F:]+\]):(\d+)",
+                     text)
+    if not m or not 0 < int(m.group(3)) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a scheduler address; expected "
+                                         "HOST:PORT or tcp://HOST:PORT (port 1 to 65535)")
     return text
 
 

@@ -114,7 +114,11 @@ def make_executor(cfg: ReportConfig) -> Executor:
             from analytic import LinkageError
             raise LinkageError("--dask needs the 'distributed' package "
                                "(pip install 'dask[distributed]')") from None
-        client = Client(cfg.dask)
+        try:
+            client = Client(cfg.dask)
+        except OSError as e:  # no scheduler there: a user error, one line
+            from analytic import LinkageError
+            raise LinkageError(f"--dask: cannot reach a scheduler at {cfg.dask!r}: {e}") from None
         ex = client.get_executor()
         ex.client_to_close = client
         return ex
