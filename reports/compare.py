@@ -15,6 +15,8 @@ import pandas as pd
 
 from analytic.errors import LinkageError
 
+from .reference import MAX_CONDITION, analytic_reference, linkage_of
+
 
 @dataclass(frozen=True)
 class Comparison:
@@ -96,32 +98,16 @@ def compare(quantity: str, reference, test, at, tolerance: float,
 
 # --- an engine run against the analytic solution ---------------------------------------
 
-#: Samples where the analytic loop Jacobian's condition number exceeds this are left
-#: out of engine comparisons: only the ends of a limited-range sweep, 1e-6 of the range
-#: from a limit position, where the exact accelerations reach ~1e9 and a sample-time
-#: offset of one ulp changes them by percent.  Every full-cycle case stays below 20.
-MAX_CONDITION = 100.0
-
-
-def _linkage_of(run_, reference=None):
-    """The analytic :class:`Linkage` to compare ``run_`` with: ``reference`` when it is
-    one (the compiled object passed down), else built from ``reference`` (a Mechanism)
-    or from the run's own mechanism (never found again by name)."""
-    from analytic import Linkage
-    if isinstance(reference, Linkage):
-        return reference
-    lk = getattr(reference, "linkage", None)  # a SimTree
-    if isinstance(lk, Linkage):
-        return lk
-    return Linkage(reference if reference is not None else run_.mechanism)
+# MAX_CONDITION (samples near a limit position left out) and the Linkage of a run come
+# from reports.reference, the one analytic reference the verdicts and the figures share
+_linkage_of = linkage_of
 
 
 def analytic_at(run_, reference=None):
     """The analytic kinematics (and forces, when the case has masses) at a run's samples,
     with the driver rates the engine was given: ``(linkage, kin, frc)``.  ``reference``:
     the Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
-    from reports.reference import analytic_reference  # the one reference: figures read it too
-    return analytic_reference(run_, reference)
+    return analytic_reference(run_, reference)  # the one reference: figures read it too
 
 
 #: A reference quantity whose peak is below this fraction of the mechanism's scale for

@@ -45,9 +45,29 @@ class Reference:
     u: np.ndarray
 
 
+#: Samples where the analytic loop Jacobian's condition number exceeds this are left
+#: out of engine comparisons: only the ends of a limited-range sweep, 1e-6 of the range
+#: from a limit position, where the exact accelerations reach ~1e9 and a sample-time
+#: offset of one ulp changes them by percent.  Every full-cycle case stays below 20.
+#: (Defined here, not in reports.compare, which imports this module: no import cycle.)
+MAX_CONDITION = 100.0
+
+
+def linkage_of(run_, reference=None):
+    """The analytic :class:`Linkage` to compare ``run_`` with: ``reference`` when it is
+    one (the compiled object passed down), else built from ``reference`` (a Mechanism)
+    or from the run's own mechanism (never found again by name)."""
+    from analytic import Linkage
+    if isinstance(reference, Linkage):
+        return reference
+    lk = getattr(reference, "linkage", None)  # a SimTree
+    if isinstance(lk, Linkage):
+        return lk
+    return Linkage(reference if reference is not None else run_.mechanism)
+
+
 def _linkage(run_, reference=None):
-    from reports.compare import _linkage_of
-    return _linkage_of(run_, reference)
+    return linkage_of(run_, reference)
 
 
 def _kinematics(lk, values, velocity, acceleration):
@@ -84,7 +104,6 @@ def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
 
 def reference_of(run_, reference=None) -> Reference:
     """:func:`analytic_reference` with the judged samples and the plotted axis."""
-    from reports.compare import MAX_CONDITION
     lk, kin, frc = analytic_reference(run_, reference)
     judged = kin.condition <= MAX_CONDITION
     if run_.ok:

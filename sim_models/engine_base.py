@@ -371,7 +371,12 @@ def _time_plan(tree: SimTree, revolutions: int, samples: int) -> Plan:
     # cut where the input leaves the feasible interval or nears a limit position: a dense
     # scan of the prescribed path (limit positions are where the input turns back)
     if not full:
+        # stay half a sample spacing of the range inside the limit positions: toward one
+        # the drive effort and the accelerations grow without bound (1/sqrt of the
+        # distance), and a sample there judges the engine on a singularity
         lo, hi = float(vals[0]), float(vals[-1])
+        margin = (hi - lo) / (2 * max(samples, 2))
+        lo, hi = lo + margin, hi - margin
         tt = np.linspace(0.0, t_run, 4001)
         x = tree.driver_path(tt)[0]
         out = (x < lo) | (x > hi)

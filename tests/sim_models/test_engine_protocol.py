@@ -200,3 +200,23 @@ def test_pybullet_accelerating_input_stays_on_its_path():
     path = d.value + d.velocity * t + 0.5 * d.acceleration * t ** 2
     off = (r.measured_values - path + math.pi) % (2 * math.pi) - math.pi
     assert np.max(np.abs(off)) < PRESCRIBED_PATH_RAD
+
+
+def test_limited_range_reversing_input_stays_off_its_limits():
+    """A collar input that decelerates, turns back and runs toward its other limit
+    (hibbeler-16-30 with a = -12 m/s^2): sampled by time, never within half a sample
+    spacing of a limit position of the solver's feasible range, and it passes."""
+    from dataclasses import replace
+
+    from reports.compare import compare_run, verdict
+    mech = load_case("hibbeler-16-30")
+    mech = replace(mech, driver=replace(mech.driver, acceleration=-12.0))
+    tree = compile_linkage(mech)
+    (lo, hi), = tree.linkage.feasible_ranges()
+    p = plan_samples(tree, 2, 24)
+    x = p.values[np.isfinite(p.times)]
+    assert p.by_time and len(x) >= 12
+    assert x.min() >= lo + (hi - lo) / 48 * 0.99 and x.max() <= hi - (hi - lo) / 48 * 0.99
+    assert np.any(np.diff(x) < 0) and np.any(np.diff(x) > 0)  # out and back
+    r = run(tree, "mujoco", samples=24)
+    assert r.ok and verdict(compare_run(r, tree.linkage))
