@@ -120,7 +120,8 @@ def from_baseline(checks) -> list[CiCase]:
         elif chk.problems:
             kind = "model changed" if "changed" in chk.problems[0] else "run failed"
         changed = chk.versions_changed()
-        lines = list(chk.problems) + [q.message() for q in chk.quantities]
+        rest = [q for q in chk.quantities if not q.failed]
+        lines = list(chk.problems) + [q.message() for q in bad + rest]
         if changed:
             lines.append("versions changed: " + ", ".join(
                 f"{k} {a} -> {b}" for k, a, b in ((k, *v) for k, v in changed.items())))
