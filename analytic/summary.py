@@ -25,6 +25,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .mechanism import Revolute
+from .tolerances import SINGULAR_CONDITION
+
+#: The peak drive effort is said to sit at an event (singular position, change point,
+#: input limit) when within this fraction of the swept range: 5 deg of a turn.
+NEAR_EVENT = 5.0 / 360.0
 
 
 @dataclass(frozen=True)
@@ -75,6 +80,11 @@ class Summary:
     peak_effort_at: float | None = None
     peak_event: object = None
     constant_speed: bool = True
+    #: samples at singular positions (condition number >= SINGULAR_CONDITION), whose
+    #: rates and forces are not determined by the input: left out of the peak effort
+    singular_samples: int = 0
+    #: power balance error over the regular samples, relative to the largest power term
+    power_balance: float | None = None
 
     def lines(self) -> list[str]:
         """Plain-text lines for the command line."""
@@ -105,9 +115,13 @@ class Summary:
                     f"{self.peak_effort_at:.6g} {u}")
             ev = self.peak_event
             if ev is not None:
-                line += (f", {ev.distance:.3g} {u} from the {ev.kind.replace('_', ' ')} "
-                         f"position ({ev.where}) at {ev.input:.6g} {u}")
+                what = "input limit" if ev.kind == "limit" else ev.kind.replace("_", " ")
+                line += (f", {ev.distance:.3g} {u} from the {what} position ({ev.where}) at "
+                         f"{ev.input:.6g} {u}")
             out.append(line)
+        if self.singular_samples:
+            out.append(f"{self.singular_samples} sample(s) at singular positions: rates and "
+                       "forces there are not determined by the input (left out above)")
         return out
 
 
@@ -206,15 +220,26 @@ def summarise(result, nearest_event=None) -> Summary:
         i = int(np.argmin(folded))
         summ.transmission.append(TransmissionSummary(jn, float(folded[i]), float(x[i]),
                                                      float(90.0 - folded[i])))
-    if result.forces is not None:
-        eff = np.abs(result.forces.effort)
+    # forces at a singular sample are not determined by the motion: left out
+    regular = kin.condition < SINGULAR_CONDITION
+    summ.singular_samples = int(np.sum(~regular))
+    if result.forces is not None and regular.any():
+        frc = result.forces
+        eff = np.where(regular, np.abs(frc.effort), np.nan)
         if np.any(np.isfinite(eff)):
             i = int(np.nanargmax(eff))
             summ.effort_name = "drive torque" if rev else "drive force"
             summ.effort_unit = "N m" if rev else "N"
             summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
             if nearest_event is not None:
-                summ.peak_event = nearest_event(result, float(x[i]))
+                ev = nearest_event(result, float(x[i]),
+                                   kinds=("singular", "change_point", "input_limit"))
+                span = 360.0 if periodic else float(np.ptp(x))
+                if ev is not None and ev.distance <= NEAR_EVENT * span:
+                    summ.peak_event = ev
+        peak = max(np.max(np.abs(frc.power[regular])), np.max(np.abs(frc.kinetic_rate[regular])),
+                   np.max(np.abs(frc.load_power[regular])), 1e-300)
+        summ.power_balance = float(np.max(np.abs(frc.power_residual[regular])) / peak)
     return summ
 
 

@@ -242,12 +242,19 @@ def nearest_event(result: SweepResult, at: float, kinds=None) -> NearestEvent | 
 
     ``at`` is in the sweep frame's input units (deg for a revolute input, m for a
     prismatic one), on any turn: for a full cycle the distance is taken modulo 360
-    deg.  ``kinds`` defaults to ``("singular", "change_point", "limit")``.  Returns
-    ``None`` when the sweep has no such event.  Use it to say whether a large error
-    sits next to a position where the mechanism itself is singular.
+    deg.  ``kinds`` defaults to ``("singular", "change_point", "limit")``; the
+    pseudo-kind ``"input_limit"`` selects the ``limit`` rows of the input itself (the
+    ends of a limited range), without the outputs' extreme angles, where nothing is
+    singular.  Returns ``None`` when the sweep has no such event.  Use it to say whether
+    a large error sits next to a position where the mechanism itself is singular:
+    ``kinds=("singular", "change_point", "input_limit")``.
     """
     kinds = ("singular", "change_point", "limit") if kinds is None else tuple(kinds)
-    ev = result.events[result.events.kind.isin(kinds)]
+    e = result.events
+    keep = e.kind.isin(kinds)
+    if "input_limit" in kinds:
+        keep |= (e.kind == "limit") & (e["where"] == result.kinematics.linkage.mech.driver.joint)
+    ev = e[keep]
     if not len(ev):
         return None
     d = np.abs(ev["input"].to_numpy() - float(at))

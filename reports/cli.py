@@ -206,8 +206,8 @@ def cmd_sweep(args) -> int:
         print(r.events.to_string(index=False))
     for line in r.summary.lines():
         print(line)
-    if r.forces is not None:
-        print(f"power balance error {r.forces.power_balance_error():.2g} (relative)")
+    if r.summary.power_balance is not None:  # over the regular samples
+        print(f"power balance error {r.summary.power_balance:.2g} (relative)")
     if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
