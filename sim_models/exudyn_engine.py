@@ -68,7 +68,15 @@ import numpy as np
 
 from analytic import Prismatic, Revolute
 
-from .engine_base import EngineRefusal, EngineSettings, Plan, Recorder, Session, check_motion
+from .engine_base import (
+    EngineRefusal,
+    EngineSettings,
+    Plan,
+    Recorder,
+    Session,
+    SettingsError,
+    check_motion,
+)
 from .tree import SimModelError, SimTree
 
 
@@ -133,8 +141,21 @@ class ExudynSettings(EngineSettings):
     spectral_radius: float = 0.7
     newton_tolerance: float = 1e-10
 
+    def __post_init__(self):
+        bad = None
+        if not self.timestep > 0:
+            bad = ("timestep", self.timestep, "must be > 0 s")
+        elif not self.steps_per_rev >= 1:
+            bad = ("steps_per_rev", self.steps_per_rev, "must be at least 1")
+        elif not 0.0 <= self.spectral_radius <= 1.0:
+            bad = ("spectral_radius", self.spectral_radius, "must be in [0, 1]")
+        elif not self.newton_tolerance > 0:
+            bad = ("newton_tolerance", self.newton_tolerance, "must be > 0")
+        if bad:
+            raise SettingsError(f"engine 'exudyn' setting {bad[0]}={bad[1]!r}: {bad[2]}")
+
     def max_step(self, plan: Plan) -> float:
-        return min(float(self.timestep), plan.rev_time / max(1, int(self.steps_per_rev)))
+        return min(float(self.timestep), plan.rev_time / int(self.steps_per_rev))
 
     def describe(self) -> str:
         return (f"gen-alpha rho={self.spectral_radius:g} steps/rev={self.steps_per_rev} "

@@ -16,7 +16,7 @@ import pytest
 from analytic import Linkage, case_names, load_case
 from analytic.mechanism import Driver
 from sim_models import compile_linkage
-from sim_models.engine_base import EngineRefusal
+from sim_models.engine_base import EngineRefusal, SettingsError
 from sim_models.engines import run
 from sim_models.registry import get_engine
 
@@ -90,6 +90,31 @@ def test_massless_link_is_massless_in_the_model():
         assert obj["mass"] == 0.0 and obj["inertia"] == 0.0
     finally:
         session.close()
+
+
+def test_all_massless_linkage_gives_the_statics():
+    """With every link massless the reactions are the statics of the gas load alone; the
+    mass matrix is zero, the Newton matrix still regular (square constraint Jacobian).
+    The multipliers then carry no integration error: round-off agreement."""
+    m = load_case("offset-slider-crank")
+    bodies = tuple(dataclasses.replace(b, mass=0.0, inertia=0.0) if b.name != m.ground
+                   else b for b in m.bodies)
+    mech = dataclasses.replace(m, name="massless", bodies=bodies)
+    r = run(mech, "exudyn", revolutions=2, samples=36)
+    assert r.ok, r.reason
+    assert_run_within(r, mech, EXUDYN_MUST_SHOW, mech.name)
+    from reports.compare import compare_run
+    forces = [c for c in compare_run(r, mech) if c.quantity.endswith(".force")
+              or c.quantity == "drive.effort"]
+    assert forces and max(c.normalised for c in forces) < 1e-9
+
+
+@pytest.mark.parametrize("key, value", [("spectral_radius", "1.5"), ("spectral_radius", "-0.1"),
+                                        ("timestep", "0"), ("steps_per_rev", "0"),
+                                        ("newton_tolerance", "-1")])
+def test_bad_setting_is_one_line_naming_it(key, value):
+    with pytest.raises(SettingsError, match=f"exudyn.*{key}"):
+        get_engine("exudyn").settings({key: value})
 
 
 def _slider_driven(acc, com=None):
