@@ -386,6 +386,31 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
     return pd.DataFrame(cols)
 
 
+def rates_by_continuity(linkage: Linkage, kin: Kinematics, idx: np.ndarray) -> list[int]:
+    """At singular samples ``idx`` the loop equations do not fix the rates.  Where the
+    linkage passes through (both sides regular, as at a change point), set them to the
+    motion's own: the mean of the rates 1e-4 (rad or sizes) before and after, which
+    differs from the limit by O(1e-8).  Elsewhere set them to NaN.  Returns the samples
+    set by continuity."""
+    done = []
+    if not idx.size:
+        return done
+    d = 1e-4 * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))
+    for i in idx:
+        x = kin.value[i] + np.array([-d, d])
+        fields = ("qd", "qdd", "omega", "alpha", "zv", "za")
+        try:
+            side = linkage.kinematics_along(x, kin.velocity[i], kin.acceleration[i])
+            ok = bool(np.all(side.condition < SINGULAR_CONDITION))
+        except LinkageError:
+            ok = False
+        for f in fields:
+            getattr(kin, f)[i] = getattr(side, f).mean(axis=0) if ok else np.nan
+        if ok:
+            done.append(int(i))
+    return done
+
+
 def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
           values: np.ndarray | None = None, start: float | None = None,
           velocity: float | None = None, input_range: tuple[float, float] | None = None
@@ -424,10 +449,30 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
     else:
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")
+    singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
+    through = rates_by_continuity(linkage, kin, singular)
     if forces is None:
         forces = linkage.mech.has_mass
-    frc = linkage.forces(kin) if forces else None
+    with np.errstate(all="ignore"):  # singular samples: their forces are set to NaN below
+        frc = linkage.forces(kin) if forces else None
     notes = []
+    if singular.size:
+        for arr in ([] if frc is None else
+                    [*frc.joint_force.values(), *frc.normal.values(), *frc.moment.values(),
+                     frc.effort, frc.power, frc.kinetic_rate, frc.load_power,
+                     frc.power_residual]):
+            arr[singular] = np.nan
+        conv = math.degrees if linkage.driver_is_revolute else float
+        unit = "deg" if linkage.driver_is_revolute else "m"
+        at = ", ".join(f"{conv(v):.6g}" for v in values[singular][:6]) + \
+            (", ..." if singular.size > 6 else "")
+        notes.append(f"{singular.size} sample(s) at singular positions ({at} {unit}): the "
+                     "rates there are "
+                     + ("the limits of the motion through them" if len(through) ==
+                        singular.size else "by continuity where the linkage passes through, "
+                        "else NaN")
+                     + (", the forces NaN (statically indeterminate there)" if frc is not None
+                        else ""))
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"

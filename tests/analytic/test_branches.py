@@ -171,3 +171,20 @@ def test_where_continuity_cannot_decide_the_signs_are_held_and_said(monkeypatch)
     kin = Linkage(load_case(PARA), branch_rule="switch").kinematics_along(
         np.radians([100.0, 200.0, 300.0, 400.0]))
     np.testing.assert_allclose(_wrap(kin.theta[:, 3] - kin.theta[:, 1]), 0.0, atol=ANGLE_TOL)
+
+
+def test_sweep_at_the_flat_positions_gives_the_motion_through_them():
+    """Samples exactly at 0 and 180 deg are singular: the rates there are the
+    parallelogram's (rocker at the crank's speed, coupler translating), the forces NaN
+    (statically indeterminate), and a note says both."""
+    lk = Linkage(load_case(PARA))
+    res = lk.sweep(360, start=0.0)
+    f = res.frame.set_index("input")
+    w = lk.mech.driver.velocity
+    for x in (0.0, 180.0):
+        assert f.loc[x, "rocker.omega"] == pytest.approx(w, rel=1e-9)
+        assert f.loc[x, "coupler.omega"] == pytest.approx(0.0, abs=1e-9 * w)
+        assert abs(f.loc[x, "rocker.alpha"]) < 1e-6 * w * w
+        assert np.isnan(f.loc[x, "drive.torque"])
+    assert np.isfinite(f.drop(index=[0.0, 180.0])["drive.torque"]).all()
+    assert any("2 sample(s) at singular positions (0, 180 deg)" in n for n in res.notes)
