@@ -1,0 +1,235 @@
+"""The results of an engine run: the :class:`Recorder` sessions fill and the
+:class:`EngineRun` it becomes (analytic conventions; see :mod:`sim_models.engine_base`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from analytic import Mechanism, Revolute
+
+from .engine_settings import EngineSettings
+from .sampling import Plan
+from .tree import SimTree
+
+
+# ============================================================================ recorder
+class Recorder:
+    """Sample arrays of a run, NaN until filled (shapes as :class:`EngineRun`).
+
+    Besides the analytic-convention arrays it keeps the raw tree coordinates ``q, qd,
+    qdd`` (N, nt) of each sample (for the long-run diagnostics)."""
+
+    def __init__(self, tree: SimTree, plan: Plan):
+        N = plan.n
+        B = len(tree.body_names)
+        J = len(tree.mech.joints)
+        P = len(tree.prismatic)
+        nt = len(tree.joints)
+        nan = np.nan
+        self.tree = tree
+        self.times = plan.times
+        self.theta = np.full((N, B), nan)
+        self.omega = np.full((N, B), nan)
+        self.alpha = np.full((N, B), nan)
+        self.slider_acc = np.full((N, P), nan)
+        self.effort = np.full(N, nan)
+        self.effort_engine = np.full(N, nan)
+        self.force = np.full((N, J, 2), nan)
+        self.force_engine = np.full((N, J, 2), nan)
+        self.normal = np.full((N, P), nan)
+        self.moment = np.full((N, P), nan)
+        self.viol = np.full(N, nan)
+        self.speed = np.full(N, nan)
+        self.measured = np.full(N, nan)
+        self.q = np.full((N, nt), nan)
+        self.qd = np.full((N, nt), nan)
+        self.qdd = np.full((N, nt), nan)
+
+    def put_motion(self, rows, t: float, q, qd, qdd):
+        """Fill the motion of ``rows`` from tree coordinates (SimTree conventions):
+        absolute theta/omega/alpha, slider accelerations, the measured driver value, the
+        driver-rate deviation from the prescribed rate at ``t`` and the loop gap.
+        Returns ``(theta, omega, alpha, origin, v_origin, a_origin)`` of
+        :meth:`SimTree.propagate` (each with one row) for the force readout."""
+        st = self.tree
+        q, qd, qdd = (np.asarray(x, float) for x in (q, qd, qdd))
+        prop = st.propagate(q[None], qd[None], qdd[None])
+        th, om, al, org = prop[:4]
+        gap = loop_gap(st, th, org)
+        _, vel, _ = st.driver_path(t)
+        rate = st.driver_sigma * qd[st.driver_tree]
+        for i in np.atleast_1d(rows):
+            self.theta[i], self.omega[i], self.alpha[i] = th[0], om[0], al[0]
+            self.q[i], self.qd[i], self.qdd[i] = q, qd, qdd
+            self.measured[i] = st.driver_value(q[st.driver_tree])
+            self.viol[i] = gap
+            self.speed[i] = rate - float(vel)
+            for p, k in enumerate(st.prismatic):
+                ti = st.tree_joint_indices.index(k)
+                self.slider_acc[i, p] = st.joints[ti].sigma * qdd[ti]
+        return prop
+
+    def put_absolute(self, rows, t: float, theta, omega, alpha, slider_acc, origin,
+                     driver_value: float, driver_rate: float):
+        """Fill the motion of ``rows`` from absolute body quantities, for engines in
+        absolute coordinates: ``theta, omega, alpha`` (B,) rad, rad/s, rad/s^2 of every
+        body's own frame (the description's body frame, ground included), ``slider_acc``
+        (P,) m/s^2 of each prismatic joint's ``s''``, ``origin`` (B, 2) m the body-frame
+        origins (for the loop gap), the engine's driver value (rad or m) and rate."""
+        st = self.tree
+        th = np.asarray(theta, float)[None]
+        gap = loop_gap(st, th, np.asarray(origin, float)[None])
+        _, vel, _ = st.driver_path(t)
+        for i in np.atleast_1d(rows):
+            self.theta[i], self.omega[i], self.alpha[i] = theta, omega, alpha
+            self.slider_acc[i] = slider_acc
+            self.measured[i] = driver_value
+            self.viol[i] = gap
+            self.speed[i] = driver_rate - float(vel)
+
+    def put_forces(self, rows, joint_force, effort, normal=None, moment=None,
+                   force_engine=None, effort_engine=None):
+        """Fill the forces of ``rows``: ``joint_force`` (J, 2) by body_a on body_b,
+        ``effort`` (drive, on body_b), ``normal``/``moment`` (P,), and the engine's own
+        unjudged readings when it has them."""
+        for i in np.atleast_1d(rows):
+            self.force[i] = joint_force
+            self.effort[i] = effort
+            if normal is not None:
+                self.normal[i] = normal
+            if moment is not None:
+                self.moment[i] = moment
+            if force_engine is not None:
+                self.force_engine[i] = force_engine
+            if effort_engine is not None:
+                self.effort_engine[i] = effort_engine
+
+    def fail(self, t_stop: float, reason: str) -> tuple[str, float]:
+        """End a run at ``t_stop``: samples at or after it become NaN.  Returns the
+        reason naming the (prescribed) driver value there, and that value."""
+        st = self.tree
+        fail = float(st.driver_path(t_stop)[0])
+        late = np.asarray(self.times) >= t_stop - 1e-15
+        for arr in (self.theta, self.omega, self.alpha, self.slider_acc, self.effort,
+                    self.force, self.normal, self.moment, self.viol, self.speed,
+                    self.effort_engine, self.force_engine, self.q, self.qd, self.qdd):
+            arr[late] = np.nan
+        return f"{reason} at driver {st.mech.driver.joint!r} = {fmt_value(st, fail)}", fail
+
+
+def loop_gap(tree: SimTree, theta, origin) -> float:
+    """Largest distance (m) between the two points of a loop-closing joint."""
+    gap = 0.0
+    for ch in tree.chords:
+        pa = tree.point_world(theta, origin, ch.body_a, ch.point_a)[0]
+        pb = tree.point_world(theta, origin, ch.body_b, ch.point_b)[0]
+        gap = max(gap, float(np.linalg.norm(pa - pb)))
+    return gap
+
+
+def fmt_value(tree: SimTree, v: float) -> str:
+    if isinstance(tree.mech.driver_joint, Revolute):
+        return f"{math.degrees(v):.4g} deg"
+    return f"{v:.6g} m"
+
+
+# ============================================================================ result
+@dataclass(frozen=True)
+class RunRequest:
+    """How a run was asked for: enough, with the mechanism and settings, to re-run it
+    exactly (:func:`rerun`)."""
+
+    revolutions: int = 2
+    samples: int = 36
+    max_violation: float = 1e-3
+    max_speed_error: float = 1e-2
+    chords: str = "moving"
+    mode: str = "run"               # "run" or "instantaneous"
+
+
+@dataclass(frozen=True)
+class EngineRun:
+    """Engine results at the sampled driver values (SI, world axes, analytic conventions).
+
+    Arrays have N rows, one per sample; B bodies (``body_names``, the description's
+    order), J joints (``joint_names``), P prismatic joints (``prismatic_names``).
+    ``mechanism``, ``settings`` (the settings object) and ``request`` re-run it exactly:
+    :func:`rerun`.  ``settings_text`` is ``settings.describe()``.
+    """
+
+    case: str
+    engine: str
+    mechanism: Mechanism
+    settings: EngineSettings
+    request: RunRequest
+    ok: bool
+    reason: str | None
+    fail_value: float | None          # driver value (rad or m) where the run failed
+    values: np.ndarray                # (N,) driver values at the samples
+    times: np.ndarray                 # (N,) s from the start of the run (NaN: unreached)
+    driver_velocity: np.ndarray       # (N,) prescribed driver rate at the sample
+    driver_acceleration: np.ndarray   # (N,) prescribed driver acceleration
+    measured_values: np.ndarray       # (N,) driver value in the engine at the sample
+    body_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    prismatic_names: tuple[str, ...]
+    theta: np.ndarray                 # (N, B) rad
+    omega: np.ndarray                 # (N, B) rad/s
+    alpha: np.ndarray                 # (N, B) rad/s^2, absolute
+    slider_acc: np.ndarray            # (N, P) m/s^2 (s'' of each prismatic joint)
+    drive_effort: np.ndarray          # (N,) N m or N, on body_b / the slider
+    joint_force: np.ndarray           # (N, J, 2) N, by body_a on body_b
+    normal: np.ndarray                # (N, P) N
+    moment: np.ndarray                # (N, P) N m
+    loop_violation: np.ndarray        # (N,) m, largest gap at a loop-closing joint
+    speed_deviation: np.ndarray       # (N,) driver rate minus prescribed rate
+    wall_per_rev: float               # s of stepping per revolution (per run if not full)
+    timestep: float
+    steps_per_rev: float
+    steps: int                        # steps taken (pre-roll included)
+    wall: float                       # s of the whole stepping loop
+    has_forces: bool                  # False: placeholder masses, forces not comparable
+    by_time: bool = False             # sampled at equal times (not the sweep's inputs)
+    notes: tuple[str, ...] = ()
+    drive_effort_engine: np.ndarray | None = None      # engine's own drive reading
+    joint_force_engine: np.ndarray | None = None       # engine's own pin-force reading
+    q: np.ndarray | None = None       # (N, nt) raw tree coordinates (SimTree)
+    qd: np.ndarray | None = None
+    qdd: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.values)
+
+    @property
+    def settings_text(self) -> str:
+        return self.settings.describe()
+
+    def frame(self):
+        """A DataFrame with the sweep's column names (see :mod:`analytic.sweep`)."""
+        import pandas as pd
+        revolute = not self.extra.get("prismatic_driver", False)
+        cols = {"input": np.degrees(self.values) if revolute else self.values}
+        for b, name in enumerate(self.body_names):
+            cols[f"{name}.angle_deg"] = 180.0 - np.mod(180.0 - np.degrees(self.theta[:, b]),
+                                                       360.0)
+            cols[f"{name}.omega"] = self.omega[:, b]
+            cols[f"{name}.alpha"] = self.alpha[:, b]
+        for p, name in enumerate(self.prismatic_names):
+            cols[f"{name}.a"] = self.slider_acc[:, p]
+            cols[f"{name}.normal"] = self.normal[:, p]
+            cols[f"{name}.moment"] = self.moment[:, p]
+        for j, name in enumerate(self.joint_names):
+            cols[f"{name}.fx"] = self.joint_force[:, j, 0]
+            cols[f"{name}.fy"] = self.joint_force[:, j, 1]
+        cols["drive.torque" if revolute else "drive.force"] = self.drive_effort
+        cols["loop_violation"] = self.loop_violation
+        cols["speed_deviation"] = self.speed_deviation
+        return pd.DataFrame(cols)
+
+
+__all__ = ["EngineRun", "Recorder", "RunRequest", "fmt_value", "loop_gap"]
