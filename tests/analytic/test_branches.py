@@ -176,14 +176,16 @@ def test_where_continuity_cannot_decide_the_signs_are_held_and_said(monkeypatch)
 def test_sweep_at_the_flat_positions_gives_the_motion_through_them():
     """Samples exactly at 0 and 180 deg are singular: the rates there are the
     parallelogram's (rocker at the crank's speed, coupler translating), the forces NaN
-    (statically indeterminate), and a note says both."""
+    (statically indeterminate), and a note says both.  The rates come from 1e-4 rad
+    either side, where the Jacobian's condition (~1e4) and the position snapping leave
+    ~1e-8 of the rate: 1e-6 is the check."""
     lk = Linkage(load_case(PARA))
     res = lk.sweep(360, start=0.0)
     f = res.frame.set_index("input")
     w = lk.mech.driver.velocity
     for x in (0.0, 180.0):
-        assert f.loc[x, "rocker.omega"] == pytest.approx(w, rel=1e-9)
-        assert f.loc[x, "coupler.omega"] == pytest.approx(0.0, abs=1e-9 * w)
+        assert f.loc[x, "rocker.omega"] == pytest.approx(w, rel=1e-6)
+        assert f.loc[x, "coupler.omega"] == pytest.approx(0.0, abs=1e-6 * w)
         assert abs(f.loc[x, "rocker.alpha"]) < 1e-6 * w * w
         assert np.isnan(f.loc[x, "drive.torque"])
     assert np.isfinite(f.drop(index=[0.0, 180.0])["drive.torque"]).all()
