@@ -9,7 +9,9 @@ for a complete example.  Units in a file:
   (length/s^2).
 * Angles (``direction``, ``angle``, a revolute driver's ``value``, assembly
   angle hints) are in degrees; a revolute driver's ``velocity`` is in rad/s and
-  ``acceleration`` in rad/s^2, as in the course notes.
+  ``acceleration`` in rad/s^2, as in the course notes, unless ``[driver]
+  velocity_unit`` (``rad/s``, ``rpm``, ``deg/s``) or ``acceleration_unit``
+  (``rad/s^2``, ``rpm/s``, ``deg/s^2``) says otherwise.
 * Mass kg, inertia kg m^2 about the centre of mass, force N, torque N m,
   gravity m/s^2: always SI.
 """
@@ -49,7 +51,11 @@ _TOP_KEYS = {"name", "description", "ground", "units", "gravity", "bodies", "joi
 _BODY_KEYS = {"points", "mass", "com", "inertia"}
 _REV_KEYS = {"name", "type", "bodies", "points"}
 _PRI_KEYS = {"name", "type", "guide", "origin", "direction", "slider", "point", "angle"}
-_DRV_KEYS = {"joint", "value", "velocity", "acceleration"}
+_DRV_KEYS = {"joint", "value", "velocity", "acceleration", "velocity_unit",
+             "acceleration_unit"}
+#: A revolute driver's rate units (``velocity_unit``, ``acceleration_unit``): factor to SI.
+RATE_UNITS = {"rad/s": 1.0, "rpm": 2.0 * math.pi / 60.0, "deg/s": math.pi / 180.0}
+ACCEL_UNITS = {"rad/s^2": 1.0, "rpm/s": 2.0 * math.pi / 60.0, "deg/s^2": math.pi / 180.0}
 _LOAD_KEYS = {"body", "point", "force", "torque"}
 
 
@@ -183,14 +189,30 @@ def _driver(doc: dict, source: str, joints: list, L: float, lu: str) -> Driver:
                                f"{list(jtypes)}", dw)
     if isinstance(jtypes[djoint], Revolute):
         value = _num(_req(dd, "value", dw), "value", dw, MAX_ANGLE, "deg", DEG)
-        rate = ("rad/s", "rad/s^2", 1.0)
+        vu = _unit_key(dd, "velocity_unit", RATE_UNITS, "rad/s", dw)
+        au = _unit_key(dd, "acceleration_unit", ACCEL_UNITS, "rad/s^2", dw)
+        rate = (vu, au, RATE_UNITS[vu], ACCEL_UNITS[au])
     else:
         value = _num(_req(dd, "value", dw), "value", dw, MAX_LENGTH, lu, L)
-        rate = (f"{lu}/s", f"{lu}/s^2", L)
+        for k in ("velocity_unit", "acceleration_unit"):
+            if k in dd:
+                raise DescriptionError(f"{k} is for a revolute driver; a prismatic driver's "
+                                       f"rates are in the [units] length ({lu}/s, {lu}/s^2)",
+                                       dw)
+        rate = (f"{lu}/s", f"{lu}/s^2", L, L)
     return Driver(djoint, value,
                   _num(_req(dd, "velocity", dw), "velocity", dw, MAX_RATE, rate[0], rate[2]),
                   _num(dd.get("acceleration", 0.0), "acceleration", dw, MAX_ACCEL, rate[1],
-                       rate[2]))
+                       rate[3]))
+
+
+def _unit_key(dd: dict, key: str, units: dict, default: str, where: str) -> str:
+    """A driver's rate unit (``velocity_unit = "rpm"``), checked against ``units``."""
+    u = dd.get(key, default)
+    if not isinstance(u, str) or u not in units:
+        raise DescriptionError(f"{key} {u!r} is not a unit; use one of "
+                               f"{', '.join(repr(k) for k in units)}", where)
+    return u
 
 
 def _loads(doc: dict, source: str) -> list[Load]:

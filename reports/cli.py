@@ -29,6 +29,7 @@ from analytic.errors import OutputError
 from analytic.mechanism import Prismatic, Revolute
 
 from . import cli_options as opt
+from .display_units import UNITS_HELP, units_option
 
 CONVENTIONS = {
     "units": "SI: m, rad, s, kg, N; angle_deg in degrees",
@@ -111,53 +112,63 @@ def _result_dict(mech, lk, kin, frc) -> dict:
     return out
 
 
-def _print_tables(res: dict) -> None:
+def _print_tables(res: dict, units=None) -> None:
+    """The tables of a solution ``res`` already in ``units`` (:mod:`reports.display_units`:
+    :func:`~reports.display_units.convert_result`), units stated in every header."""
     from rich.console import Console
     from rich.table import Table
+
+    from .display_units import DisplayUnits, text
+    u = units or DisplayUnits()
+    lu, vu, au, an, sp = (u.unit(k) for k in ("length", "velocity", "acceleration", "angle",
+                                              "omega"))
     con = Console()
     if con.width < 150:  # keep the tables whole when piped or in a narrow terminal
         con = Console(width=150)
     inp = res["input"]
     head = (f"[bold]{res['case']}[/]  input {inp['joint']} = "
-            + (f"{inp['angle_deg']:.6g} deg, omega = {inp['velocity']:.6g} rad/s, "
-               f"alpha = {inp['acceleration']:.6g} rad/s^2" if "angle_deg" in inp else
-               f"{inp['s']:.6g} m, v = {inp['velocity']:.6g} m/s, "
-               f"a = {inp['acceleration']:.6g} m/s^2"))
+            + (f"{text(inp['angle_deg'])} {an}, omega = {text(inp['velocity'])} {sp}, "
+               f"alpha = {text(inp['acceleration'])} rad/s^2" if "angle_deg" in inp else
+               f"{text(inp['s'])} {lu}, v = {text(inp['velocity'])} {vu}, "
+               f"a = {text(inp['acceleration'])} {au}"))
     con.print(head)
+    con.print(u.header(), markup=False)
     t = Table(title="Links: position, velocity, acceleration")
-    for c in ("link", "theta (deg)", "omega (rad/s)", "alpha (rad/s^2)"):
+    for c in ("link", f"theta ({an})", f"omega ({sp})", "alpha (rad/s^2)"):
         t.add_column(c, justify="right")
     for n, d in res["bodies"].items():
-        t.add_row(n, f"{d['angle_deg']:.6f}", f"{d['omega']:.6f}", f"{d['alpha']:.6f}")
+        t.add_row(n, text(d["angle_deg"], ".6f"), text(d["omega"], ".6f"),
+                  text(d["alpha"], ".6f"))
     con.print(t)
     t = Table(title="Points (world frame)")
-    for c in ("point", "x (m)", "y (m)", "vx", "vy", "|v| (m/s)", "ax", "ay", "|a| (m/s^2)"):
+    for c in ("point", f"x ({lu})", f"y ({lu})", "vx", "vy", f"|v| ({vu})", "ax", "ay",
+              f"|a| ({au})"):
         t.add_column(c, justify="right")
     for n, d in res["points"].items():
         p, v, a = d["position"], d["velocity"], d["acceleration"]
-        t.add_row(n, f"{p[0]:.6f}", f"{p[1]:.6f}", f"{v[0]:.6g}", f"{v[1]:.6g}",
-                  f"{math.hypot(*v):.6g}", f"{a[0]:.6g}", f"{a[1]:.6g}", f"{math.hypot(*a):.6g}")
+        t.add_row(n, text(p[0], ".6f"), text(p[1], ".6f"), text(v[0]), text(v[1]),
+                  text(math.hypot(*v)), text(a[0]), text(a[1]), text(math.hypot(*a)))
     con.print(t)
     if res["sliders"]:
         t = Table(title="Sliders")
-        for c in ("joint", "s (m)", "s' (m/s)", "s'' (m/s^2)"):
+        for c in ("joint", f"s ({lu})", f"s' ({vu})", f"s'' ({au})"):
             t.add_column(c, justify="right")
         for n, d in res["sliders"].items():
-            t.add_row(n, f"{d['s']:.6f}", f"{d['v']:.6f}", f"{d['a']:.6f}")
+            t.add_row(n, text(d["s"], ".6f"), text(d["v"], ".6f"), text(d["a"], ".6f"))
         con.print(t)
     if res["drive"] is not None:
         t = Table(title="Joint forces (by body_a on body_b, world axes)")
         for c in ("joint", "by -> on", "fx (N)", "fy (N)", "|F| (N)", "moment (N m)"):
             t.add_column(c, justify="right")
         for n, d in res["joints"].items():
-            t.add_row(n, f"{d['body_a']} -> {d['body_b']}", f"{d['force'][0]:.6g}",
-                      f"{d['force'][1]:.6g}", f"{d['magnitude']:.6g}",
-                      f"{d['moment']:.6g}" if "moment" in d else "")
+            t.add_row(n, f"{d['body_a']} -> {d['body_b']}", text(d["force"][0]),
+                      text(d["force"][1]), text(d["magnitude"]),
+                      text(d["moment"]) if "moment" in d else "")
         con.print(t)
         dr = res["drive"]
-        eff = (f"drive torque T = {dr['torque']:.6g} N m" if "torque" in dr
-               else f"drive force F = {dr['force']:.6g} N")
-        con.print(f"{eff}, input power P = {dr['power']:.6g} W "
+        eff = (f"drive torque T = {text(dr['torque'])} N m" if "torque" in dr
+               else f"drive force F = {text(dr['force'])} N")
+        con.print(f"{eff}, input power P = {text(dr['power'])} W "
                   f"(power-balance residual {dr['power_balance_residual']:.2g} W)")
     else:
         con.print("[dim]no masses in the description: forces not computed[/]")
@@ -172,15 +183,18 @@ def cmd_cases(args) -> int:
 
 
 def cmd_solve(args) -> int:
-    res = _result_dict(*_solve_one(args))
+    from .display_units import DisplayUnits, convert_result
+    units = DisplayUnits.parse(getattr(args, "units", None))
+    res = convert_result(_result_dict(*_solve_one(args)), units)  # display units at the edge
     if args.json:
         print(json.dumps(res, indent=2, allow_nan=False))
     else:
-        _print_tables(res)
+        _print_tables(res, units)
     return 0
 
 
 def cmd_sweep(args) -> int:
+    from .display_units import DisplayUnits, convert_frame
     mech = load_case(args.case)
     opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints))
     lk = Linkage(mech, branch_rule=args.branch_rule)
@@ -194,12 +208,16 @@ def cmd_sweep(args) -> int:
     elif isinstance(mech.driver_joint, Revolute):
         kw["start"] = 0.0  # the table and the events run from 0 to 360 deg
     r = lk.sweep(args.points, **kw)
-    if args.csv:
-        write_csv(r.frame, args.csv, getattr(args, "stdout", sys.stdout))
+    units = DisplayUnits.parse(getattr(args, "units", None))
+    if args.csv:  # display units at the edge, round-off noise shown as 0
+        table = convert_frame(r.frame, units, isinstance(mech.driver_joint, Revolute))
+        write_csv(table, args.csv, getattr(args, "stdout", sys.stdout))
     print(f"{mech.name}: {len(r.frame)} points, "
           + ("full cycle" if r.full_cycle else "the range asked for" if args.range
              else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))
+    if args.csv:
+        print(f"table {units.header()}; the events and summary below in SI, angles in deg")
     for n in r.notes:
         print("note:", n)
     if len(r.events):
@@ -237,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--omega", type=opt.rate, help="input velocity, rad/s (or m/s)")
     s.add_argument("--alpha", type=opt.accel, help="input acceleration, rad/s^2 (or m/s^2)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
+    s.add_argument("--units", type=units_option, help=UNITS_HELP)
     s.set_defaults(func=cmd_solve)
     s = sub.add_parser("sweep", help="full-cycle table")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -254,6 +273,8 @@ def build_parser() -> argparse.ArgumentParser:
                    default="continuous",
                    help="branch taken at a change point: the one whose velocity is "
                         "continuous (default), or hold / switch the dyad signs")
+    s.add_argument("--units", type=units_option, help=UNITS_HELP + "; the CSV's columns "
+                   "then name their units")
     s.set_defaults(func=cmd_sweep)
     _register_more(sub)
     return p
