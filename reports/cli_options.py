@@ -103,7 +103,8 @@ angle_deg = finite_float(MAX_ANGLE, "deg", scale=math.pi / 180, why="1000 turns"
 length_m = finite_float(MAX_LENGTH, "m")
 rate = finite_float(MAX_RATE, "rad/s or m/s")
 accel = finite_float(MAX_ACCEL, "rad/s^2 or m/s^2")
-sweep_points = int_range(2, MAX_SWEEP_POINTS, "about 200 bytes a point per body and joint")
+sweep_points = int_range(2, MAX_SWEEP_POINTS, "a ceiling on memory: a sweep holds about 200 "
+                                              "bytes a point for each body and joint")
 samples = int_range(2, MAX_SAMPLES, "0.1 deg apart at most; every sample falls on an "
                                     "engine step")
 revolutions = int_range(1, MAX_REVOLUTIONS, "the last revolution is compared")
