@@ -79,21 +79,26 @@ def _index_in(line_u: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
-                  line=analytic_line) -> list[CurveFigure]:
+                  line=analytic_line, plan=None, extra=()) -> list[CurveFigure]:
     """The body angle, omega, alpha, slider s'', drive effort and joint-force figures
     of the (case) ``label`` from its engine runs (``{engine: EngineRun}``, one plan).
     ``reference(run, linkage)`` gives each run's samples' reference (the verdict's) and
     ``line(runs, linkage)`` the analytic lines (a test swaps in a wrong one to show
-    that the plot-against-verdict check catches it)."""
+    that the plot-against-verdict check catches it).  Without runs, ``plan`` (anything
+    with a run's ``times, values, driver_velocity, driver_acceleration, by_time,
+    has_forces``: :func:`reports.plot_cmd.plan_samples_of`) places the analytic lines
+    (``xval plot`` without engines).  ``extra``: figures drawn on request only,
+    ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions)."""
     runs = {e: r for e, r in runs.items() if r is not None}
-    if not runs:
+    basis = list(runs.values()) or ([plan] if plan is not None else [])
+    if not basis:
         return []
-    line = line(list(runs.values()), linkage)
+    line = line(basis, linkage)
     if line is None:
         return []
     lu, lkin, lfrc = line
     mech = linkage.mech
-    r0 = next(iter(runs.values()))
+    r0 = basis[0]
     _, xl = axis_of(r0, linkage)
     refs = {e: reference(r, linkage) for e, r in runs.items()}
     idx = {e: _index_in(lu, refs[e].u) for e in runs}
@@ -149,6 +154,15 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
             curves.append(Curve(jt.name, lu, np.linalg.norm(lfrc.joint_force[jt.name], axis=1),
                                 mk, f"{jt.name}.force", "magnitude"))
         out.append(fig("forces", "joint force magnitudes", "|F| (N)", curves))
+    if "slider_s" in extra and linkage.topo.prismatic:  # drawn only (engines: no markers)
+        curves = [Curve(linkage.topo.joint_names[j], lu,
+                        lkin.slider(linkage.topo.joint_names[j])[0], {})
+                  for j in linkage.topo.prismatic]
+        out.append(fig("slider_s", "slider positions", "s (m)", curves))
+    if "transmission" in extra and lkin.transmission:
+        curves = [Curve(f"at {k}", lu, np.asarray(v, float), {})
+                  for k, v in lkin.transmission.items()]
+        out.append(fig("transmission", "transmission angles", "angle (deg)", curves))
     return out
 
 

@@ -289,6 +289,8 @@ def _register_more(sub) -> None:
     except ImportError:  # pragma: no cover - engines not built yet
         return
     cli_engines.register(sub)
+    from . import cli_media  # xval plot, animate, view (issue 12)
+    cli_media.register(sub)
 
 
 def main(argv: list[str] | None = None) -> int:

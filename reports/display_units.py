@@ -288,6 +288,62 @@ def _size(pts: dict) -> float:
     return scale_of([d["position"] for d in pts.values()])
 
 
+# ============================================================================ figures
+#: The quantity kind of each curve figure of :func:`reports.case_figures.curve_figures`
+#: (angles there are degrees), and of its axis by label.
+FIGURE_KINDS = {"angle": "angle", "omega": "omega", "alpha": "alpha",
+                "slider": "acceleration", "slider_s": "length", "drive": None,
+                "forces": "force", "transmission": "angle"}
+
+
+def _axis_kind(label: str) -> str | None:
+    if label.startswith("input angle"):
+        return "angle"
+    if label.startswith("input ("):
+        return "length"
+    return None  # time (s)
+
+
+def _factor(kind: str | None, units: DisplayUnits) -> float:
+    if kind is None:
+        return 1.0
+    return units.A * math.pi / 180.0 if kind == "angle" else units.factor(kind)
+
+
+def _relabel(label: str, kind: str | None, units: DisplayUnits) -> str:
+    if kind is None or "(" not in label:
+        return label
+    return f"{label[:label.rindex('(')]}({units.unit(kind)})"
+
+
+def convert_figure(fig, units: DisplayUnits):
+    """A copy of a :class:`~reports.case_figures.CurveFigure` or ``ErrorFigure`` with its
+    axes in ``units`` (values, markers, events, ranges and labels); an error figure's
+    errors are ratios and stay as they are."""
+    import dataclasses
+    xk = _axis_kind(fig.xlabel)
+    fx = _factor(xk, units)
+    xl = _relabel(fig.xlabel, xk, units)
+    if hasattr(fig, "panels"):  # ErrorFigure: only its axis converts
+        panels = {e: {**p, "x": np.asarray(p["x"], float) * fx,
+                      "worst": (p["worst"][0], p["worst"][1], p["worst"][2] * fx)}
+                  for e, p in fig.panels.items()}
+        return dataclasses.replace(fig, xlabel=xl, panels=panels)
+    yk = FIGURE_KINDS.get(fig.name)
+    fy = _factor(yk, units)
+    curves = []
+    for c in fig.curves:
+        y = np.asarray(c.y, float) * fy
+        mk = {e: (np.asarray(x, float) * fx, np.asarray(v, float) * fy, j)
+              for e, (x, v, j) in c.markers.items()}
+        curves.append(dataclasses.replace(c, x=np.asarray(c.x, float) * fx, y=y, markers=mk))
+    scale = lambda r: None if r is None else (r[0] * fx, r[1] * fx)  # noqa: E731
+    return dataclasses.replace(
+        fig, xlabel=xl, ylabel=_relabel(fig.ylabel, yk, units), curves=curves,
+        events=[(k, v * fx) for k, v in fig.events], feasible=scale(fig.feasible),
+        covered=scale(fig.covered))
+
+
 __all__ = ["ANGLES", "DisplayUnits", "KINDS", "LENGTHS", "NOISE", "SPEEDS", "UnitsError",
            "column_kind", "convert_frame", "convert_result", "scale_of", "snap", "text",
-           "units_option", "UNITS_HELP"]
+           "units_option", "UNITS_HELP", "convert_figure", "FIGURE_KINDS"]

@@ -1,0 +1,240 @@
+"""``xval plot CASE|FILE``: the full-cycle curves of one linkage, with engine runs overlaid.
+
+One implementation with the report: the curves are
+:func:`reports.case_figures.curve_figures` (the analytic line of
+:func:`reports.reference.analytic_line`), the engines' errors
+:func:`reports.case_figures.error_figure` (the verdict's reference and peaks), drawn by
+:func:`reports.plots.draw_curve_axes` / :func:`reports.plots.draw_error_axes` onto one
+figure, in the display units of :mod:`reports.display_units`.
+
+Without ``--engine`` the analytic lines follow :func:`cycle_plan`: the sweep's inputs
+over the full turn (or the feasible range) at the description's constant rate; a driver
+that accelerates is placed by the engines' own sampling plan instead.  With
+``--engine`` the lines follow the runs, exactly as in the report.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from analytic.errors import LinkageError, OutputError
+
+#: ``--what`` words -> curve figure names of :func:`reports.case_figures.curve_figures`.
+WHAT = {"angle": ("angle",), "omega": ("omega",), "alpha": ("alpha",),
+        "slider": ("slider_s", "slider"), "forces": ("forces",), "torque": ("drive",),
+        "transmission": ("transmission",)}
+DEFAULT_WHAT = "angle,omega,alpha,slider,torque"
+FORMATS = (".png", ".svg", ".pdf")
+#: Analytic line points of a plot without engines (the report's line uses the runs').
+CYCLE_POINTS = 360
+
+
+class NoDisplay(LinkageError):
+    """``--show`` (or ``xval view``) without a display: one line, status 2."""
+
+
+@dataclass(frozen=True)
+class PlanSamples:
+    """Where the analytic lines of a plot without engines are placed: the fields of an
+    engine run that :func:`reports.reference.analytic_line` reads (SI; ``times`` s from
+    the reference value, negative behind it)."""
+
+    times: np.ndarray
+    values: np.ndarray
+    driver_velocity: np.ndarray
+    driver_acceleration: np.ndarray
+    by_time: bool = False
+    has_forces: bool = True
+
+
+def cycle_plan(linkage, tree=None, points: int = CYCLE_POINTS) -> PlanSamples:
+    """The sweep's inputs (full turn from 0 deg, or the feasible range) at
+    the times the description's constant rate reaches them; for an accelerating or
+    standing driver, the engines' plan (:func:`sim_models.engine_base.plan_samples`)."""
+    from analytic.sweep import input_values
+    d = linkage.mech.driver
+    if d.acceleration == 0.0 and d.velocity != 0.0:
+        vals, _, _ = input_values(linkage, points, start=0.0)  # a full turn: 0 to 360 deg
+        vals = np.asarray(vals, float)
+        t = (vals - d.value) / d.velocity
+        n = len(vals)
+        return PlanSamples(t, vals, np.full(n, d.velocity), np.zeros(n))
+    from sim_models import compile_linkage
+    from sim_models.engine_base import plan_samples
+    p = plan_samples(tree or compile_linkage(linkage.mech), 2, 72)
+    return PlanSamples(p.times, p.values, p.velocity, p.acceleration, p.by_time)
+
+
+def parse_what(text: str | None) -> list[str]:
+    words = [w.strip().lower() for w in (text or DEFAULT_WHAT).split(",") if w.strip()]
+    bad = [w for w in words if w not in WHAT]
+    if bad or not words:
+        raise LinkageError(f"option --what: {', '.join(map(repr, bad)) or 'nothing'} is not a "
+                           f"quantity; use a comma-separated list of {', '.join(WHAT)}")
+    return words
+
+
+def case_figures(mech, what: list[str], engines: list[str], settings: dict,
+                 revolutions: int = 2, samples: int = 36, quiet: tuple[str, ...] = ()):
+    """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
+    case: the report's figure code on the analytic solution and the engine runs."""
+    from sim_models import compile_linkage
+
+    from .case_figures import curve_figures, error_figure
+    tree = compile_linkage(mech)  # the analytic solution, once, for every engine
+    lk = tree.linkage
+    runs, comps, notes = {}, {}, []
+    if engines:
+        from .verdict_runs import run_comparison
+        for e in engines:
+            r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
+            runs[e], comps[e] = r, c
+            if not r.ok:
+                notes.append(f"{e}: run failed: {r.reason}")
+    names = [n for w in what for n in WHAT[w]]
+    extra = tuple(n for n in ("transmission", "slider_s") if n in names)
+    plan = None if runs else cycle_plan(lk, tree)
+    figs = curve_figures(mech.name, runs, lk, plan=plan, extra=extra)
+    by = {f.name: f for f in figs}
+    chosen = [by[n] for n in names if n in by]
+    for w in what:
+        if w not in quiet and not any(n in by for n in WHAT[w]):
+            notes.append(f"--what {w}: nothing to plot for {mech.name!r}"
+                         + (" (no masses: no forces)" if w in ("forces", "torque") else
+                            " (no prismatic joint)" if w == "slider" else ""))
+    err = None
+    if runs:
+        from analytic.tolerances import ENGINE_RELATIVE
+        err = error_figure(mech.name, runs, comps, lk, ENGINE_RELATIVE)
+    return chosen, err, runs, notes
+
+
+def draw(figs, err, units, title: str):
+    """One matplotlib figure: a panel per curve figure, then a row of error panels."""
+    from . import plots
+    from .display_units import convert_figure
+    plt = plots.plt
+    figs = [convert_figure(f, units) for f in figs]
+    err = convert_figure(err, units) if err is not None else None
+    n = len(figs) + (1 if err is not None else 0)
+    ne = len(err.panels) if err is not None else 0
+    fig = plt.figure(figsize=(9.0, 2.7 * max(n, 1) + 0.6))
+    grid = fig.add_gridspec(max(n, 1), max(ne, 1))
+    for i, f in enumerate(figs):
+        ax = fig.add_subplot(grid[i, :])
+        plots.draw_curve_axes(ax, f)
+    if err is not None:
+        axes = []
+        for k, (engine, p) in enumerate(err.panels.items()):
+            ax = fig.add_subplot(grid[n - 1, k], sharey=axes[0] if axes else None)
+            plots.draw_error_axes(ax, err, engine, p)
+            axes.append(ax)
+        axes[0].set_ylabel("|engine - analytic| / peak (-)")
+        axes[0].legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(0.0, -0.28), ncol=5)
+    fig.suptitle(f"{title}\n{units.header()}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def has_display() -> tuple[bool, str]:
+    """``(True, "")`` when a window can open, else ``(False, why)``."""
+    if sys.platform.startswith(("win", "darwin")):
+        return True, ""
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return True, ""
+    return False, "no display (neither DISPLAY nor WAYLAND_DISPLAY is set)"
+
+
+def check_out(out: str | None, formats=FORMATS) -> None:
+    if out is not None and Path(out).suffix.lower() not in formats:
+        raise OutputError(f"option --out {out!r}: the file name must end in "
+                          f"{', '.join(formats)} (the format is taken from it)")
+
+
+def cmd_plot(args) -> int:
+    from analytic import load_case
+
+    from .display_units import DisplayUnits
+    check_out(args.out)
+    if args.show:
+        ok, why = has_display()
+        if not ok and not args.out:
+            raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
+    mech = load_case(args.case)
+    what = parse_what(args.what)
+    units = DisplayUnits.parse(args.units)
+    engines, settings = [], {}
+    if args.engine:
+        from .verdict_runs import engine_list, settings_for
+        engines = engine_list(args.engine)
+        settings = settings_for(engines)
+    quiet = tuple(what) if args.what == DEFAULT_WHAT else ()  # no notes for the default
+    figs, err, runs, notes = case_figures(mech, what, engines, settings, args.revolutions,
+                                          args.samples, quiet)
+    title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
+                                " (markers; errors in the last row)" if runs else ""))
+    fig = draw(figs, err, units, title)
+    out = args.out or (None if args.show else f"{mech.name}-plot.png")
+    for n in notes:
+        print("note:", n)
+    if out:
+        try:
+            fig.savefig(out, dpi=110, bbox_inches="tight")
+        except OSError as e:
+            raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
+        print(f"wrote {out} ({len(figs)} panels{', with ' + ', '.join(runs) if runs else ''}; "
+              f"{units.header()})")
+    if args.show:
+        ok, why = has_display()
+        if not ok:
+            raise NoDisplay(f"--show: {why}; the figure was written to {out}")
+        _show(fig)
+    return 0
+
+
+def _show(fig) -> None:  # pragma: no cover - needs a display
+    import matplotlib
+    import matplotlib.pyplot as plt
+    for backend in ("TkAgg", "QtAgg", "GTK3Agg", "MacOSX"):
+        try:
+            plt.switch_backend(backend)
+            break
+        except Exception:  # noqa: BLE001 - try the next toolkit
+            continue
+    else:
+        raise NoDisplay(f"--show: no interactive matplotlib backend (have "
+                        f"{matplotlib.get_backend()}); use --out")
+    manager = plt.figure().canvas.manager  # a window of the new backend holding ``fig``
+    manager.canvas.figure = fig
+    fig.set_canvas(manager.canvas)
+    plt.show()
+
+
+def register(sub) -> None:
+    from . import cli_options as opt
+    from .display_units import UNITS_HELP, units_option
+    s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional)")
+    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("--what", default=DEFAULT_WHAT,
+                   help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT})")
+    from sim_models.registry import engine_names
+    s.add_argument("--engine", choices=[*engine_names(), "all"],
+                   help="overlay this engine's run (markers) and plot its error below")
+    s.add_argument("--units", type=units_option, help=UNITS_HELP)
+    s.add_argument("--out", type=opt.output_file,
+                   help="output file; .png, .svg or .pdf (default <case>-plot.png)")
+    s.add_argument("--show", action="store_true", help="open a window (needs a display)")
+    s.add_argument("--revolutions", type=opt.revolutions, default=2,
+                   help="engine revolutions (the last is plotted)")
+    s.add_argument("--samples", type=opt.samples, default=36,
+                   help="engine samples per revolution")
+    s.set_defaults(func=cmd_plot)
+
+
+__all__ = ["NoDisplay", "PlanSamples", "case_figures", "cmd_plot", "cycle_plan", "draw",
+           "has_display", "parse_what", "register"]
