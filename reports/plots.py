@@ -201,8 +201,14 @@ def curve_plot(fig_data) -> bytes:
     quantity), engine markers at their samples (grey: samples the verdict does not
     judge), limit/singular positions, the part of the input range no engine reached
     shaded, and the axis clipped (and said so) when a spike would flatten the rest."""
-    d = fig_data
     fig, ax = plt.subplots(figsize=(7.4, 3.3))
+    draw_curve_axes(ax, fig_data)
+    return _png(fig)
+
+
+def draw_curve_axes(ax, fig_data) -> None:
+    """:func:`curve_plot` onto the axes ``ax`` (``xval plot`` stacks several)."""
+    d = fig_data
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     engines: list[str] = []
     allv = []
@@ -253,7 +259,6 @@ def curve_plot(fig_data) -> bytes:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
               title="lines: analytic\nmarkers: engines", title_fontsize=6.5)
-    return _png(fig)
 
 
 _FAMILY_COLOURS = {"body alpha": "tab:blue", "slider s''": "tab:green",
@@ -271,20 +276,7 @@ def error_panels(fig_data) -> bytes:
     n = len(d.panels)
     fig, axes = plt.subplots(1, n, figsize=(3.9 * n + 0.6, 3.1), sharey=True, squeeze=False)
     for ax, (engine, p) in zip(axes[0], d.panels.items(), strict=True):
-        for fam, e in p["families"].items():
-            ax.semilogy(p["x"], np.maximum(np.asarray(e, float), ERROR_FLOOR), lw=1,
-                        marker=".", ms=3, color=_FAMILY_COLOURS.get(fam), label=fam)
-        ax.axhline(d.tolerance, color="red", lw=0.9, ls="--",
-                   label=f"tolerance {d.tolerance:g}")
-        q, v, at = p["worst"]
-        ax.set_title(f"{engine}: worst {q} {v:.2g} at {at:.4g}", fontsize=8.5)
-        ax.set_xlabel(d.xlabel)
-        ax.grid(alpha=0.3, which="both")
-        if p.get("twin") is not None:
-            ax2 = ax.twinx()
-            ax2.plot(p["x"], p["twin"][1], color="0.55", lw=0.8, alpha=0.8)
-            ax2.set_ylabel(p["twin"][0], color="0.45", fontsize=7)
-            ax2.tick_params(labelsize=7, colors="0.45")
+        draw_error_axes(ax, d, engine, p)
     axes[0, 0].set_ylabel("|engine - analytic| / peak (-)")
     h, lab = axes[0, 0].get_legend_handles_labels()
     fig.legend(h, lab, fontsize=7, loc="lower center", ncol=len(lab),
@@ -292,3 +284,21 @@ def error_panels(fig_data) -> bytes:
     fig.suptitle(d.title, fontsize=9.5)
     fig.tight_layout()
     return _png(fig)
+
+
+def draw_error_axes(ax, d, engine: str, p: dict) -> None:
+    """One engine's panel of :func:`error_panels` onto the axes ``ax``."""
+    for fam, e in p["families"].items():
+        ax.semilogy(p["x"], np.maximum(np.asarray(e, float), ERROR_FLOOR), lw=1,
+                    marker=".", ms=3, color=_FAMILY_COLOURS.get(fam), label=fam)
+    ax.axhline(d.tolerance, color="red", lw=0.9, ls="--",
+               label=f"tolerance {d.tolerance:g}")
+    q, v, at = p["worst"]
+    ax.set_title(f"{engine}: worst {q} {v:.2g} at {at:.4g}", fontsize=8.5)
+    ax.set_xlabel(d.xlabel)
+    ax.grid(alpha=0.3, which="both")
+    if p.get("twin") is not None:
+        ax2 = ax.twinx()
+        ax2.plot(p["x"], p["twin"][1], color="0.55", lw=0.8, alpha=0.8)
+        ax2.set_ylabel(p["twin"][0], color="0.45", fontsize=7)
+        ax2.tick_params(labelsize=7, colors="0.45")
