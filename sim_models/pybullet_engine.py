@@ -36,6 +36,7 @@ world frame, converted to the analytic convention) and
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import tempfile
@@ -378,10 +379,27 @@ class PybulletSession(Session):
 
 def _require_pybullet():
     try:
-        import pybullet
+        with _quiet_stderr():  # its C extension prints "pybullet build time: ..." on import
+            import pybullet
     except ImportError as e:  # pragma: no cover
         raise SimModelError(f"PyBullet is not installed ({e}); pip install pybullet") from None
     return pybullet
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """File descriptor 2 to /dev/null for the block (a C library's own prints), so that
+    xval's standard error holds only its messages (one line for an error)."""
+    import sys
+    sys.stderr.flush()
+    saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(null)
 
 
 __all__ = ["PybulletSession", "PybulletSettings", "PybulletSim"]
