@@ -26,7 +26,7 @@ def cmd_compare(args) -> int:
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
-    engines = engine_list(args.engine)
+    engines = engine_list(args.engine, args.mode)
     settings = settings_for(engines, list(args.set or ()) +
                             ([f"mujoco.integrator={args.integrator}"] if args.integrator else []),
                             {"timestep": args.timestep})

@@ -12,11 +12,15 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 
-def engine_list(choice: str) -> list[str]:
-    """``"all"`` -> every registered engine whose module is present; else the one named."""
+def engine_list(choice: str, mode: str = "run") -> list[str]:
+    """``"all"`` -> every registered engine whose module is present (in the instantaneous
+    mode, those with a forward-dynamics call); else the one named."""
+    from sim_models.engines import has_instantaneous
     from sim_models.registry import available_engines, get_engine
     if choice == "all":
-        return list(available_engines())
+        names = list(available_engines())
+        return [n for n in names if has_instantaneous(n)] if mode == "instantaneous" \
+            else names
     return [get_engine(choice).name]
 
 

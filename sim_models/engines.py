@@ -107,7 +107,7 @@ def instantaneous(mech: Mechanism | SimTree, engine: str,
     forward-dynamics call refuse (:class:`EngineRefusal`)."""
     eng = get_engine(engine)
     if eng.session_class.forward_at is Session.forward_at:
-        able = [n for n in engine_names() if _has_forward(n)]
+        able = [n for n in engine_names() if has_instantaneous(n)]
         raise EngineRefusal(f"engine {eng.name!r} has no instantaneous mode (no forward-"
                             f"dynamics call at a given state); engines with one: "
                             f"{', '.join(able) or 'none'}")
@@ -139,7 +139,8 @@ def time_engine(mech: Mechanism | SimTree, engine: str, settings: EngineSettings
         return time_steps(session, h, n, repeats)
 
 
-def _has_forward(name: str) -> bool:
+def has_instantaneous(name: str) -> bool:
+    """Whether engine ``name`` has a forward-dynamics call (the instantaneous mode)."""
     try:
         return get_engine(name).session_class.forward_at is not Session.forward_at
     except (ImportError, SimModelError):  # an engine whose library is missing
@@ -151,5 +152,6 @@ def mujoco_instantaneous(mech: Mechanism | SimTree, settings=None, values=None) 
     return instantaneous(mech, "mujoco", settings, values)
 
 
-__all__ = ["EngineRefusal", "EngineRun", "instantaneous", "mujoco_instantaneous",
+__all__ = ["EngineRefusal", "EngineRun", "has_instantaneous", "instantaneous",
+           "mujoco_instantaneous",
            "open_session", "rerun", "run", "time_engine"]
