@@ -377,3 +377,26 @@ def test_sweep_sample_on_a_change_point_is_finite(fast_folder):
     assert code == 0, err
     cells = [c for r in out.splitlines()[1:] for c in r.split(",")]
     assert not [c for c in cells if c == "" or c.lower() in ("nan", "inf", "-inf")]
+
+
+@pytest.mark.xfail(strict=True, raises=LinkageError,
+                   reason="solver (analytic/positions.py, tolerances TOGGLE_SNAP vs "
+                          "LOOP_RESIDUAL): next to a change point the snapped dyad leaves a loop "
+                          "residual of 1.27e-12 of the size, above LOOP_RESIDUAL (1e-12), so an "
+                          "assembly that exists is refused with an AssemblyError")
+def test_parallelogram_assembles_next_to_its_change_point():
+    """Found by the fuzz (a typed error, but a false one): a parallelogram four-bar
+    (crank = rocker = 1.3257 m, ground = coupler = 0.10859 m), crossed branch, at
+    5.34e-6 rad from its change point: there the coupler's circle and the rocker's touch
+    (|AO4| = rocker - coupler), so the assembly exists (closed form below)."""
+    kw = dict(ground=0.10859315890744291, crank=1.325721818434985,
+              coupler=0.10859315890744291, rocker=1.325721818434985,
+              theta=0.005235987755982988, omega=0.0, alpha=0.0, masses=None,
+              open_branch=False, gravity=(0.0, 0.0))
+    th = 5.3447869591918986e-06
+    a, b, c, g = kw["crank"], kw["coupler"], kw["rocker"], kw["ground"]
+    d = math.hypot(a * math.cos(th) - g, a * math.sin(th))
+    assert abs(b - c) <= d <= b + c  # the triangle closes: an assembly exists
+    mech = with_exact_hint("four-bar", four_bar(**kw), kw)
+    kin = Linkage(mech).kinematics(np.array([th]), on_singular="flag")
+    assert finite(kin.theta)
