@@ -16,7 +16,8 @@ import numpy as np  # noqa: E402
 
 ENGINE_STYLE = {"analytic": dict(color="black", lw=1.6),
                 "mujoco": dict(color="tab:blue", lw=1.0, ls="--"),
-                "pybullet": dict(color="tab:orange", lw=1.0, ls=":")}
+                "pybullet": dict(color="tab:orange", lw=1.0, ls=":"),
+                "exudyn": dict(color="tab:green", lw=1.0, ls="-.")}
 
 
 def _png(fig) -> bytes:
@@ -27,15 +28,20 @@ def _png(fig) -> bytes:
 
 
 def draw_linkage(linkage, values, title: str = "") -> bytes:
-    """The linkage drawn at a few input values (lines between each body's joint
-    points, ground pivots as triangles, slider lines dashed)."""
+    """The linkage drawn at a few input values (each body's outline through its joint
+    points, ground pivots as triangles, slider lines dashed), one colour per input value
+    with a key; bodies and joints named at the first value."""
     from analytic.mechanism import Prismatic
     mech = linkage.mech
     kin = linkage.kinematics(values, on_singular="flag")
-    fig, ax = plt.subplots(figsize=(5.2, 4.0))
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
     cmap = plt.get_cmap("viridis")
+    rev = linkage.driver_is_revolute
     for i in range(kin.n):
         col = cmap(i / max(kin.n - 1, 1))
+        v = kin.value[i]
+        key = f"input {np.degrees(v) % 360:.0f} deg" if rev else f"input {v:.4g} m"
+        ax.plot([], [], color=col, lw=2, label=key)
         for body in mech.moving_bodies:
             pts = [kin.point(body.name, jt.point_a if jt.body_a == body.name else jt.point_b)[0][i]
                    for jt in mech.joints if body.name in jt.bodies]
@@ -49,10 +55,22 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
                 ax.fill(poly[:, 0], poly[:, 1], color=col, alpha=0.15, lw=0)
                 ax.plot(np.r_[poly[:, 0], poly[:1, 0]], np.r_[poly[:, 1], poly[:1, 1]],
                         color=col, lw=1.2)
+                if i == 0:
+                    ax.annotate(body.name, c, fontsize=7.5, fontweight="bold", ha="center",
+                                va="center", color="0.15",
+                                bbox=dict(fc="white", ec="none", alpha=0.6, pad=0.5))
             ax.plot(pts[:, 0], pts[:, 1], "o", color=col, ms=3)
+    for jt in mech.joints:  # joint names at the first input value
+        try:
+            p = kin.point(jt.body_b, jt.point_b)[0][0] if jt.body_b != mech.ground else \
+                kin.point(jt.body_a, jt.point_a)[0][0]
+        except Exception:  # noqa: BLE001 - a name is decoration
+            continue
+        ax.annotate(jt.name, p, xytext=(4, -9), textcoords="offset points", fontsize=6.5,
+                    color="darkred")
     g = mech.body(mech.ground)
     gp = np.array(list(g.points.values()))
-    ax.plot(gp[:, 0], gp[:, 1], "^", color="k", ms=8)
+    ax.plot(gp[:, 0], gp[:, 1], "^", color="k", ms=8, label="ground pivot")
     for jt in mech.joints:
         if isinstance(jt, Prismatic) and jt.guide == mech.ground:
             q = np.array(g.points[jt.origin])
@@ -66,6 +84,8 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
     ax.set_ylabel("y (m)")
     ax.set_title(title or mech.name, fontsize=10)
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
+              title="colour key", title_fontsize=7)
     return _png(fig)
 
 

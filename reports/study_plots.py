@@ -33,13 +33,14 @@ def _frontier(t: np.ndarray, e: np.ndarray) -> np.ndarray:
 
 
 def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
-                         floor: float = 1e-9) -> bytes:
+                         floor: float = 1e-9, analytic_points: int | None = None) -> bytes:
     """Speed against error of a settings grid (:func:`reports.studies.speed_error_grid`).
 
     One colour per engine and settings family, MuJoCo integrators by marker; each
     engine's Pareto frontier as a step line with its points labelled; failed runs
     as crosses on the top edge; tolerance lines; the analytic solver's time per
-    revolution as a vertical line.
+    revolution (at ``analytic_points`` samples, the engines' count) as a vertical line.
+    Only the Pareto-optimal points are labelled, alternately above and below.
     """
     fig, ax = plt.subplots(figsize=(7.2, 4.6))
     grid = grid.assign(integrator=grid["integrator"].fillna("").astype(str),
@@ -68,9 +69,10 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
             st = ENGINE_STYLE.get(engine, {})
             ax.step(t[idx], e[idx], where="post", color=st.get("color", "k"), lw=0.9,
                     alpha=0.7)
-            for i in idx:
-                ax.annotate(g["label"].iloc[i], (t[i], e[i]), fontsize=5.5, alpha=0.8,
-                            xytext=(3, 2), textcoords="offset points")
+            for n, i in enumerate(idx):
+                ax.annotate(g["label"].iloc[i], (t[i], e[i]), fontsize=6, alpha=0.9,
+                            xytext=(4, 5 if n % 2 == 0 else -9), textcoords="offset points",
+                            color=st.get("color", "k"))
     ymax = max(1.0, float(np.nanmax(ok["error"])) if len(ok) else 1.0)
     if len(bad):
         tb = bad["seconds_per_rev"].to_numpy(float)
@@ -80,16 +82,21 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
                       label=f"failed / diverged ({len(bad)})")
     for tol in _TOLERANCES:
         ax.axhline(tol, color="grey", lw=0.6, ls=":")
+        ax.annotate(f"tolerance {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"),
+                    xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
+                    fontsize=6.5, color="0.35")
     if analytic_time:
         ax.axvline(analytic_time, color="black", lw=0.9)
-        ax.annotate("analytic solver (3600 points)", (analytic_time, 0.97),
-                    xycoords=("data", "axes fraction"), fontsize=7, rotation=90, va="top",
-                    ha="right")
-    ax.set_xlabel("wall-clock seconds per simulated revolution")
-    ax.set_ylabel("max normalised error (accelerations, forces)")
+        what = f"{analytic_points} samples" if analytic_points else "one revolution"
+        ax.annotate(f"analytic solver\n({what})", (analytic_time, 1.0),
+                    xycoords=("data", "axes fraction"), xytext=(3, -3),
+                    textcoords="offset points", fontsize=6.5, va="top", ha="left")
+    ax.set_xlabel("wall-clock time per simulated revolution (s, log)")
+    ax.set_ylabel("largest error / peak, accelerations and forces (-, log)")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6, ncol=2, loc="lower left")
+    ax.legend(fontsize=6, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              borderaxespad=0)
     return _png(fig)
 
 
@@ -145,6 +152,7 @@ def long_run_plot(frame, title: str) -> bytes:
     for ax in axes[1]:
         ax.set_xlabel("revolution")
     fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
     return _png(fig)
 
 

@@ -68,7 +68,7 @@ def test_markdown_links_its_images(report_dir):
     md = (report_dir / "report.md").read_text()
     for line in md.splitlines():
         if line.startswith("!["):
-            rel = line.split("(", 1)[1].rstrip(")")
+            rel = line.rsplit("](", 1)[1].rstrip(")")
             assert (report_dir / rel).is_file(), rel
 
 
