@@ -83,7 +83,8 @@ class Summary:
     #: samples at singular positions (condition number >= SINGULAR_CONDITION), whose
     #: rates and forces are not determined by the input: left out of the peak effort
     singular_samples: int = 0
-    #: power balance error over the regular samples, relative to the largest power term
+    #: power balance error over the regular samples, relative to the size of the power
+    #: terms (:func:`_power_scale`)
     power_balance: float | None = None
 
     def lines(self) -> list[str]:
@@ -120,8 +121,8 @@ class Summary:
                          f"{ev.input:.6g} {u}")
             out.append(line)
         if self.singular_samples:
-            out.append(f"{self.singular_samples} sample(s) at singular positions: rates and "
-                       "forces there are not determined by the input (left out above)")
+            out.append(f"{self.singular_samples} sample(s) at singular positions: forces there "
+                       "are indeterminate (left out above)")
         return out
 
 
@@ -237,10 +238,28 @@ def summarise(result, nearest_event=None) -> Summary:
                 span = 360.0 if periodic else float(np.ptp(x))
                 if ev is not None and ev.distance <= NEAR_EVENT * span:
                     summ.peak_event = ev
-        peak = max(np.max(np.abs(frc.power[regular])), np.max(np.abs(frc.kinetic_rate[regular])),
-                   np.max(np.abs(frc.load_power[regular])), 1e-300)
-        summ.power_balance = float(np.max(np.abs(frc.power_residual[regular])) / peak)
+        summ.power_balance = float(np.max(np.abs(frc.power_residual[regular]))
+                                   / _power_scale(kin, frc, regular))
     return summ
+
+
+def _power_scale(kin, frc, regular) -> float:
+    """The size of the terms the power balance sums: the peak over the regular samples
+    of each body's m |v| |a| + I |omega alpha| summed, or of the drive and load powers when
+    larger.  (A linkage whose kinetic energy is constant, such as a parallelogram at
+    constant speed, has a net rate of zero: relative to that, rounding looks large.)"""
+    mech = kin.linkage.mech
+    terms = np.zeros(int(np.sum(regular)))
+    for b, body in enumerate(mech.bodies):
+        if b == kin.linkage.topo.ground or not body.mass:
+            continue
+        _, v, a = kin.com_c(b)
+        terms += body.mass * (np.abs(v) * np.abs(a))[regular]
+        terms += (body.inertia or 0.0) * np.abs(kin.omega[:, b] * kin.alpha[:, b])[regular]
+    peak = max(float(np.max(terms)) if terms.size else 0.0,
+               float(np.max(np.abs(frc.power[regular]))),
+               float(np.max(np.abs(frc.load_power[regular]))))
+    return peak if peak > 0 else 1e-300
 
 
 def _is_revolute(jt) -> bool:
