@@ -329,11 +329,24 @@ def validate(mech: Mechanism) -> None:
     """Check a description for consistency; raise :class:`DescriptionError`.
 
     Checks names (unique, known bodies and points), joints joining a body to
-    itself, zero-length links (two joints of a body at one point), mass
-    properties (positive inertia, non-negative mass), the driver, the loads,
-    connectivity to ground and the mobility (Gruebler: exactly one degree of
-    freedom).
+    itself, every number (finite and in the accepted ranges above), zero-length
+    links (two joints of a body closer than ZERO_LENGTH of the mechanism's size),
+    mass properties (positive inertia, non-negative mass), the driver, the loads,
+    the hints, connectivity to ground, the mobility (Gruebler: exactly one degree
+    of freedom) and a user's loops (closed cycles of distinct bodies).
     """
+    bodies = _check_bodies(mech)
+    _check_joints(mech, bodies)
+    _check_size(mech)
+    _check_driver(mech)
+    _check_loads_and_hints(mech, bodies)
+    _check_graph(mech)
+    if mech.loops is not None:
+        _check_loops(mech)
+
+
+def _check_bodies(mech: Mechanism) -> dict[str, Body]:
+    """Unique names, ground among them, points and mass properties in range."""
     where = mech.source
     names = [b.name for b in mech.bodies]
     if len(set(names)) != len(names):
@@ -342,7 +355,6 @@ def validate(mech: Mechanism) -> None:
     if mech.ground not in names:
         raise DescriptionError(f"ground body {mech.ground!r} is not among the bodies {names}",
                                where)
-    bodies = {b.name: b for b in mech.bodies}
     for b in mech.bodies:
         bw = _where(mech, f"body {b.name!r}")
         for pname, p in b.points.items():
@@ -350,31 +362,40 @@ def validate(mech: Mechanism) -> None:
                 raise DescriptionError(f"point {pname!r} must have 2 coordinates, got {p!r}",
                                        bw)
             check_range(tuple(p), MAX_LENGTH, f"point {pname!r}", bw, "m")
-        if b.name == mech.ground:
-            continue
-        if b.mass is not None:
-            _finite(b.mass, "mass", bw)
-            if b.mass < 0:
-                raise DescriptionError(f"mass must be >= 0 kg, got {b.mass}", bw)
-            check_range(b.mass, MAX_MASS, "mass", bw, "kg", lo=0.0)
-            if b.inertia is None:
-                raise DescriptionError("a body with a mass needs an inertia about its "
-                                       "centre of mass (kg m^2)", bw)
-            _finite(b.inertia, "inertia", bw)
-            if b.inertia < 0 or (b.mass > 0 and b.inertia == 0):
-                raise DescriptionError(f"inertia about the centre of mass must be > 0 "
-                                       f"kg m^2 for a body with mass, got {b.inertia}", bw)
-            check_range(b.inertia, MAX_INERTIA, "inertia", bw, "kg m^2", lo=0.0)
-            if b.mass == 0 and b.inertia != 0:
-                raise DescriptionError("a massless body cannot have an inertia", bw)
-            check_range(tuple(b.com), MAX_LENGTH, "com", bw, "m")
-        elif b.inertia is not None:
-            raise DescriptionError("inertia given without a mass", bw)
+        if b.name != mech.ground:
+            _check_mass(b, bw)
+    return {b.name: b for b in mech.bodies}
 
+
+def _check_mass(b: Body, bw: str) -> None:
+    if b.mass is None:
+        if b.inertia is not None:
+            raise DescriptionError("inertia given without a mass", bw)
+        return
+    _finite(b.mass, "mass", bw)
+    if b.mass < 0:
+        raise DescriptionError(f"mass must be >= 0 kg, got {b.mass}", bw)
+    check_range(b.mass, MAX_MASS, "mass", bw, "kg", lo=0.0)
+    if b.inertia is None:
+        raise DescriptionError("a body with a mass needs an inertia about its "
+                               "centre of mass (kg m^2)", bw)
+    _finite(b.inertia, "inertia", bw)
+    if b.inertia < 0 or (b.mass > 0 and b.inertia == 0):
+        raise DescriptionError(f"inertia about the centre of mass must be > 0 "
+                               f"kg m^2 for a body with mass, got {b.inertia}", bw)
+    check_range(b.inertia, MAX_INERTIA, "inertia", bw, "kg m^2", lo=0.0)
+    if b.mass == 0 and b.inertia != 0:
+        raise DescriptionError("a massless body cannot have an inertia", bw)
+    check_range(tuple(b.com), MAX_LENGTH, "com", bw, "m")
+
+
+def _check_joints(mech: Mechanism, bodies: dict[str, Body]) -> None:
+    """Unique names, known bodies and points, no joint of a body to itself."""
+    names = list(bodies)
     jnames = [j.name for j in mech.joints]
     if len(set(jnames)) != len(jnames):
         dup = sorted({n for n in jnames if jnames.count(n) > 1})
-        raise DescriptionError(f"duplicate joint names {dup}", where)
+        raise DescriptionError(f"duplicate joint names {dup}", mech.source)
     for j in mech.joints:
         jw = _where(mech, f"joint {j.name!r}")
         for bn in j.bodies:
@@ -390,13 +411,15 @@ def validate(mech: Mechanism) -> None:
             check_range(j.direction, MAX_ANGLE, "direction", jw, "deg", math.pi / 180)
             check_range(j.angle, MAX_ANGLE, "angle", jw, "deg", math.pi / 180)
 
-    # Size, and zero-length links (two joints of one body at one point), relative
-    # to it, so that a linkage is valid or not whatever its scale.
+
+def _check_size(mech: Mechanism) -> None:
+    """Size, and zero-length links (two joints of one body at one point) relative to
+    it, so that a linkage is valid or not whatever its scale."""
     size = mechanism_size(mech.bodies)
     if size < MIN_SIZE:
         raise DescriptionError(f"the mechanism's size (the longest distance between two "
                                f"points of one body) is {size:g} m; it must be at least "
-                               f"{MIN_SIZE:g} m", where)
+                               f"{MIN_SIZE:g} m", mech.source)
     for b in mech.bodies:
         if b.name == mech.ground:
             continue
@@ -412,8 +435,11 @@ def validate(mech: Mechanism) -> None:
                         f"(zero link length): closer than {ZERO_LENGTH:g} of the mechanism's "
                         f"size {size:g} m", _where(mech, f"body {b.name!r}"))
 
+
+def _check_driver(mech: Mechanism) -> None:
     d = mech.driver
     dw = _where(mech, "driver")
+    jnames = [j.name for j in mech.joints]
     if d.joint not in jnames:
         raise DescriptionError(f"driver joint {d.joint!r} is not a joint; joints are {jnames}",
                                dw)
@@ -426,6 +452,8 @@ def validate(mech: Mechanism) -> None:
     check_range(d.acceleration, MAX_ACCEL, "acceleration", dw,
                 "rad/s^2" if rev else "m/s^2")
 
+
+def _check_loads_and_hints(mech: Mechanism, bodies: dict[str, Body]) -> None:
     for i, ld in enumerate(mech.loads):
         lw = _where(mech, f"load {i} on body {ld.body!r}")
         if ld.body not in bodies:
@@ -450,7 +478,11 @@ def validate(mech: Mechanism) -> None:
             raise DescriptionError(f"assembly hint names unknown body {bn!r}", aw)
         check_range(ang, MAX_ANGLE, f"hint {bn!r}", aw, "deg", math.pi / 180)
 
-    # Connectivity: every body reachable from ground.
+
+def _check_graph(mech: Mechanism) -> None:
+    """Every body reachable from ground; one degree of freedom by Gruebler's count."""
+    where = mech.source
+    names = [b.name for b in mech.bodies]
     adj: dict[str, set[str]] = {n: set() for n in names}
     for j in mech.joints:
         adj[j.body_a].add(j.body_b)
@@ -472,8 +504,6 @@ def validate(mech: Mechanism) -> None:
             f"the linkage has {dof} degrees of freedom by Gruebler's count "
             f"(3*(bodies-1) - 2*joints = 3*{len(names) - 1} - 2*{len(mech.joints)}); "
             "exactly 1 is needed for one driver", where)
-    if mech.loops is not None:
-        _check_loops(mech)
 
 
 def _check_loops(mech: Mechanism) -> None:
