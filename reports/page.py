@@ -73,10 +73,11 @@ th{background:#eef1f4;position:sticky;top:0}
 td:first-child,th:first-child,td.text,th.text{text-align:left}
 td.pass{background:#e3f4e3;color:#155d15;font-weight:bold}
 td.fail{background:#fbe0e0;color:#a00;font-weight:bold}
-td.wide{max-width:420px;font-size:11px;white-space:normal;word-break:break-word}
+td.wide{max-width:420px;text-align:left;font-size:11px;white-space:normal;word-break:break-word}
 details{margin:6px 0}summary{cursor:pointer;color:#246}
 .figs{display:flex;flex-wrap:wrap;gap:6px}
-figure{margin:2px;max-width:100%}figure img{max-width:100%;height:auto}
+figure{display:inline-block;vertical-align:top;margin:2px;max-width:49.5%}
+figure.full{max-width:100%}figure img{max-width:100%;height:auto}
 figcaption{font-size:12px;color:#555}
 .csv{font-size:12px}
 @media print{details{display:block}details>summary{display:none}nav.toc{display:none}
@@ -159,9 +160,22 @@ class Document:
             return "text"
         return ""
 
+    def _anchors(self) -> dict[int, str]:
+        """A unique id for each heading (part index -> id)."""
+        out, seen = {}, set()
+        for i, (kind, d) in enumerate(self.parts):
+            if kind == "h":
+                a, k = anchor(d[1]), 2
+                while a in seen:
+                    a, k = f"{anchor(d[1])}-{k}", k + 1
+                seen.add(a)
+                out[i] = a
+        return out
+
     def _toc(self) -> str:
-        links = [f"<a href='#{anchor(t)}'>{html.escape(t)}</a>"
-                 for kind, d in self.parts if kind == "h" and d[0] == 1 for t in [d[1]]]
+        ids = self._anchors()
+        links = [f"<a href='#{ids[i]}'>{html.escape(d[1])}</a>"
+                 for i, (kind, d) in enumerate(self.parts) if kind == "h" and d[0] == 1]
         return "<nav class='toc'>" + "".join(links) + "</nav>" if links else ""
 
     def html(self, title: str) -> str:
@@ -169,13 +183,14 @@ class Document:
                f"</title><style>{_CSS}</style></head><body>"
                f"<h1 class='title'>{html.escape(title)}</h1>"]
         toc_done = False
-        for kind, data in self.parts:
+        ids = self._anchors()
+        for i, (kind, data) in enumerate(self.parts):
             if kind == "h":
                 lv, text = data
                 if lv == 1 and not toc_done:
                     out.append("<h3>Contents</h3>" + self._toc())
                     toc_done = True
-                out.append(f"<h{lv + 1} id='{anchor(text)}'>{html.escape(text)}</h{lv + 1}>")
+                out.append(f"<h{lv + 1} id='{ids[i]}'>{html.escape(text)}</h{lv + 1}>")
             elif kind == "p":
                 out.append(f"<p>{html.escape(data)}</p>")
             elif kind == "intro":

@@ -161,12 +161,13 @@ def _verdict_section(doc, verdicts, summary, runs, revolute, cfg):
         doc.p("no engine ran")
         return
     doc.table(summary_for_reading(summary), "verdict_summary", "verdict per case and engine",
-              data=summary, fold=None, wide=("note",))
+              data=summary, fold=None, wide=("note",), digits=2)
     doc.p("Every compared quantity, with its unit. Rows 'not judged' are an engine's own "
           "readings (PyBullet's jointReactionForces and motor torque), reported but not "
           "judged: the judged forces are rebuilt by Newton-Euler from the engine's motion.")
     doc.table(verdicts_for_reading(verdicts, revolute), "verdicts",
-              "every compared quantity", data=verdicts, wide=("why the run stopped",))
+              "every compared quantity", data=verdicts, wide=("why the run stopped",),
+              digits=3)
     rows = {}
     for r in runs:
         if r["run"] is not None and r["engine"] not in rows:

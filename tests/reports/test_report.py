@@ -109,24 +109,61 @@ def test_dask_local_cluster(tmp_path):
     assert meta["executor"].startswith("dask tcp://")
 
 
-def test_html_renders_in_headless_chromium(report_dir, tmp_path):
-    """Where Chromium is installed (Debian's package), the page renders to a screenshot."""
+#: After load, the page reports its own height and width and how many of its images the
+#: browser decoded (``naturalWidth > 0``) into a <pre id="probe"> read from --dump-dom.
+_PROBE = ("<script>window.addEventListener('load',()=>{const im=[...document.images];"
+          "const p=document.createElement('pre');p.id='probe';p.textContent=JSON.stringify("
+          "{h:document.documentElement.scrollHeight,w:document.documentElement.scrollWidth,"
+          "n:im.length,bad:im.filter(i=>!(i.complete&&i.naturalWidth>0)).length});"
+          "document.body.appendChild(p);});</script>")
+
+
+def _chromium():
     import shutil
-    import subprocess
     exe = shutil.which("chromium") or shutil.which("chromium-browser")
     if exe is None:
         if os.environ.get("CI"):  # .ci/run installs it: under CI a missing browser is a failure
             pytest.fail("CI=true but no Chromium: .ci/run should have installed it")
         pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    return exe
+
+
+def _chromium_args(exe, tmp_path, *more):
+    return [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+            "--no-first-run", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,1600", *more]
+
+
+def test_html_renders_in_headless_chromium(report_dir, tmp_path):
+    """Debian's Chromium renders the page: the screenshot is not blank, the browser
+    decodes every image, and the page is as tall as its contents make plausible."""
+    import json
+    import re
+    import subprocess
+    exe = _chromium()
     shot = tmp_path / "page.png"
-    subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                    "--no-first-run", "--disable-background-networking",
-                    "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1200,1600",
-                    f"--screenshot={shot}", (report_dir / "index.html").as_uri()],
-                   check=True, timeout=60, capture_output=True)
+    subprocess.run(_chromium_args(exe, tmp_path, f"--screenshot={shot}",
+                                  (report_dir / "index.html").as_uri()),
+                   check=True, timeout=120, capture_output=True)
     from PIL import Image
     img = Image.open(shot)
     assert img.size == (1200, 1600)
     # not a blank page: the tables and plots put many distinct colours on it
     assert len(img.convert("RGB").getcolors(maxcolors=1 << 20) or []) > 50
+    # the browser's own view: every image decoded, the page's height
+    html_text = (report_dir / "index.html").read_text()
+    probe = tmp_path / "probe.html"
+    probe.write_text(html_text.replace("</body>", _PROBE + "</body>"))
+    dom = subprocess.run(_chromium_args(exe, tmp_path, "--virtual-time-budget=15000",
+                                        "--dump-dom", probe.as_uri()),
+                         check=True, timeout=120, capture_output=True, text=True).stdout
+    m = re.search(r'<pre id="probe">([^<]*)</pre>', dom)
+    assert m, "the page's load handler never ran"
+    got = json.loads(m.group(1))
+    p = _Images()
+    p.feed(html_text)
+    assert got["n"] == len(p.srcs) >= 5 and got["bad"] == 0, got
+    # plausible height: more than a screen, less than every image and table at 900 px
+    assert 1600 < got["h"] < 900 * (len(p.srcs) + p.tables) + 4000, got
+    assert got["w"] <= 1200, got  # nothing wider than the window
