@@ -375,8 +375,19 @@ def settings_json(engine: str, settings) -> dict:
 
 def settings_line(engine: str, settings) -> str:
     """Every field of a settings object as ``key=value``, after the engine's name."""
-    from sim_models.engine_base import EngineSettings
-    return f"{engine}: " + EngineSettings.describe(settings)
+    return f"{engine}: " + " ".join(f"{k}={_fmt_value(v, True)}"
+                                    for k, v in settings.as_dict().items())
+
+
+def _fmt_value(v, paren: bool = False) -> str:
+    """A setting as typed after ``--set KEY=`` (floats in %g, tuples comma-separated;
+    ``paren``: tuples in parentheses, for reading)."""
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, (tuple, list)):
+        inner = ",".join(_fmt_value(x) for x in v)
+        return f"({inner})" if paren else inner
+    return str(v)
 
 
 def settings_from_json(rec: RunRecord, where: str):
@@ -482,7 +493,6 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
 
 def _overrides(rec: RunRecord) -> list[str]:
     """``ENGINE.KEY=VALUE`` for each recorded setting that is not the engine's default."""
-    from sim_models.engine_base import _fmt_setting
     from sim_models.registry import get_engine
     try:
         default = get_engine(rec.engine).settings().as_dict()
@@ -492,7 +502,7 @@ def _overrides(rec: RunRecord) -> list[str]:
     for k, v in sorted(rec.settings["fields"].items()):
         v = tuple(v) if isinstance(v, list) else v
         if k in default and default[k] != v:
-            out.append(f"{rec.engine}.{k}={_fmt_setting(v).strip('()')}")
+            out.append(f"{rec.engine}.{k}={_fmt_value(v)}")
     return out
 
 

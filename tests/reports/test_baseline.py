@@ -308,3 +308,23 @@ def test_compare_junit_and_summary(tmp_path, capsys):
     md = summary.read_text()
     assert "| quick-return | mujoco | **FAIL** |" in md and f"`{q}`" in md
     assert not math.isnan(err)
+
+
+def test_record_command_names_settings_that_differ_from_the_defaults(mujoco_baseline):
+    """The re-record hint repeats the non-default settings as --set ENGINE.KEY=VALUE, in
+    the form the command line parses back to the same settings object."""
+    from dataclasses import replace
+
+    from sim_models.registry import get_engine, split_overrides
+    base = bl.load(mujoco_baseline)
+    run = base.runs[0]
+    fields = dict(run.settings["fields"], timestep=1e-4, solref=[-20000.0, -300.0])
+    edited = replace(base, runs=(replace(run, settings=dict(run.settings, fields=fields)),
+                                 *base.runs[1:]))
+    cmd = bl.record_command(edited, mujoco_baseline.parent)
+    sets = [w for w in cmd.split("--set ")[1:]]
+    assert [s.split()[0] for s in sets] == ["mujoco.solref=-20000,-300",
+                                            "mujoco.timestep=0.0001"], cmd
+    over = split_overrides([s.split()[0] for s in sets], ["mujoco"])["mujoco"]
+    assert get_engine("mujoco").settings(over) == \
+        bl.settings_from_json(edited.runs[0], "test")
