@@ -1,0 +1,561 @@
+"""``xval animate CASE|FILE --out F.gif|F.mp4|F.html``: the linkage moving through a cycle.
+
+A full-turn input turns once from its reference value, so the first frame is the
+assembled reference pose; a limited input goes from the reference value to one end of
+its feasible range, back to the other and back to the reference (its time runs on at
+the description's rate).  Each frame draws the bodies (outline through their points,
+named), the joints (named; a slider as a square on its dashed line), the ground hatched
+under its pivots and guides, the paths of the points of the bodies not pinned to the
+ground (thin grey, traced in colour up to the frame), the current input value and time,
+and with ``--forces`` the joint forces as arrows on a common scale with a key.
+
+With ``--engine`` the engine's poses (its body angles and frame origins at its samples,
+from the run's tree coordinates through :meth:`sim_models.tree.SimTree.propagate`) are
+drawn over the analytic ones, dashed in the engine's colour: a drifting loop shows as a
+gap.  Engine and analytic poses go through the same drawing function
+(:func:`body_outlines`), so what differs on screen differs in the numbers.
+
+Writers: GIF through Pillow, MP4 through ffmpeg (where it is on PATH; else one line,
+status 2), HTML as one self-contained page (matplotlib's ``to_jshtml``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from analytic.errors import LinkageError, OutputError
+
+#: Frames per cycle by default (>= 36 so a turn is drawn every 5 deg at most).
+FRAMES = 72
+FORMATS = (".gif", ".mp4", ".html")
+#: The longest force arrow, as a fraction of the mechanism's size.
+ARROW_FRACTION = 0.3
+ENGINE_COLOURS = {"mujoco": "tab:red", "pybullet": "tab:orange", "exudyn": "tab:green"}
+
+
+@dataclass
+class Poses:
+    """Body poses along the frames: ``theta`` (F, B) rad and ``origin`` (F, B, 2) m of
+    every body frame (description order, ground included); NaN where not available."""
+
+    label: str
+    theta: np.ndarray
+    origin: np.ndarray
+
+
+@dataclass
+class Frames:
+    """What the animation shows, frame by frame (SI)."""
+
+    mech: object
+    values: np.ndarray            # (F,) input value, rad or m
+    times: np.ndarray             # (F,) s
+    analytic: Poses
+    engines: list[Poses] = field(default_factory=list)
+    forces: dict | None = None    # joint -> (F, 2) N, by body_a on body_b
+    revolute: bool = True
+
+    @property
+    def n(self) -> int:
+        return len(self.values)
+
+
+# ============================================================================ frames
+def frame_inputs(linkage, frames: int = FRAMES) -> tuple[np.ndarray, np.ndarray]:
+    """``(values, times)`` of the frames: a full turn from the reference value, or the
+    feasible range back and forth from it; times at the description's rate (an
+    accelerating driver: its prescribed law where it reaches the value, else the travel
+    at the reference rate)."""
+    from analytic.sweep import input_values
+    d = linkage.mech.driver
+    v0 = d.value
+    vals, full, _ = input_values(linkage, 8)
+    if full:
+        values = v0 + 2 * math.pi * np.arange(frames) / frames
+    else:
+        lo, hi = float(vals[0]), float(vals[-1])
+        first, second = (hi, lo) if d.velocity >= 0 else (lo, hi)
+        legs = [abs(first - v0), abs(second - first), abs(v0 - second)]
+        total = sum(legs) or 1.0
+        counts = [max(2, round(frames * x / total)) for x in legs]
+        values = np.concatenate([
+            np.linspace(v0, first, counts[0], endpoint=False),
+            np.linspace(first, second, counts[1], endpoint=False),
+            np.linspace(second, v0, counts[2], endpoint=False)])
+    travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(values)))])
+    rate = abs(d.velocity) or 1.0
+    times = travel / rate
+    if d.acceleration != 0.0 and full:
+        from sim_models.sampling import time_of
+        t = np.array([time_of(d, float(v)) for v in values])
+        times = np.where(np.isfinite(t), t, times)
+    return values, times
+
+
+def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False) -> Frames:
+    """The analytic poses (and joint forces) at :func:`frame_inputs`, on the branch the
+    moving linkage follows from the reference assembly."""
+    mech = linkage.mech
+    values, times = frame_inputs(linkage, frames)
+    d = mech.driver
+    kin = linkage.kinematics_along(values, np.full(len(values), d.velocity),
+                                   np.full(len(values), d.acceleration))
+    frc = None
+    if forces:
+        if not mech.has_mass:
+            raise LinkageError(f"--forces: {mech.name!r} has no masses, so no joint forces "
+                               "are computed")
+        f = linkage.forces(kin)
+        frc = {jt.name: np.asarray(f.joint_force[jt.name], float) for jt in mech.joints}
+    return Frames(mech, values, times, Poses("analytic", np.asarray(kin.theta, float),
+                                             np.asarray(kin.origin, float)),
+                  forces=frc, revolute=linkage.driver_is_revolute)
+
+
+def engine_poses(run_, tree, values: np.ndarray, full: bool) -> Poses:
+    """The engine's body poses at the frames' input values: each frame takes the run's
+    sample at the same input (modulo a turn for a full-turn crank; within a tenth of
+    the frame spacing), NaN where the run has none."""
+    th, _, _, org = tree.propagate(run_.q, run_.qd, run_.qdd)[:4]
+    sv = np.asarray(run_.values, float)
+    ok = np.all(np.isfinite(run_.q), axis=1)
+    F, B = len(values), th.shape[1]
+    theta, origin = np.full((F, B), np.nan), np.full((F, B, 2), np.nan)
+    spacing = np.min(np.abs(np.diff(values))) if len(values) > 1 else 1.0
+    for i, v in enumerate(values):
+        dv = sv - v
+        if full:
+            dv = (dv + math.pi) % (2 * math.pi) - math.pi
+        dv = np.where(ok, np.abs(dv), np.inf)
+        k = int(np.argmin(dv))
+        if dv[k] <= 0.1 * spacing:
+            theta[i], origin[i] = th[k], org[k]
+    return Poses(run_.engine, theta, origin)
+
+
+def engine_run(mech, tree, engine: str, frames: int):
+    """An engine run sampled at the frames' inputs (a full turn: one sample a frame)."""
+    from sim_models.engines import run
+    from sim_models.registry import get_engine
+    settings = get_engine(engine).settings({})
+    return run(tree, engine, settings, revolutions=2, samples=frames)
+
+
+# ============================================================================ drawing
+def body_points(mech, b: int) -> list[tuple[str, np.ndarray]]:
+    """The named points of body ``b`` (body frame, m), joint points first."""
+    body = mech.bodies[b]
+    return [(n, np.asarray(p, float)) for n, p in body.points.items()]
+
+
+def world(theta, origin, local) -> np.ndarray:
+    """World position of a body-frame point for a body at ``theta`` (rad), ``origin``."""
+    c, s = math.cos(theta), math.sin(theta)
+    return origin + np.array([c * local[0] - s * local[1], s * local[0] + c * local[1]])
+
+
+def body_outlines(mech, poses: Poses, i: int) -> dict[str, np.ndarray]:
+    """Each moving body's outline at frame ``i``: its points in world axes (k, 2), in
+    convex-outline order and closed when it has three or more (NaN if no pose)."""
+    ground = mech.body_index(mech.ground) if hasattr(mech, "body_index") else \
+        [b.name for b in mech.bodies].index(mech.ground)
+    out = {}
+    for b, body in enumerate(mech.bodies):
+        if b == ground:
+            continue
+        pts = np.array([world(poses.theta[i, b], poses.origin[i, b], p)
+                        for _, p in body_points(mech, b)])
+        if len(pts) >= 3:
+            c = pts.mean(axis=0)
+            order = np.argsort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
+            pts = np.vstack([pts[order], pts[order][:1]])
+        out[body.name] = pts
+    return out
+
+
+def joint_positions(mech, poses: Poses, i: int) -> dict[str, np.ndarray]:
+    """World position of each joint at frame ``i`` (a prismatic joint: its slider point)."""
+    from analytic.mechanism import Prismatic
+    names = [b.name for b in mech.bodies]
+    out = {}
+    for jt in mech.joints:
+        if isinstance(jt, Prismatic):
+            b, p = names.index(jt.slider), mech.bodies[names.index(jt.slider)].points[jt.point]
+        else:
+            b, p = names.index(jt.body_b), mech.bodies[names.index(jt.body_b)].points[jt.point_b]
+        out[jt.name] = world(poses.theta[i, b], poses.origin[i, b], np.asarray(p, float))
+    return out
+
+
+def traced_points(mech) -> list[tuple[int, str]]:
+    """``(body, point)`` of the points whose paths are drawn: every point of a moving
+    body with no joint to the ground (the couplers), else every moving point."""
+    names = [b.name for b in mech.bodies]
+    pinned = {n for jt in mech.joints for n in jt.bodies if mech.ground in jt.bodies}
+    out = [(b, pn) for b, body in enumerate(mech.bodies)
+           if body.name != mech.ground and body.name not in pinned for pn in body.points]
+    if not out:
+        out = [(b, pn) for b, body in enumerate(mech.bodies) if body.name != mech.ground
+               for pn in body.points]
+    return [(b, pn) for b, pn in out if names[b] != mech.ground]
+
+
+def _size(fr: Frames) -> float:
+    pts = [p for i in range(fr.n) for o in body_outlines(fr.mech, fr.analytic, i).values()
+           for p in o]
+    pts = np.array(pts)
+    return float(np.max(np.ptp(pts, axis=0))) or 1.0
+
+
+def _nice(x: float) -> float:
+    """A round number near ``x`` (1, 2, 5 x 10^k)."""
+    if not (x > 0 and math.isfinite(x)):
+        return 1.0
+    e = math.floor(math.log10(x))
+    m = x / 10 ** e
+    return (1 if m < 1.5 else 2 if m < 3.5 else 5 if m < 7.5 else 10) * 10 ** e
+
+
+def _ground_art(ax, mech, size: float, analytic: Poses) -> None:
+    """The ground: a hatched block under each ground pivot and along each fixed guide."""
+    from matplotlib.patches import Polygon, Rectangle
+
+    from analytic.mechanism import Prismatic
+    g = mech.body(mech.ground)
+    w = 0.08 * size
+    for jt in mech.joints:
+        if mech.ground not in jt.bodies or isinstance(jt, Prismatic):
+            continue
+        p = np.asarray(g.points[jt.point_a if jt.body_a == mech.ground else jt.point_b], float)
+        ax.add_patch(Rectangle((p[0] - w / 2, p[1] - 0.6 * w), w, 0.35 * w, hatch="////",
+                               fill=False, lw=0.8, color="0.25", zorder=1))
+        ax.plot([p[0], p[0] - w / 3, p[0] + w / 3, p[0]],
+                [p[1], p[1] - 0.25 * w, p[1] - 0.25 * w, p[1]], color="0.25", lw=1, zorder=1)
+    for jt in mech.joints:
+        if not (isinstance(jt, Prismatic) and jt.guide == mech.ground):
+            continue
+        o = np.asarray(g.points[jt.origin], float)
+        u = np.array([math.cos(jt.direction), math.sin(jt.direction)])
+        nrm = np.array([-u[1], u[0]])
+        names = [b.name for b in mech.bodies]
+        b = names.index(jt.slider)
+        pts = np.array([world(analytic.theta[i, b], analytic.origin[i, b],
+                              np.asarray(mech.bodies[b].points[jt.point], float))
+                        for i in range(len(analytic.theta))])
+        s = (pts - o) @ u
+        a, e = o + (s.min() - 0.15 * size) * u, o + (s.max() + 0.15 * size) * u
+        ax.plot([a[0], e[0]], [a[1], e[1]], "k--", lw=0.8, zorder=1)
+        # hatched band just behind the line, on its right-hand side (the ground's side)
+        h = 0.035 * size
+        poly = np.array([a - 0.2 * h * nrm, e - 0.2 * h * nrm, e - 1.2 * h * nrm,
+                         a - 1.2 * h * nrm])
+        ax.add_patch(Polygon(poly, closed=True, hatch="////", fill=False, lw=0.6,
+                             color="0.35", zorder=1))
+
+
+@dataclass
+class Animator:
+    """The figure of an animation and how to draw frame ``i`` (``draw(i)`` updates the
+    moving artists ``dynamic``; everything else is drawn once)."""
+
+    fig: object
+    ax: object
+    draw: object
+    dynamic: list
+    n: int
+    labels: list = field(default_factory=list)  # moving Text artists of constant text
+
+
+def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
+    """The figure of ``fr`` with its moving artists; frame 0 is drawn."""
+    from . import plots
+    plt = plots.plt
+    mech = fr.mech
+    size = _size(fr)
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), dpi=dpi)
+    allpts = np.array([p for i in range(fr.n)
+                       for o in body_outlines(mech, fr.analytic, i).values() for p in o])
+    lo, hi = np.nanmin(allpts, axis=0), np.nanmax(allpts, axis=0)
+    pad = 0.15 * size
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad - 0.05 * size, hi[1] + pad + 0.1 * size)  # room for the text
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.25)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title or mech.name, fontsize=10)
+    _ground_art(ax, mech, size, fr.analytic)
+    # paths of the traced points (full, thin grey) and the trace up to the frame
+    names = [b.name for b in mech.bodies]
+    traces = []
+    for b, pn in traced_points(mech):
+        p = np.asarray(mech.bodies[b].points[pn], float)
+        path = np.array([world(fr.analytic.theta[i, b], fr.analytic.origin[i, b], p)
+                         for i in range(fr.n)])
+        ax.plot(path[:, 0], path[:, 1], color="0.75", lw=0.7, zorder=2)
+        (ln,) = ax.plot([], [], color="tab:purple", lw=1.2, zorder=2)
+        traces.append((path, ln, f"{names[b]}.{pn}"))
+    ax.plot([], [], color="tab:purple", lw=1.2, label="point paths")
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    body_art = {}
+    for k, body in enumerate(mech.moving_bodies):
+        col = colours[k % len(colours)]
+        one = len(body.points) == 1  # a slider block: a square at its point
+        (ln,) = ax.plot([], [], "-", color=col, lw=2.5, solid_capstyle="round", zorder=4,
+                        marker="s" if one else None, ms=13, mfc=col, mec="k", alpha=0.9)
+        fill = ax.fill([0], [0], color=col, alpha=0.2, lw=0, zorder=3)[0]
+        txt = ax.text(0, 0, body.name, fontsize=8, fontweight="bold", ha="center",
+                      va="bottom", color="0.1", zorder=7)
+        body_art[body.name] = (ln, fill, txt)
+    ax.plot([], [], "-", color="0.3", lw=2.5, label="analytic")
+    (joints,) = ax.plot([], [], "o", ms=6, mfc="white", mec="k", mew=1.2, zorder=6)
+    jtext = {jt.name: ax.text(0, 0, jt.name, fontsize=7, color="darkred", zorder=7)
+             for jt in mech.joints}
+    eng_art = []
+    for e in fr.engines:
+        col = ENGINE_COLOURS.get(e.label, "tab:red")
+        lines = {n: ax.plot([], [], "--", color=col, lw=1.4, zorder=5)[0]
+                 for n in body_art}
+        (ej,) = ax.plot([], [], "x", color=col, ms=7, mew=1.5, zorder=6)
+        ax.plot([], [], "--x", color=col, lw=1.4, label=f"{e.label} (engine)")
+        eng_art.append((e, lines, ej))
+    quiv = None
+    if fr.forces is not None:
+        peak = max(float(np.nanmax(np.linalg.norm(f, axis=1))) for f in fr.forces.values())
+        scale = peak / (ARROW_FRACTION * size) if peak > 0 else 1.0  # N per m of arrow
+        quiv = ax.quiver(np.zeros(len(fr.forces)), np.zeros(len(fr.forces)),
+                         np.zeros(len(fr.forces)), np.zeros(len(fr.forces)),
+                         angles="xy", scale_units="xy", scale=scale, color="tab:red",
+                         width=0.006, zorder=8)
+        ref = _nice(0.5 * peak)
+        ax.quiverkey(quiv, 0.80, 0.04, ref, f"{ref:g} N (force by body_a on body_b)",
+                     labelpos="N", coordinates="axes", fontproperties={"size": 7})
+    info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", ha="left", fontsize=8,
+                   family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
+    ax.legend(fontsize=7, loc="upper right")
+    d = mech.driver
+
+    def draw(i: int):
+        outl = body_outlines(mech, fr.analytic, i)
+        for n, (ln, fill, txt) in body_art.items():
+            pts = outl[n]
+            ln.set_data(pts[:, 0], pts[:, 1])
+            fill.set_xy(pts if len(pts) >= 3 else np.zeros((1, 2)))
+            txt.set_position(np.nanmean(pts[:-1] if len(pts) >= 3 else pts, axis=0))
+        jp = joint_positions(mech, fr.analytic, i)
+        xy = np.array(list(jp.values()))
+        joints.set_data(xy[:, 0], xy[:, 1])
+        for n, p in jp.items():
+            jtext[n].set_position(p + np.array([0.02, -0.045]) * size)
+        for path, ln, _ in traces:
+            ln.set_data(path[:i + 1, 0], path[:i + 1, 1])
+        for e, lines, ej in eng_art:
+            eo = body_outlines(mech, e, i)
+            for n, ln in lines.items():
+                ln.set_data(eo[n][:, 0], eo[n][:, 1])
+            ejp = np.array(list(joint_positions(mech, e, i).values()))
+            ej.set_data(ejp[:, 0], ejp[:, 1])
+        if quiv is not None:
+            F = np.array([fr.forces[jt.name][i] for jt in mech.joints])
+            quiv.set_offsets(xy)
+            quiv.set_UVC(F[:, 0], F[:, 1])
+        v = fr.values[i]
+        val = f"{math.degrees(v) % 360:7.2f} deg" if fr.revolute else f"{v:.5g} m"
+        rate = f"{d.velocity:g} rad/s" if fr.revolute else f"{d.velocity:g} m/s"
+        info.set_text(f"input {d.joint} = {val}  ({rate})\nt = {fr.times[i]:.4f} s   "
+                      f"frame {i + 1}/{fr.n}")
+        return []
+
+    labels = [txt for _, _, txt in body_art.values()] + list(jtext.values())
+    dynamic = [a for ln, fill, _ in body_art.values() for a in (ln, fill)] + [joints, info]
+    dynamic += [ln for _, ln, _ in traces]
+    dynamic += [a for _, lines, ej in eng_art for a in (*lines.values(), ej)]
+    if quiv is not None:
+        dynamic.append(quiv)
+    draw(0)
+    return Animator(fig, ax, draw, dynamic, fr.n, labels)
+
+
+def frames_rgb(an: Animator):
+    """Each frame as an (H, W, 3) uint8 image: the still parts drawn once, the moving
+    artists drawn over a copy of them per frame (blitting; the ticks' text is most of a
+    full draw), and the moving names pasted as images rendered once (drawing a text
+    costs ~4 ms, 4/5 of a frame, and a name's pixels do not change as it moves)."""
+    canvas = an.fig.canvas
+    for a in an.dynamic:
+        a.set_animated(True)
+    for t in an.labels:
+        t.set_visible(False)
+    canvas.draw()
+    bg = canvas.copy_from_bbox(an.fig.bbox)
+    sprites = [_sprite(t, an.fig.dpi) for t in an.labels]
+    for i in range(an.n):
+        canvas.restore_region(bg)
+        an.draw(i)
+        for a in an.dynamic:
+            an.ax.draw_artist(a)
+        rgb = np.asarray(canvas.buffer_rgba())[..., :3].copy()
+        for t, sp in zip(an.labels, sprites, strict=True):
+            _paste(rgb, sp, an.ax.transData.transform(t.get_position()))
+        yield rgb
+    for a in an.dynamic:
+        a.set_animated(False)
+    for t in an.labels:
+        t.set_visible(True)
+
+
+def _sprite(text, dpi: float):
+    """``(rgb (h, w, 3) float, alpha (h, w, 1), (dx, dy))``: ``text`` rendered once
+    alone, and the offset of its anchor from the image's top-left corner (pixels)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(3, 1), dpi=dpi)
+    fig.patch.set_alpha(0.0)
+    canvas = FigureCanvasAgg(fig)
+    t = fig.text(0.5, 0.5, text.get_text(), fontproperties=text.get_fontproperties(),
+                 color=text.get_color(), ha=text.get_ha(), va=text.get_va())
+    canvas.draw()
+    buf = np.asarray(canvas.buffer_rgba()).astype(float) / 255.0
+    H = buf.shape[0]
+    bb = t.get_window_extent(canvas.get_renderer())
+    x0, x1 = int(math.floor(bb.x0)) - 1, int(math.ceil(bb.x1)) + 1
+    r0, r1 = H - int(math.ceil(bb.y1)) - 1, H - int(math.floor(bb.y0)) + 1
+    x0, r0 = max(x0, 0), max(r0, 0)
+    crop = buf[r0:r1, x0:x1]
+    ax_, ay_ = fig.transFigure.transform((0.5, 0.5))
+    alpha = crop[..., 3:4]
+    rgb = np.where(alpha > 0, crop[..., :3] / np.maximum(alpha, 1e-9), 0.0)  # unpremultiply
+    return np.clip(rgb, 0, 1), alpha, (ax_ - x0, (H - ay_) - r0)
+
+
+def _paste(img: np.ndarray, sprite, anchor_px) -> None:
+    """Blend ``sprite`` into ``img`` (uint8, rows from the top) at the display point
+    ``anchor_px`` (pixels from the bottom-left), clipped to the image."""
+    rgb, alpha, (dx, dy) = sprite
+    H, W = img.shape[:2]
+    if not np.all(np.isfinite(anchor_px)):
+        return
+    c0 = int(round(anchor_px[0] - dx))
+    r0 = int(round(H - anchor_px[1] - dy))
+    h, w = alpha.shape[:2]
+    rs, cs = max(r0, 0), max(c0, 0)
+    re, ce = min(r0 + h, H), min(c0 + w, W)
+    if rs >= re or cs >= ce:
+        return
+    sub = img[rs:re, cs:ce].astype(float) / 255.0
+    a = alpha[rs - r0:re - r0, cs - c0:ce - c0]
+    src = rgb[rs - r0:re - r0, cs - c0:ce - c0]
+    img[rs:re, cs:ce] = np.round(255.0 * (sub * (1 - a) + src * a)).astype(np.uint8)
+
+
+def write_gif(an: Animator, out: str, fps: int = 24) -> int:
+    """The GIF through Pillow: one adaptive palette from the first frame (the still
+    parts and the linkage's colours), no dithering.  Returns the frame count."""
+    from PIL import Image
+    rgbs = list(frames_rgb(an))
+    # one palette for every frame, from frames spread over the cycle (colours that
+    # appear late, such as the traced paths, are in it)
+    pick = rgbs[:: max(1, len(rgbs) // 4)]
+    pal = Image.fromarray(np.concatenate(pick, axis=0)).quantize(
+        colors=128, method=Image.Quantize.MEDIANCUT)
+    imgs = [Image.fromarray(rgb).quantize(palette=pal, dither=Image.Dither.NONE)
+            for rgb in rgbs]
+    imgs[0].save(out, save_all=True, append_images=imgs[1:], duration=round(1000 / fps),
+                 loop=0, optimize=False, disposal=1)
+    return len(imgs)
+
+
+def write(an: Animator, out: str, fps: int = 24) -> None:
+    """Write the animation to ``out`` by its extension: GIF (Pillow), MP4 (ffmpeg),
+    HTML (matplotlib's self-contained JavaScript player)."""
+    from matplotlib import animation
+
+    from . import plots
+    ext = Path(out).suffix.lower()
+    try:
+        if ext == ".gif":
+            write_gif(an, out, fps)
+            return
+        if ext == ".mp4" and not animation.writers.is_available("ffmpeg"):
+            raise OutputError(f"--out {out!r}: MP4 needs ffmpeg, which is not on PATH; "
+                              "write .gif or .html instead (or install ffmpeg)")
+        anim = animation.FuncAnimation(an.fig, an.draw, frames=an.n, interval=1000 / fps)
+        if ext == ".mp4":
+            anim.save(out, writer=animation.FFMpegWriter(fps=fps))
+        else:
+            Path(out).write_text(anim.to_jshtml(fps=fps, default_mode="loop"))
+    except OSError as e:
+        raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
+    finally:
+        plots.plt.close(an.fig)
+
+
+def cmd_animate(args) -> int:
+    from analytic import Linkage, load_case
+    from sim_models import compile_linkage
+
+    from .plot_cmd import check_out
+    if args.out is None:
+        raise OutputError("option --out is required: F.gif, F.mp4 or F.html")
+    check_out(args.out, FORMATS)
+    if Path(args.out).suffix.lower() == ".mp4":
+        from matplotlib import animation
+        if not animation.writers.is_available("ffmpeg"):
+            raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
+                              "write .gif or .html instead (or install ffmpeg)")
+    mech = load_case(args.case)
+    # the compiled linkage (analytic solution + simulation tree) only when an engine runs
+    tree = compile_linkage(mech) if args.engine else None
+    fr = analytic_frames(tree.linkage if tree else Linkage(mech), args.frames, args.forces)
+    notes = []
+    if args.engine:
+        from .verdict_runs import engine_list
+        full = _full(tree.linkage)
+        for e in engine_list(args.engine):
+            r = engine_run(mech, tree, e, args.frames)
+            if not r.ok:
+                notes.append(f"{e}: run failed: {r.reason}")
+            poses = engine_poses(r, tree, fr.values, full)
+            missing = int(np.sum(~np.isfinite(poses.theta[:, 0])))
+            if missing:
+                notes.append(f"{e}: no sample at {missing} of {fr.n} frames (drawn where it "
+                             "has one)")
+            fr.engines.append(poses)
+    label = "analytic" + ("".join(f" + {e.label} (dashed)" for e in fr.engines))
+    an = build_animation(fr, f"{mech.name}: {label}")
+    write(an, args.out, args.fps)
+    for n in notes:
+        print("note:", n)
+    print(f"wrote {args.out} ({fr.n} frames, {fr.times[-1]:.4g} s of motion)")
+    return 0
+
+
+def _full(linkage) -> bool:
+    from analytic.sweep import input_values
+    return bool(input_values(linkage, 2)[1])
+
+
+def register(sub) -> None:
+    from . import cli_options as opt
+    s = sub.add_parser("animate", help="the linkage moving through a cycle (GIF, MP4, HTML)")
+    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("--out", type=opt.output_file, help="F.gif, F.mp4 (needs ffmpeg) or F.html")
+    from sim_models.registry import engine_names
+    s.add_argument("--engine", choices=[*engine_names(), "all"],
+                   help="draw this engine's poses (dashed) over the analytic ones")
+    s.add_argument("--forces", action="store_true",
+                   help="joint forces as arrows on one scale, with a key")
+    s.add_argument("--frames", type=opt.int_range(36, 720, "frames per cycle"),
+                   default=FRAMES, help=f"frames per cycle, 36 to 720 (default {FRAMES})")
+    s.add_argument("--fps", type=opt.int_range(1, 60, "frames per second"), default=24,
+                   help="frames per second, 1 to 60 (default 24)")
+    s.set_defaults(func=cmd_animate)
+
+
+__all__ = ["Animator", "Frames", "Poses", "analytic_frames", "body_outlines",
+           "build_animation", "cmd_animate", "engine_poses", "frame_inputs", "frames_rgb",
+           "joint_positions", "register", "write", "write_gif"]
