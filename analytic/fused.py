@@ -204,11 +204,14 @@ class FusedKernel:
         values = np.ascontiguousarray(np.atleast_1d(np.asarray(
             d.value if values is None else values, float)))
         N = len(values)
-        vel = np.broadcast_to(np.asarray(d.velocity if velocity is None else velocity, float),
-                              (N,)).copy()
-        acc = np.broadcast_to(np.asarray(d.acceleration if acceleration is None
-                                         else acceleration, float), (N,)).copy()
-        return values, vel, acc
+
+        def rate(x):  # a constant rate stays one number: the kernel broadcasts it
+            x = np.asarray(x, float)
+            if x.ndim == 0 or x.size == 1:
+                return np.ascontiguousarray(x.reshape(1))
+            return np.ascontiguousarray(np.broadcast_to(x, (N,)))
+        return (values, rate(d.velocity if velocity is None else velocity),
+                rate(d.acceleration if acceleration is None else acceleration))
 
     def _check(self, values, bad, worst_i, worst):
         from . import positions as P
@@ -282,8 +285,10 @@ class FusedKernel:
         trans = [(name, out["trv"][:, 2 * d], out["trv"][:, 2 * d + 1])
                  for d, name in enumerate(self.trans_names)]
         jp = {j: out["jp"][:, j] for j in range(self.J)}
+        N = len(values)
         kin = Kinematics(
-            linkage=self.lk, value=values, velocity=vel, acceleration=acc, q=out["q"],
+            linkage=self.lk, value=values, velocity=np.broadcast_to(vel, (N,)),
+            acceleration=np.broadcast_to(acc, (N,)), q=out["q"],
             qd=out["qd"], qdd=out["qdd"], theta=out["theta"], omega=out["omega"],
             alpha=out["alpha"], E=out["E"], zO=out["zO"], zv=out["zv"], za=out["za"],
             jacobian=out["A"], determinant=out["det"], transmission_vectors=trans,
@@ -303,8 +308,8 @@ class FusedKernel:
         N = kin.n
         out = self.alloc(N, 3)
         branch = getattr(kin, "_fused_branch", "continued")
-        self.run(kin.value, kin.velocity, kin.acceleration,
-                 self.signs_for(kin.value, branch), out, 3)
+        _, vel, acc = self._inputs(kin.value, _compact(kin.velocity), _compact(kin.acceleration))
+        self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3)
         return self._forces(out)
 
     def _require_mass(self):
@@ -350,6 +355,14 @@ class FusedKernel:
         bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0)
         self._check(values, bad, wi, worst)
         return out["E"][:len(values)], out["zO"][:len(values)]
+
+
+def _compact(x: np.ndarray) -> np.ndarray:
+    """A rate series as one number when it is constant (a broadcast view or equal)."""
+    x = np.asarray(x, float)
+    if x.ndim and x.size and (x.strides[0] == 0 or np.all(x == x[0])):
+        return x[:1]
+    return x
 
 
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:

@@ -2,21 +2,22 @@
 
 :func:`evaluate_blocked` runs the solver over the input values in blocks of
 :data:`BLOCK` configurations into preallocated outputs (the fused kernel where the
-mechanism has one, else the numpy path block by block), so the working set per
-block stays in cache and the temporaries do not grow with the sweep.
+mechanism has one, else the numpy path block by block): the outputs of one block are
+reused by the next, so memory does not grow with the point count.
 
 :func:`sweep_csv` is :func:`analytic.sweep.sweep` for tables too large to hold: each
 block's table (:func:`analytic.sweep.to_frame`, the same columns and numbers) is
-appended to the CSV as it is solved, and only the series that the events and the
-summary read are kept for every point.
+appended to the CSV as it is solved.  The events and the summary are then computed by
+the sweep's own functions (:func:`analytic.sweep.find_events`,
+:func:`analytic.summary.summarise`) from :class:`LazyKinematics`: every series they
+read is recomputed by one more pass of the solver and only that series is held.
 
-Memory ceiling of :func:`sweep_csv` per configuration: ``8 (2 nq + 3 + D + F)``
-bytes, with ``nq`` the loop unknowns (their values and rates give every angle,
-angular velocity and slider travel the events and summary read), the input value,
-the Jacobian's determinant and condition number, ``D`` the dyads' transmission angles
-and ``F`` = 5 with forces (drive effort, power terms): 112 B for a four-bar with
-forces.  On top of that one block (:data:`BLOCK` configurations of the full tables,
-about 20 MB for a four-bar) whatever the point count.
+Memory ceiling of :func:`sweep_csv`: the input values (8 B per configuration), the
+determinant and condition number of the Jacobian and the transmission angles that the
+events read more than once (8 B each per configuration), one or two series of 8-16 B
+per configuration at a time while the events and summary run, and one block
+(:data:`BLOCK` configurations of the full tables, a few tens of MB) whatever the
+point count: under 100 B per configuration for a four-bar.
 """
 
 from __future__ import annotations
@@ -34,74 +35,123 @@ from .fused import kernel_for
 BLOCK = 1 << 15
 
 
-class _Columns:
-    """Per-body series from the group variables: ``[:, b]`` of theta or omega is the
-    body's group column (plus its offset for angles); the ground's is zero."""
+class _Lazy:
+    """A streamed sweep's results for every point, computed on demand: each series
+    asked for is recomputed by one more pass of the solver over the input values
+    (block by block) and only that series is kept.  The events and the summary read
+    a handful of series, so memory stays a few arrays of the point count whatever
+    they read, and they read the same numbers the CSV holds."""
 
-    def __init__(self, x: np.ndarray, topo, offset: bool):
-        self.x, self.topo, self.offset = x, topo, offset
-
-    def __getitem__(self, key):
-        rows, b = key
-        g = self.topo.group_of[b]
-        if g < 0:
-            return np.zeros(len(self.x))[rows]
-        col = self.x[rows, g]
-        return col + self.topo.offset[b] if self.offset else col
-
-
-class _Series:
-    """What :func:`analytic.sweep.find_events` and :func:`analytic.summary.summarise`
-    read of a sweep's kinematics, for every point; nothing else."""
-
-    def __init__(self, linkage, N: int, velocity, acceleration, forces: bool):
-        topo = linkage.topo
-        self.linkage = linkage
-        self.value = np.empty(N)
-        self.q = np.empty((N, topo.nq))
-        self.qd = np.empty((N, topo.nq))
-        self.determinant = np.empty(N)
-        self.condition = np.empty(N)
-        self.velocity = np.broadcast_to(np.asarray(velocity, float), (N,))
-        self.acceleration = np.broadcast_to(np.asarray(acceleration, float), (N,))
-        self.theta = _Columns(self.q, topo, True)
-        self.omega = _Columns(self.qd, topo, False)
-        self.transmission: dict[str, np.ndarray] = {}
-        self.forces = _ForceSeries(N) if forces else None
+    def __init__(self, linkage, values, velocity, acceleration, forces: bool, block: int):
+        self.linkage, self.value = linkage, values
+        self._rates = (velocity, acceleration)
+        self._forces, self._block = forces, block
+        self._cache: dict[str, np.ndarray] = {}
 
     @property
     def n(self) -> int:
         return len(self.value)
 
-    def slider(self, joint: str):
-        topo = self.linkage.topo
-        i = topo.n_groups + topo.slider_index[topo.joint_names.index(joint)]
-        return self.q[:, i], self.qd[:, i], None
+    def _collect(self, pick, forces: bool = False) -> np.ndarray:
+        parts = [np.array(pick(kin, frc)) for _, kin, frc in evaluate_blocked(
+            self.linkage, self.value, *self._rates, forces=forces, block=self._block)]
+        return np.concatenate(parts) if parts else np.zeros(0)
 
-    def store(self, a: int, kin, frc) -> None:
-        b = a + kin.n
-        self.value[a:b] = kin.value
-        self.q[a:b], self.qd[a:b] = kin.q, kin.qd
-        self.determinant[a:b] = kin.determinant
-        self.condition[a:b] = kin.condition
-        for name, tr in kin.transmission.items():
-            self.transmission.setdefault(name, np.empty(self.n))[a:b] = tr
-        if self.forces is not None:
-            self.forces.store(a, frc)
+    def _cached(self, key, pick, forces=False):
+        if key not in self._cache:
+            self._cache[key] = self._collect(pick, forces)
+        return self._cache[key]
 
 
-class _ForceSeries:
-    """The drive effort and the power terms of every point (``Forces``' methods)."""
+class _LazyArray:
+    """A per-configuration array of a :class:`_Lazy`: ``[:, k]`` computes one column."""
 
-    def __init__(self, N: int):
-        self.effort, self.power = np.empty(N), np.empty(N)
-        self.kinetic_rate, self.load_power = np.empty(N), np.empty(N)
-        self.power_residual = np.empty(N)
+    def __init__(self, owner: _Lazy, name: str, forces: bool):
+        self.owner, self.name, self.forces = owner, name, forces
 
-    def store(self, a: int, frc) -> None:
-        b = a + len(frc.effort)
-        for k in ("effort", "power", "kinetic_rate", "load_power", "power_residual"):
-            getattr(self, k)[a:b] = getattr(frc, k)
+    def _get(self, kin, frc):
+        return getattr(frc if self.forces else kin, self.name)
+
+    def __getitem__(self, key):
+        if isinstance(key, tuple) and len(key) == 2:
+            rows, col = key
+            return self.owner._collect(lambda k, f: self._get(k, f)[:, col], self.forces)[rows]
+        return np.asarray(self)[key]
+
+    def __array__(self, dtype=None, copy=None):
+        a = self.owner._collect(self._get, self.forces)
+        return a if dtype is None else a.astype(dtype)
+
+    def __len__(self):
+        return self.owner.n
+
+
+class LazyKinematics(_Lazy):
+    """:class:`analytic.kinematics.Kinematics` of a streamed sweep (see :class:`_Lazy`)."""
+
+    _ARRAYS = ("q", "qd", "qdd", "theta", "omega", "alpha", "E", "zO", "zv", "za",
+               "jacobian")
+
+    def __getattr__(self, name):
+        if name in LazyKinematics._ARRAYS:
+            return _LazyArray(self, name, False)
+        raise AttributeError(f"a streamed sweep's kinematics have no {name!r}")
+
+    @property
+    def velocity(self):
+        return np.broadcast_to(np.asarray(self._rates[0], float), (self.n,))
+
+    @property
+    def acceleration(self):
+        return np.broadcast_to(np.asarray(self._rates[1], float), (self.n,))
+
+    @property
+    def determinant(self):
+        return self._cached("determinant", lambda k, f: k.determinant)
+
+    @property
+    def condition(self):
+        return self._cached("condition", lambda k, f: k.condition)
+
+    @property
+    def transmission(self):
+        first = next(evaluate_blocked(self.linkage, self.value[:2], *self._rates, forces=False))
+        names = list(first[1].transmission)
+        return {n: self._cached("tr " + n, lambda k, f, n=n: k.transmission[n]) for n in names}
+
+    def point_c(self, body, point):
+        from .kinematics import Kinematics
+        return Kinematics.point_c(self, body, point)
+
+    def point(self, body, point):
+        from .kinematics import Kinematics
+        return Kinematics.point(self, body, point)
+
+    def com_c(self, b):
+        from .kinematics import Kinematics
+        return Kinematics.com_c(self, b)
+
+    def com(self, b):
+        from .kinematics import Kinematics
+        return Kinematics.com(self, b)
+
+    def slider(self, joint):
+        from .kinematics import Kinematics
+        return Kinematics.slider(self, joint)
+
+
+class LazyForces:
+    """:class:`analytic.kinetostatics.Forces` of a streamed sweep (see :class:`_Lazy`)."""
+
+    _ARRAYS = ("effort", "power", "kinetic_rate", "load_power", "power_residual")
+
+    def __init__(self, owner: _Lazy):
+        self._owner = owner
+
+    def __getattr__(self, name):
+        if name in LazyForces._ARRAYS:
+            return self._owner._collect(lambda k, f: getattr(f, name), True)
+        raise AttributeError(f"a streamed sweep's forces have no {name!r}")
 
     def power_balance_error(self) -> float:
         from .kinetostatics import Forces
@@ -139,6 +189,29 @@ def evaluate_blocked(linkage, values, velocity=None, acceleration=None, forces=N
         yield a, kin, frc
 
 
+def _csv_writer():
+    """``write(frame, fh, header)``: pyarrow's CSV writer where installed (C++, about
+    15x pandas' ``to_csv``; numbers in the shortest form that reads back exactly),
+    else pandas'."""
+    try:
+        import pyarrow as pa
+        import pyarrow.csv as pacsv
+    except ImportError:  # pragma: no cover - pyarrow is a dependency
+        def write(frame, fh, header):
+            frame.to_csv(fh, index=False, header=header)
+        return write
+
+    def write(frame, fh, header):
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        if header:
+            fh.write(",".join(frame.columns) + "\n")
+        buf = pa.BufferOutputStream()
+        pacsv.write_csv(table, buf, pacsv.WriteOptions(include_header=False,
+                                                       quoting_style="none"))
+        fh.write(buf.getvalue().to_pybytes().decode())
+    return write
+
+
 def _sweep_values(linkage, points, start, input_range):
     """The sweep's input values as :func:`analytic.sweep.sweep` chooses them."""
     from .sweep import input_values
@@ -166,17 +239,16 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         forces = linkage.mech.has_mass
     d = linkage.mech.driver
     vel = d.velocity if velocity is None else velocity
-    series = _Series(linkage, len(values), vel, d.acceleration, forces)
     if path == "-":
         ctx = nullcontext(sys.stdout)
     elif hasattr(path, "write"):
         ctx = nullcontext(path)
     else:
         ctx = open(path, "w", newline="")
+    write = _csv_writer()
     with ctx as fh:
         for a, kin, frc in evaluate_blocked(linkage, values, vel, None, forces, block):
-            to_frame(linkage, kin, frc).to_csv(fh, index=False, header=(a == 0))
-            series.store(a, kin, frc)
+            write(to_frame(linkage, kin, frc), fh, a == 0)
     notes = []
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
@@ -188,9 +260,10 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         notes.append(f"{len(undecided)} change point(s) where continuity of velocity cannot "
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
-    events = find_events(linkage, series, full, None if full else feas, crossings)
-    res = SweepResult(series, series.forces, None, events, full, feas, grashof(linkage),
-                      notes, crossings)
+    kin = LazyKinematics(linkage, values, vel, d.acceleration, forces, block)
+    frc = LazyForces(kin) if forces else None
+    events = find_events(linkage, kin, full, None if full else feas, crossings)
+    res = SweepResult(kin, frc, None, events, full, feas, grashof(linkage), notes, crossings)
     from .sweep import nearest_event
     res.summary = summarise(res, nearest_event)
     res.written = True

@@ -1,28 +1,61 @@
-"""Solver throughput: configurations per second for 3600-point sweeps.
+"""Solver speed and memory against pylinkage and a hand-written closed form, one process.
 
-Measures positions + velocities + accelerations + forces of every body and joint
-for ``seed-four-bar`` and ``six-bar``, and, in the same run, a hand-written
-vectorised numpy closed form of the four-bar's positions, velocities and
-accelerations (no forces) as the yardstick: the machine is shared and noisy, so
-the ratio is the robust figure.  Best of ``--repeat`` runs.
+Everything is measured in one process, interleaved (each repeat runs every method
+once, in turn), so the ratios hold on a shared, noisy machine even when the absolute
+rates move.  Sizes 360 / 3.6k / 36k / 360k / 3.6M input values of the S4 four-bar
+(``seed-four-bar``) and the Watt six-bar (``six-bar``).
 
-    python benchmarks/bench_solver.py [--points 3600] [--repeat 20] [--json FILE]
+Methods (configurations per second, min and median over the repeats):
+
+* ``hand_kinematics``: a vectorised numpy closed form of the four-bar's angles, rates
+  and accelerations written out by hand (no forces): the yardstick;
+* ``pylinkage_positions`` / ``pylinkage_kinematics``: pylinkage's numba solver
+  (``step_fast`` / ``step_fast_with_kinematics``) on the same four-bar (optional: the
+  ``bench`` extra);
+* ``fused_positions``: the fused kernel's poses (every body's ``exp(i theta)`` and
+  origin, from which every point follows: what pylinkage's joint coordinates hold);
+  ``fused_angles``: the same plus the unwrapped angles ``q``;
+* ``fused_kinematics``: ``q, q', q''`` (every body's angle, rate, acceleration and
+  every slider's); ``fused_kinematics_forces``: plus every joint force, the drive
+  effort and the power terms, in the same pass (:meth:`analytic.fused.FusedKernel.state`);
+* ``linkage_kinematics_forces``: ``Linkage.forces(Linkage.kinematics(x))`` through the
+  front door: the full :class:`Kinematics` and :class:`Forces` objects;
+* ``numpy_kinematics_forces``: the same on the numpy path (``XVAL_FUSED=0``), up to
+  360k points (at 3.6M it holds several GB).
+
+Memory: tracemalloc's peak during one call, per configuration (numba-allocated arrays,
+as pylinkage's, are invisible to it), and the process's resident peak.
+
+    python benchmarks/bench_solver.py [--sizes 360,3600,...] [--json FILE]
+        [--cli-points 10000000]   # also time `xval sweep seed-four-bar --csv` in /usr/bin/time -v
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import platform
+import resource
+import subprocess
+import sys
+import tempfile
 import time
+import tracemalloc
 
 import numpy as np
 
 from analytic import Linkage, load_case
+from analytic.fused import COMPILE_LOG, FusedKernel
+from analytic.perf import tune_allocator
+
+A, B, C, D, W2 = 0.1, 0.3, 0.25, 0.4, 15.0  # the S4 four-bar, m and rad/s
+SIZES = (360, 3600, 36_000, 360_000, 3_600_000)
 
 
-def hand_four_bar(th2, a=0.1, b=0.3, c=0.25, d=0.4, w2=15.0):
-    """Positions, velocities, accelerations of the S4 four-bar, written out by hand."""
+def hand_four_bar(th2, a=A, b=B, c=C, d=D, w2=W2):
+    """Angles, rates and accelerations of the S4 four-bar, written out by hand."""
     ax, ay = a * np.cos(th2), a * np.sin(th2)
     ex, ey = d - ax, -ay
     D2 = ex * ex + ey * ey
@@ -36,63 +69,220 @@ def hand_four_bar(th2, a=0.1, b=0.3, c=0.25, d=0.4, w2=15.0):
     w4 = a * w2 / c * (-s23) / (-s34)
     c2, c3, c4 = np.cos(th2), np.cos(th3), np.cos(th4)
     s2, s3, s4 = np.sin(th2), np.sin(th3), np.sin(th4)
-    C = a * w2 * w2 * c2 + b * w3 * w3 * c3 - c * w4 * w4 * c4
+    Cc = a * w2 * w2 * c2 + b * w3 * w3 * c3 - c * w4 * w4 * c4
     F = -a * w2 * w2 * s2 - b * w3 * w3 * s3 + c * w4 * w4 * s4
     det = c * s4 * b * c3 - b * s3 * c * c4
-    al3 = (C * c * c4 - c * s4 * F) / det
-    al4 = (C * b * c3 - b * s3 * F) / det
+    al3 = (Cc * c * c4 - c * s4 * F) / det
+    al4 = (Cc * b * c3 - b * s3 * F) / det
     return th3, th4, w3, w4, al3, al4
 
 
-def best(fn, repeat):
-    fn()
-    t = []
-    for _ in range(repeat):
+def pylinkage_four_bar(n: int):
+    """The same four-bar in pylinkage, stepping 2 pi / n per step at 15 rad/s."""
+    from pylinkage.actuators import Crank
+    from pylinkage.components import Ground
+    from pylinkage.dyads import RRRDyad
+    from pylinkage.simulation import Linkage as PL
+    o2, o4 = Ground(0.0, 0.0, name="O2"), Ground(D, 0.0, name="O4")
+    crank = Crank(anchor=o2, radius=A, angular_velocity=2 * math.pi / n, name="A")
+    rocker = RRRDyad(crank.output, o4, distance1=B, distance2=C, name="B")
+    pl = PL([o2, o4, crank, rocker], name="four-bar")
+    pl.set_input_velocity(crank, omega=W2)
+    return pl
+
+
+def machine() -> dict:
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            model = next(ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    import numba
+    return {"cpu": model, "cores": os.cpu_count(), "python": platform.python_version(),
+            "numpy": np.__version__, "numba": numba.__version__,
+            "pylinkage": _version("pylinkage")}
+
+
+def _version(mod):
+    try:
+        from importlib.metadata import version
+        return version(mod)
+    except Exception:  # noqa: BLE001 - not installed
+        return None
+
+
+def load() -> str:
+    return "load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+
+
+def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
+    x = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    lk4, lk6 = Linkage(load_case("seed-four-bar")), Linkage(load_case("six-bar"))
+    fk4, fk6 = FusedKernel(lk4), FusedKernel(lk6)
+    fns = {"hand_kinematics": lambda: hand_four_bar(x)}
+    if with_pylinkage:
+        pl = pylinkage_four_bar(n)
+        fns["pylinkage_positions"] = lambda: pl.step_fast(iterations=n)
+        fns["pylinkage_kinematics"] = lambda: pl.step_fast_with_kinematics(iterations=n)
+    fns.update({
+        "fused_positions": lambda: fk4.poses(x),
+        "fused_angles": lambda: fk4.state(x, level=1),
+        "fused_kinematics": lambda: fk4.state(x, level=2),
+        "fused_kinematics_forces": lambda: fk4.state(x, level=3),
+        "six_bar_fused_kinematics_forces": lambda: fk6.state(x, level=3),
+        "linkage_kinematics_forces": lambda: lk4.forces(lk4.kinematics(x)),
+    })
+    if numpy_path:
+        def numpy_kf():
+            os.environ["XVAL_FUSED"] = "0"
+            try:
+                return lk4.forces(lk4.kinematics(x))
+            finally:
+                del os.environ["XVAL_FUSED"]
+        fns["numpy_kinematics_forces"] = numpy_kf
+    return fns
+
+
+def repeats(n: int) -> int:
+    return max(3, min(40, int(2e6 / n)))
+
+
+def measure(n: int, with_pylinkage: bool) -> dict:
+    fns = methods(n, with_pylinkage, numpy_path=n <= 360_000)
+    for f in fns.values():  # warm-up (compiles or loads the kernels)
+        f()
+    peak = {}
+    for k, f in fns.items():
+        tracemalloc.start()
+        f()
+        peak[k] = tracemalloc.get_traced_memory()[1] / n
+        tracemalloc.stop()
+    times = {k: [] for k in fns}
+    for _ in range(repeats(n)):
+        for k, f in fns.items():
+            t0 = time.perf_counter()
+            f()
+            times[k].append(time.perf_counter() - t0)
+    out = {}
+    for k, t in times.items():
+        out[k] = {"rate_min_time": n / min(t), "rate_median": n / float(np.median(t)),
+                  "ns_per_config_min": min(t) / n * 1e9, "bytes_per_config_peak": peak[k],
+                  "repeats": len(t), "times": t}
+    out["_resident_peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return out
+
+
+def ratios(res: dict) -> dict:
+    """The issue's figures, each the ratio of two methods timed in the same repeats:
+    the min over repeats of each, and the median of the per-repeat ratios."""
+    def r(n, a, b):
+        ta, tb = np.array(res[n][a]["times"]), np.array(res[n][b]["times"])
+        return {"min": float(tb.min() / ta.min()), "median": float(np.median(tb / ta))}
+    out = {}
+    for n in res:
+        row = {}
+        if "pylinkage_kinematics" in res[n]:
+            row["kinematics / pylinkage step_fast_with_kinematics"] = r(
+                n, "fused_kinematics", "pylinkage_kinematics")
+            row["Linkage kinematics+forces / pylinkage step_fast_with_kinematics"] = r(
+                n, "linkage_kinematics_forces", "pylinkage_kinematics")
+            row["positions (poses) / pylinkage step_fast"] = r(
+                n, "fused_positions", "pylinkage_positions")
+            row["angles / pylinkage step_fast"] = r(n, "fused_angles", "pylinkage_positions")
+        row["kinematics+forces / hand kinematics"] = r(n, "fused_kinematics_forces",
+                                                         "hand_kinematics")
+        row["Linkage kinematics+forces / hand kinematics"] = r(
+            n, "linkage_kinematics_forces", "hand_kinematics")
+        row["six-bar kinematics+forces / four-bar kinematics+forces"] = r(
+            n, "six_bar_fused_kinematics_forces", "fused_kinematics_forces")
+        if "numpy_kinematics_forces" in res[n]:
+            row["kinematics+forces / numpy path"] = r(n, "fused_kinematics_forces",
+                                                      "numpy_kinematics_forces")
+        out[n] = row
+    sizes = sorted(res)
+    if 36_000 in res and sizes[-1] > 36_000:
+        big = sizes[-1]
+        out["flatness"] = {
+            k: res[big][k]["ns_per_config_min"] / res[36_000][k]["ns_per_config_min"]
+            for k in res[big] if not k.startswith("_")}
+        out["flatness_sizes"] = [36_000, big]
+    return out
+
+
+def cli_sweep(points: int) -> dict:
+    """``xval sweep seed-four-bar --points N --csv F`` under ``/usr/bin/time -v``."""
+    with tempfile.TemporaryDirectory() as d:
+        csv = os.path.join(d, "sweep.csv")
+        cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "reports.cli", "sweep",
+               "seed-four-bar", "--points", str(points), "--csv", csv]
         t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return min(t)
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        rss = next((int(ln.split(":")[1]) for ln in p.stderr.splitlines()
+                    if "Maximum resident set size" in ln), None)
+        rows = sum(1 for _ in open(csv)) - 1 if os.path.exists(csv) else 0
+        size = os.path.getsize(csv) if os.path.exists(csv) else 0
+    return {"points": points, "exit": p.returncode, "wall_s": wall,
+            "max_resident_MB": rss / 1024 if rss else None, "rows": rows,
+            "csv_MB": size / 2 ** 20, "stderr_tail": p.stderr.splitlines()[-3:]
+            if p.returncode else []}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--points", type=int, default=3600)
-    ap.add_argument("--repeat", type=int, default=20)
+    ap.add_argument("--sizes", default=",".join(map(str, SIZES)))
     ap.add_argument("--json", help="write the figures to this JSON file")
+    ap.add_argument("--cli-points", type=int, default=0,
+                    help="also run xval sweep seed-four-bar --points N --csv under "
+                         "/usr/bin/time -v")
     args = ap.parse_args(argv)
-    n = args.points
-    x = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    out = {"points": n, "machine": platform.processor() or platform.machine(),
-           "python": platform.python_version(), "numpy": np.__version__}
-    from analytic.perf import tune_allocator
-
-    def measure(suffix):
-        t_hand = best(lambda: hand_four_bar(x), args.repeat)
-        out[f"hand_closed_form_four_bar_kinematics{suffix}"] = n / t_hand
-        for case in ("seed-four-bar", "six-bar"):
-            lk = Linkage(load_case(case))
-            t_kin = best(lambda lk=lk: lk.kinematics(x), args.repeat)
-            t_all = best(lambda lk=lk: lk.forces(lk.kinematics(x)), args.repeat)
-            out[f"{case}_kinematics{suffix}"] = n / t_kin
-            out[f"{case}_kinematics_and_forces{suffix}"] = n / t_all
-
-    # the same process, first with glibc's default allocator, then tuned
-    # (analytic.perf.tune_allocator, as the xval command runs)
-    measure("_default_allocator")
-    out["allocator_tuned"] = tune_allocator()
-    measure("")
-    print(f"{n}-point sweeps, best of {args.repeat} (configurations per second):")
-    for k, v in out.items():
-        if isinstance(v, float):
-            print(f"  {k:63s} {v / 1e6:8.3f} M/s")
-    ratio = (out["seed-four-bar_kinematics_and_forces"]
-             / out["hand_closed_form_four_bar_kinematics"])
-    out["ratio_four_bar_with_forces_to_hand_kinematics"] = ratio
-    print(f"  ratio solver(four-bar, with forces) / hand closed form (no forces): {ratio:.3f}")
+    tune_allocator()  # as the xval command does
+    try:
+        import pylinkage  # noqa: F401
+        with_pl = True
+    except ImportError:
+        with_pl = False
+        print("pylinkage not installed (pip install -e '.[bench]'): its rows are skipped")
+    info = {"machine": machine(), "load_before": load(),
+            "uptime": subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()}
+    print(json.dumps(info, indent=1))
+    t0 = time.perf_counter()
+    FusedKernel(Linkage(load_case("seed-four-bar"))).state(np.zeros(4), level=3)
+    info["first_call_seconds_four_bar"] = time.perf_counter() - t0
+    res = {}
+    for n in map(int, args.sizes.split(",")):
+        res[n] = measure(n, with_pl)
+        print(f"\n{n} points ({load()}, resident peak {res[n]['_resident_peak_MB']:.0f} MB)")
+        for k, v in res[n].items():
+            if not k.startswith("_"):
+                print(f"  {k:34s} {v['rate_min_time'] / 1e6:8.3f} M/s  median "
+                      f"{v['rate_median'] / 1e6:8.3f}  {v['ns_per_config_min']:8.1f} ns  "
+                      f"{v['bytes_per_config_peak']:8.1f} B/config")
+    rat = ratios(res)
+    print("\nratios (same repeats; min of each, and median of per-repeat ratios):")
+    for n, row in rat.items():
+        if n in ("flatness", "flatness_sizes"):
+            continue
+        for k, v in row.items():
+            print(f"  {n:>8} {k:62s} {v['min']:6.2f}  median {v['median']:6.2f}")
+    if "flatness" in rat:
+        a, b = rat["flatness_sizes"]
+        print(f"\ncost per configuration at {b} / at {a} points (min times):")
+        for k, v in rat["flatness"].items():
+            print(f"  {k:34s} {v:6.2f}")
+    info["load_after"] = load()
+    info["compile_log_s"] = COMPILE_LOG
+    info["resident_peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print("\n" + info["load_after"], f"; resident peak {info['resident_peak_MB']:.0f} MB")
+    if args.cli_points:
+        info["cli_sweep"] = cli_sweep(args.cli_points)
+        print("xval sweep:", json.dumps(info["cli_sweep"]))
     if args.json:
         with open(args.json, "w") as f:
-            json.dump(out, f, indent=2)
-    return out
+            json.dump({"info": info, "results": {str(k): v for k, v in res.items()},
+                       "ratios": {str(k): v for k, v in rat.items()}}, f, indent=1)
+    return info, res, rat
 
 
 if __name__ == "__main__":

@@ -11,15 +11,15 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def _det3(A00, A01, A02, A10, A11, A12, A20, A21, A22):
     return (A00 * (A11 * A22 - A12 * A21)
             - A01 * (A10 * A22 - A12 * A20)
             + A02 * (A10 * A21 - A11 * A20))
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def _lu(A, n, lu, piv):
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def lu_factor(A, n, lu, piv):
     """LU factors of ``A[:n, :n]`` in ``lu`` (unit lower L below the diagonal), row
     pivots in ``piv``; returns the permutation's sign."""
     for r in range(n):
@@ -50,7 +50,7 @@ def _lu(A, n, lu, piv):
     return sign
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def det_small(A, n, lu, piv):
     """Determinant of ``A[:n, :n]``."""
     if n == 1:
@@ -60,13 +60,13 @@ def det_small(A, n, lu, piv):
     if n == 3:
         return _det3(A[0, 0], A[0, 1], A[0, 2], A[1, 0], A[1, 1], A[1, 2],
                      A[2, 0], A[2, 1], A[2, 2])
-    d = _lu(A, n, lu, piv)
+    d = lu_factor(A, n, lu, piv)
     for j in range(n):
         d *= lu[j, j]
     return d
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def solve_small(A, b, n, out, lu, piv):
     """Solve ``A[:n, :n] x = b[:n]`` into ``out[:n]`` (inf/nan where singular)."""
     if n == 0:
@@ -89,7 +89,23 @@ def solve_small(A, b, n, out, lu, piv):
         out[2] = _det3(A[0, 0], A[0, 1], b[0], A[1, 0], A[1, 1], b[1],
                        A[2, 0], A[2, 1], b[2]) / d
         return
-    _lu(A, n, lu, piv)
+    lu_factor(A, n, lu, piv)
+    lu_solve(lu, piv, b, n, out)
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def lu_det(lu, n, sign):
+    """Determinant from the factors of :func:`lu_factor` and its sign."""
+    d = sign
+    for j in range(n):
+        d *= lu[j, j]
+    return d
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def lu_solve(lu, piv, b, n, out):
+    """Solve with the factors of :func:`lu_factor` (one factorisation, many right-hand
+    sides: the rates and the accelerations share their matrix)."""
     for r in range(n):
         out[r] = b[r]
     for j in range(n):  # apply the row swaps, then forward substitution (unit L)
