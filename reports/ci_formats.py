@@ -118,7 +118,7 @@ def from_baseline(checks) -> list[CiCase]:
                 bad[0].status, bad[0].status)
             parts.append(bad[0].message())
         elif chk.problems:
-            kind = "model changed" if "changed" in chk.problems[0] else "run failed"
+            kind = _problem_kind(chk.problems[0])
         changed = chk.versions_changed()
         rest = [q for q in chk.quantities if not q.failed]
         lines = list(chk.problems) + [q.message() for q in bad + rest]
@@ -136,6 +136,15 @@ def from_baseline(checks) -> list[CiCase]:
             details="\n".join(lines), settings=chk.settings_text, time=chk.wall,
             notes=tuple(chk.notes)))
     return out
+
+
+def _problem_kind(problem: str) -> str:
+    """A run-level problem's JUnit ``type`` (see :func:`reports.baseline.check_run`)."""
+    if "changed since the baseline" in problem:
+        return "model changed"
+    if any(w in problem for w in ("no longer exists", "is gone", "is not available")):
+        return "gone"
+    return "run failed"
 
 
 # ============================================================================ JUnit

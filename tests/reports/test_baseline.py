@@ -169,6 +169,15 @@ def test_over_tolerance_missing_quantity_and_missing_case_fail(mujoco_baseline, 
     assert not checks["quick-return"].passed
     assert "'no-such-case' no longer exists" in checks["quick-return"].problems[0]
     assert sum(not c.passed for c in checks.values()) == 3
+    # in JUnit: two failures (tolerance, missing quantity) and one error (case gone)
+    from reports.ci_formats import from_baseline, junit_xml
+    junit = tmp_path / "j.xml"
+    junit.write_text(junit_xml("check", from_baseline(list(checks.values()))))
+    _validate_junit(junit, tests=len(checks), failures=2, errors=1)
+    kinds = {c.get("name"): (c[0].tag, c[0].get("type")) for c in
+             ET.parse(junit).getroot().iter("testcase") if len(c) and c[0].tag != "system-out"}
+    assert kinds == {"seed-four-bar": ("failure", "tolerance"),
+                     "six-bar": ("failure", "missing"), "quick-return": ("error", "gone")}
 
 
 def test_a_model_file_is_stored_relative_and_a_change_is_detected(tmp_path):
