@@ -28,11 +28,15 @@ from contextlib import nullcontext
 
 import numpy as np
 
+from .errors import OutputError
 from .fused import kernel_for
 
 #: configurations per block: the fused kernel's outputs for a block of a four-bar
 #: (~600 B each) stay within a few MB; the CSV of a block is written in one go
 BLOCK = 1 << 15
+#: ``xval sweep --csv`` streams above this many points (below, the table is built in
+#: memory and written by pandas)
+STREAM_POINTS = 200_000
 
 
 class _Lazy:
@@ -222,9 +226,13 @@ def _sweep_values(linkage, points, start, input_range):
 
 
 def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_range=None,
-              forces: bool | None = None, block: int = BLOCK):
+              forces: bool | None = None, block: int = BLOCK, convert=lambda frame: frame):
     """:func:`analytic.sweep.sweep` written to the CSV ``path`` (or ``"-"``: standard
     output, or an open text file) block by block.
+
+    ``convert`` maps each block's table before it is written (display units: the
+    round-off snapping of :func:`reports.display_units.convert_frame` then takes its
+    scale per block of :data:`BLOCK` rows, not over the whole table).
 
     Returns a :class:`analytic.sweep.SweepResult` whose ``frame`` is ``None`` (the table
     is in the file) and whose kinematics and forces hold only the series the events
@@ -246,9 +254,12 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
     else:
         ctx = open(path, "w", newline="")
     write = _csv_writer()
-    with ctx as fh:
-        for a, kin, frc in evaluate_blocked(linkage, values, vel, None, forces, block):
-            write(to_frame(linkage, kin, frc), fh, a == 0)
+    try:
+        with ctx as fh:
+            for a, kin, frc in evaluate_blocked(linkage, values, vel, None, forces, block):
+                write(convert(to_frame(linkage, kin, frc)), fh, a == 0)
+    except OSError as e:  # a full disk or a vanished folder, mid-way
+        raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
     notes = []
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "

@@ -27,6 +27,7 @@ import numpy as np
 from analytic import Linkage, LinkageError, case_names, load_case
 from analytic.errors import OutputError
 from analytic.mechanism import Prismatic, Revolute
+from analytic.stream import STREAM_POINTS, sweep_csv
 
 from . import cli_options as opt
 from .display_units import UNITS_HELP, units_option
@@ -196,7 +197,8 @@ def cmd_solve(args) -> int:
 def cmd_sweep(args) -> int:
     from .display_units import DisplayUnits, convert_frame
     mech = load_case(args.case)
-    opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints))
+    streamed = bool(args.csv) and args.points > STREAM_POINTS  # written block by block
+    opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints), streamed)
     lk = Linkage(mech, branch_rule=args.branch_rule)
     kw = {"velocity": args.omega}
     if args.range is not None:
@@ -207,12 +209,15 @@ def cmd_sweep(args) -> int:
         kw["input_range"] = tuple(math.radians(v) if rev else v for v in args.range)
     elif isinstance(mech.driver_joint, Revolute):
         kw["start"] = 0.0  # the table and the events run from 0 to 360 deg
-    r = lk.sweep(args.points, **kw)
     units = DisplayUnits.parse(getattr(args, "units", None))
-    if args.csv:  # display units at the edge, round-off noise shown as 0
+    rev_ = isinstance(mech.driver_joint, Revolute)
+    r = sweep_csv(lk, args.points, getattr(args, "stdout", sys.stdout) if args.csv == "-" else
+                  args.csv, convert=lambda f: convert_frame(f, units, rev_), **kw) \
+        if streamed else lk.sweep(args.points, **kw)
+    if args.csv and not streamed:  # display units at the edge, round-off noise shown as 0
         table = convert_frame(r.frame, units, isinstance(mech.driver_joint, Revolute))
         write_csv(table, args.csv, getattr(args, "stdout", sys.stdout))
-    print(f"{mech.name}: {len(r.frame)} points, "
+    print(f"{mech.name}: {r.kinematics.n} points, "
           + ("full cycle" if r.full_cycle else "the range asked for" if args.range
              else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))

@@ -46,6 +46,10 @@ MAX_SWEEP_POINTS = 1_000_000
 #: MAX_SWEEP_POINTS for descriptions with many bodies.
 SWEEP_BYTES_PER_ELEMENT = 250
 SWEEP_MEMORY_BUDGET = 4 * 2 ** 30
+#: Most points of a sweep written to CSV in blocks (``--csv`` and more than
+#: analytic.stream.STREAM_POINTS): its memory does not grow with the points
+#: (analytic/stream.py), so only time bounds it.
+MAX_STREAMED_SWEEP_POINTS = 1_000_000_000
 
 #: Engine samples per revolution: 0.1 deg apart at the ceiling.  The engine's step
 #: is shortened so that every sample falls on a step, so more samples make a run
@@ -103,8 +107,8 @@ angle_deg = finite_float(MAX_ANGLE, "deg", scale=math.pi / 180, why="1000 turns"
 length_m = finite_float(MAX_LENGTH, "m")
 rate = finite_float(MAX_RATE, "rad/s or m/s")
 accel = finite_float(MAX_ACCEL, "rad/s^2 or m/s^2")
-sweep_points = int_range(2, MAX_SWEEP_POINTS, "a ceiling on memory: a sweep holds about 200 "
-                                              "bytes a point for each body and joint")
+sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_POINTS} only "
+                         "with --csv, written block by block")
 samples = int_range(2, MAX_SAMPLES, "0.1 deg apart at most; every sample falls on an "
                                     "engine step")
 revolutions = int_range(1, MAX_REVOLUTIONS, "the last revolution is compared")
@@ -114,9 +118,16 @@ timestep = finite_float(MAX_TIMESTEP, "s", lo=MIN_TIMESTEP,
 workers = int_range(1, MAX_WORKERS, "each worker is a process holding both engines")
 
 
-def check_sweep_points(points: int, n_elements: int) -> None:
+def check_sweep_points(points: int, n_elements: int, streamed: bool = False) -> None:
     """Raise :class:`UsageError` when a sweep of ``points`` over a mechanism with
-    ``n_elements`` bodies and joints would exceed :data:`SWEEP_MEMORY_BUDGET`."""
+    ``n_elements`` bodies and joints would exceed :data:`SWEEP_MEMORY_BUDGET` (a
+    ``streamed`` sweep holds one block: no limit but the option's)."""
+    if streamed:
+        return
+    if points > MAX_SWEEP_POINTS:
+        raise UsageError(f"argument --points: {points} is out of range: the accepted range is "
+                         f"2 to {MAX_SWEEP_POINTS} (more only with --csv, written block by "
+                         "block)")
     cap = min(MAX_SWEEP_POINTS,
               SWEEP_MEMORY_BUDGET // (SWEEP_BYTES_PER_ELEMENT * max(n_elements, 1)))
     if points > cap:
