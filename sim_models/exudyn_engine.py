@@ -279,9 +279,8 @@ class ExudynSession(Session):
         if isinstance(djt, Revolute):
             a, b = idx[djt.body_a], idx[djt.body_b]
             self._drive_a, self._drive_b = a, b
-            m0 = (m_ground if a == self.g else
-                  mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.node[a], coordinate=2)))
-            m1 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=self.node[b], coordinate=2))
+            m0, m1 = (m_ground if x == self.g else mbs.AddMarker(
+                ii.MarkerNodeCoordinate(nodeNumber=self.node[x], coordinate=2)) for x in (a, b))
         else:
             # sigma (displacement s - s_ref) is a massless coordinate tied to the slider's
             # displacement along the (ground) line; the drive constrains sigma
@@ -338,6 +337,8 @@ class ExudynSession(Session):
         idx = {n: i for i, n in enumerate(st.body_names)}
         for ld in mech.loads:
             b = idx[ld.body]
+            if b == self.g:  # a load on the ground moves nothing
+                continue
             body = mech.bodies[b]
             p = body.points[ld.point] if ld.point is not None else self.com[b]
             mk = self._marker(b, p)
@@ -408,11 +409,16 @@ class ExudynSession(Session):
         if self.sigma is not None:
             ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
             q[ls], qd[ls] = value - mech.driver.value, rate
-        elif self.ltg.get(self._drive_b) is not None:
+        else:
             # the rotation coordinates must carry the turns the input has made
-            qa = q[self.ltg[self._drive_a][2]] if self._drive_a != self.g else 0.0
-            turns = (value - mech.driver.value) - (q[self.ltg[self._drive_b][2]] - qa)
-            q[self.ltg[self._drive_b][2]] += 2 * math.pi * round(turns / (2 * math.pi))
+            a, b = self._drive_a, self._drive_b
+            qa = q[self.ltg[a][2]] if a != self.g else 0.0
+            qb = q[self.ltg[b][2]] if b != self.g else 0.0
+            turns = 2 * math.pi * round(((value - mech.driver.value) - (qb - qa)) / (2 * math.pi))
+            if b != self.g:
+                q[self.ltg[b][2]] += turns
+            else:
+                q[self.ltg[a][2]] -= turns
         sd = self.mbs.systemData
         initial = exu.ConfigurationType.Initial
         sd.SetODE2Coordinates(q, configuration=initial)
@@ -515,18 +521,17 @@ class ExudynSession(Session):
 
     def _driver(self, pose):
         """The driver's value (rad or m, unwrapped) and rate in the engine."""
-        st = self.tree
-        mech = st.mech
-        d, djt = mech.driver, mech.driver_joint
+        d = self.tree.mech.driver
         Q, Qt = pose[6], pose[7]
         if self.sigma is not None:
             ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
             return d.value + Q[ls], Qt[ls]
-        idx = {n: i for i, n in enumerate(st.body_names)}
-        a, b = idx[djt.body_a], idx[djt.body_b]
-        qa = Q[self.ltg[a][2]] if a != self.g else 0.0
-        wa = Qt[self.ltg[a][2]] if a != self.g else 0.0
-        return d.value + Q[self.ltg[b][2]] - qa, Qt[self.ltg[b][2]] - wa
+
+        def rotation(x):  # rotation displacement and rate of body x (ground: 0)
+            return (Q[self.ltg[x][2]], Qt[self.ltg[x][2]]) if x != self.g else (0.0, 0.0)
+
+        (qa, wa), (qb, wb) = rotation(self._drive_a), rotation(self._drive_b)
+        return d.value + qb - qa, wb - wa
 
     def _gap(self, pose) -> float:
         """Largest distance (m) between the two points of any revolute joint."""

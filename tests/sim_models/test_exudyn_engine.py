@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from analytic import Linkage, case_names, load_case
-from analytic.mechanism import Driver
+from analytic.mechanism import Driver, Load, Revolute
 from analytic.sweep import input_values
 from sim_models import compile_linkage
 from sim_models.engine_base import EngineRefusal, SettingsError
@@ -179,6 +179,22 @@ def test_accelerating_crank_with_forces():
     r = run(mech, "exudyn", revolutions=2, samples=36)
     assert r.ok, r.reason
     assert_run_within(r, mech, EXUDYN_MUST_SHOW, mech.name)
+
+
+def test_driver_turning_the_ground_relative_to_the_crank():
+    """The driven pin written the other way round (body_b is the ground: the value is
+    minus the crank angle, the effort acts on the ground) and a load on the ground."""
+    m = load_case("seed-four-bar")
+    joints = tuple(Revolute("O2", "crank", "O2", "ground", "O2") if j.name == "O2" else j
+                   for j in m.joints)
+    mech = dataclasses.replace(m, name="reversed-pin", joints=joints,
+                               driver=Driver("O2", -m.driver.value, -m.driver.velocity),
+                               loads=(Load("ground", None, (5.0, 0.0)),))
+    r = run(mech, "exudyn", revolutions=2, samples=36)
+    assert r.ok, r.reason
+    assert_run_within(r, mech, EXUDYN_MUST_SHOW, mech.name)
+    np.testing.assert_allclose(np.remainder(r.measured_values - r.values + 1, 2 * math.pi) - 1,
+                               0, atol=1e-9)
 
 
 def test_prismatic_driver_on_a_moving_guide_is_refused():
