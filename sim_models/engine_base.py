@@ -37,16 +37,25 @@ Writing an engine
      (:meth:`SimTree.driver_path`); return a reason string when the state diverged
      (non-finite, huge), else ``None``.  Do no readout here: this loop is what the
      speed studies time (:func:`time_steps`);
-   * ``sample(self, t: float, rows, rec: Recorder) -> float``: read the state at time
+   * the readout, preferably **deferred** (what the MuJoCo and PyBullet sessions do):
+     ``record(self, t: float) -> (raw, ahead, reason)`` copies the engine's own state
+     at time ``t`` (no conversion; ``ahead`` = time stepped past ``t`` while reading,
+     0.0 or one step when accelerations are finite differences over the next step;
+     ``reason`` = a divergence the raw state already shows: non-finite, huge, an
+     engine warning), and ``convert(self, times, raws, rows, rec) -> (gap, rate)``
+     turns all records at once, vectorised, into ``rec``'s sample rows
+     (:meth:`Recorder.put_motions` for tree coordinates, :meth:`Recorder.put_forces_many`)
+     and returns each record's loop gap (m) and driver rate, which :func:`drive`
+     checks after the run (:func:`first_divergence`: the same tests and messages as
+     :func:`check_motion`, at the same stops).  **Or** the per-sample readout:
+     ``sample(self, t: float, rows, rec: Recorder) -> float`` reads the state at time
      ``t`` into rows ``rows`` of ``rec`` in the analytic conventions (below), with
      :meth:`Recorder.put_motion` (tree coordinates) or :meth:`Recorder.put_absolute`
-     (absolute body angles/rates) and :meth:`Recorder.put_forces`; return the time the
-     session advanced past ``t`` while sampling (0.0, or one step when accelerations
-     are finite differences over the next step);
-   * ``state(self) -> tuple[np.ndarray, np.ndarray]``: the raw tree coordinates ``q, qd``
-     (:class:`SimTree` conventions) for the default divergence check, **or** override
-     ``divergence(self, t) -> str | None`` (an engine in absolute coordinates: use
-     :func:`check_motion` with the loop gap and the driver rate);
+     (absolute body angles/rates) and :meth:`Recorder.put_forces`, returning the time
+     the session advanced past ``t``; with it ``state(self) -> tuple[np.ndarray,
+     np.ndarray]`` (the raw tree coordinates ``q, qd`` for the default divergence
+     check) **or** ``divergence(self, t) -> str | None`` (an engine in absolute
+     coordinates: use :func:`check_motion` with the loop gap and the driver rate);
    * optionally ``divergence(self, t)`` (engine-specific checks, call ``super()``),
      ``forward_at(self, q, qd, acc, rows, rec)`` (accelerations and forces at a given
      state without stepping: the instantaneous mode), ``close(self)``.
@@ -84,7 +93,11 @@ feasible range.  The step is shortened so every sample time is a step boundary
 
 Divergence (non-finite state, loop gap above ``max_violation`` of the mechanism's size,
 driver rate off by ``max_speed_error``) ends a run: ``ok = False``, ``reason``, NaN
-samples from there on.  Nothing raises for a diverging simulation.
+samples from there on.  Nothing raises for a diverging simulation.  It is checked at
+every stop of the step schedule (once per sample interval, never per step); for a
+deferred session the loop gap and driver rate of every stop are checked after the run
+(vectorised), and the run ends at the first stop that fails either check, exactly as a
+per-stop check would have ended it (``steps`` counted to there).
 """
 
 from __future__ import annotations
@@ -98,7 +111,7 @@ import numpy as np
 
 from analytic import Linkage, Mechanism, Prismatic
 
-from .engine_run import EngineRun, Recorder, RunRequest, fmt_value, loop_gap
+from .engine_run import EngineRun, Recorder, RunRequest, fmt_value, loop_gap, loop_gaps
 from .engine_settings import EngineRefusal, EngineSettings, SettingsError
 from .sampling import (
     LIMITED_RANGE_CONDITION,
@@ -188,9 +201,37 @@ class Session(ABC):
     def advance(self, t: float, h: float, n: int) -> str | None:
         """``n`` steps of ``h`` s from time ``t``; a divergence reason or None."""
 
-    @abstractmethod
     def sample(self, t: float, rows, rec: Recorder) -> float:
-        """Fill ``rows`` of ``rec`` at time ``t``; return the time stepped past ``t``."""
+        """Fill ``rows`` of ``rec`` at time ``t``; return the time stepped past ``t``
+        (a session that implements :meth:`record` and :meth:`convert` instead needs
+        none: :func:`drive` reads it raw and converts once)."""
+        raise NotImplementedError(f"engine {self.name!r} implements neither sample() nor "
+                                  "record()/convert()")
+
+    # -- deferred readout (optional, preferred): raw state now, conversion after the run
+    def record(self, t: float) -> tuple[object, float, str | None]:
+        """The raw engine state at time ``t`` (a step boundary): ``(raw, ahead,
+        reason)``.  ``raw`` is whatever :meth:`convert` needs (copies of the engine's
+        own arrays, no conversion); ``ahead`` the time stepped past ``t`` while reading
+        (0.0, or one step for finite differences); ``reason`` a divergence the raw
+        state already shows (non-finite, huge, an engine's own warning; ``raw`` is then
+        not used), else None.  The loop gap and the driver rate are checked after the
+        run, from :meth:`convert`'s values at each record (same tests, same order as
+        :func:`check_motion`)."""
+        raise NotImplementedError
+
+    def convert(self, times: np.ndarray, raws: list, rows: list, rec: Recorder):
+        """Convert K raw records (:meth:`record` at ``times`` (K,), s) at once,
+        vectorised, into ``rec``'s sample rows (``rows[k]``: the sample indices of
+        record ``k``, possibly empty), in the conventions of the module docstring.
+        Returns ``(gap, rate)`` (K,): the loop gap (m) and the driver's rate in the
+        engine at each record, for the divergence check."""
+        raise NotImplementedError
+
+    @property
+    def deferred(self) -> bool:
+        """Whether this session reads raw state (:meth:`record`) and converts once."""
+        return type(self).record is not Session.record
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Raw tree coordinates ``q, qd`` (SimTree conventions), used by the default
@@ -246,10 +287,9 @@ def check_state(tree: SimTree, q, qd, t: float, max_violation: float,
                 max_speed_error: float) -> str | None:
     """The shared divergence check of raw tree coordinates at time ``t``."""
     q, qd = np.asarray(q, float), np.asarray(qd, float)
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        return "non-finite state (simulation diverged)"
-    if np.max(np.abs(qd), initial=0.0) > HUGE:
-        return "huge velocities (simulation diverged)"
+    why = check_raw_state(q, qd)
+    if why is not None:
+        return why
     th, _, _, org, _, _ = tree.propagate(q[None], qd[None], np.zeros_like(q)[None])
     return check_motion(tree, loop_gap(tree, th, org),
                         tree.driver_sigma * qd[tree.driver_tree], t, max_violation,
@@ -273,6 +313,40 @@ def check_motion(tree: SimTree, gap: float, rate: float, t: float, max_violation
     return None
 
 
+def check_raw_state(q, qd) -> str | None:
+    """The part of :func:`check_state` a raw record needs no conversion for: non-finite
+    or huge tree coordinates ``q, qd`` (same messages)."""
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        return "non-finite state (simulation diverged)"
+    if np.max(np.abs(qd), initial=0.0) > HUGE:
+        return "huge velocities (simulation diverged)"
+    return None
+
+
+def first_divergence(tree: SimTree, gap, rate, times, max_violation: float,
+                     max_speed_error: float) -> tuple[int | None, str | None]:
+    """The first record (index into ``times``) whose loop gap or driver rate fails
+    :func:`check_motion`, and its reason; ``(None, None)`` when none does.  Vectorised
+    screen (a slightly wider net), then :func:`check_motion` itself on the candidates,
+    so the verdict and the message are exactly the per-sample check's."""
+    gap, rate, times = (np.asarray(x, float) for x in (gap, rate, times))
+    if not len(times):
+        return None, None
+    _, vel, _ = tree.driver_path(times)
+    ref = np.maximum(np.maximum(np.abs(vel), abs(tree.mech.driver.velocity)), 1e-12)
+    with np.errstate(invalid="ignore", over="ignore"):
+        net = 1.0 - 1e-9
+        bad = ~(np.isfinite(gap) & np.isfinite(rate)) | (np.abs(rate) > net * HUGE) \
+            | (gap > net * max_violation * tree.size) \
+            | (np.abs(rate - vel) > net * max_speed_error * ref)
+    for k in np.flatnonzero(bad):
+        why = check_motion(tree, float(gap[k]), float(rate[k]), float(times[k]),
+                           max_violation, max_speed_error)
+        if why is not None:
+            return int(k), why
+    return None, None
+
+
 #: Velocities above this (MuJoCo's own "huge value" threshold) count as divergence.
 HUGE = 1e10
 
@@ -283,14 +357,18 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
     verdict runs, the speed grids, the hard cases, the long runs and the scene study.
 
     Resets to the analytic state at t = 0, then for each stop of
-    :func:`step_schedule`: :meth:`Session.advance` to it, :meth:`Session.sample` the
-    samples there, :meth:`Session.divergence`.  A divergence ends the run (``ok =
-    False``, NaN samples from there on).  ``wall`` times the whole loop."""
+    :func:`step_schedule`: :meth:`Session.advance` to it, then read the samples there.
+    A session with :meth:`Session.record` is read raw at every stop (with the checks
+    the raw state allows) and converted once after the loop
+    (:meth:`Session.convert`, vectorised), where the loop gap and driver rate of every
+    stop are checked; otherwise :meth:`Session.sample` and :meth:`Session.divergence`
+    at each stop.  A divergence ends the run at the first stop that shows it (``ok =
+    False``, NaN samples from there on, ``steps`` counted to there).  ``wall`` times
+    the whole loop and the conversion."""
     request = request or RunRequest()
     session.max_violation = request.max_violation
     session.max_speed_error = request.max_speed_error
-    st = session.tree
-    rec = Recorder(st, plan)
+    rec = Recorder(session.tree, plan)
     dt_max = session.settings.max_step(plan)
     order, stops, steps = step_schedule(plan.times, dt_max)
     sample_at: dict[float, list[int]] = {}
@@ -298,10 +376,42 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
         if np.isfinite(plan.times[i]):
             key = float(plan.times[i]) if plan.times[i] > 1e-15 else 0.0
             sample_at.setdefault(key, []).append(int(i))
-    reason = fail = None
     dt_used = max((h for h, n in steps if n > 0), default=dt_max)
-    nsteps = 0
     t0 = time.perf_counter()
+    log = _RawLog() if session.deferred else None
+    reason, t_fail, nsteps = _step_through(session, steps, stops, dt_used, dt_max,
+                                           sample_at, rec, log)
+    if log is not None and log.times:
+        gap, rate = session.convert(np.asarray(log.times), log.raws, log.rows, rec)
+        k, why = first_divergence(session.tree, gap, rate, log.times,
+                                  request.max_violation, request.max_speed_error)
+        if why is not None:  # every logged stop precedes a failure seen while stepping
+            reason, t_fail, nsteps = why, log.times[k], log.steps[k]
+            rec.drop([i for rows in log.rows[k + 1:] for i in rows])  # never reached
+    fail = None
+    if reason is not None:
+        reason, fail = rec.fail(t_fail, reason)
+    wall = time.perf_counter() - t0
+    return finish(session, plan, rec, request, reason, fail, wall, dt_used, nsteps)
+
+
+class _RawLog:
+    """Raw records of a run (:meth:`Session.record`): time (s), sample rows, raw state,
+    steps taken up to and including the record."""
+
+    def __init__(self):
+        self.times: list[float] = []
+        self.rows: list[list[int]] = []
+        self.raws: list = []
+        self.steps: list[int] = []
+
+
+def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
+                  sample_at: dict, rec: Recorder, log: _RawLog | None):
+    """The stepping phase of :func:`drive`: ``(reason, t_stop, steps)`` of the first
+    failure seen while stepping (None, None, all steps when none)."""
+    reason = None
+    nsteps = 0
     session.reset(0.0, dt_used)
     t, h_prev = 0.0, dt_used
     for (h, n), t_stop in zip(steps, stops[1:], strict=True):
@@ -315,16 +425,24 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
             h_prev = h
         t = t_stop
         if reason is None:
-            ahead = session.sample(t, sample_at.get(t_stop, []), rec)
+            rows = sample_at.get(t_stop, [])
+            if log is not None:
+                raw, ahead, reason = session.record(t)
+            else:
+                ahead = session.sample(t, rows, rec)
             if ahead:
                 nsteps += 1
-            reason = session.divergence(t + ahead)
+            if log is None:
+                reason = session.divergence(t + ahead)
+            elif reason is None:
+                log.times.append(t_stop)
+                log.rows.append(rows)
+                log.raws.append(raw)
+                log.steps.append(nsteps)
             t += ahead
         if reason is not None:
-            reason, fail = rec.fail(t_stop, reason)
-            break
-    wall = time.perf_counter() - t0
-    return finish(session, plan, rec, request, reason, fail, wall, dt_used, nsteps)
+            return reason, t_stop, nsteps
+    return None, None, nsteps
 
 
 def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
@@ -352,6 +470,7 @@ def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
 
 __all__ = ["HUGE", "LIMITED_RANGE_CONDITION", "EngineRefusal", "EngineRun", "EngineSettings",
            "Plan", "Recorder", "RunRequest", "Session", "SettingsError", "check_motion",
-           "check_state", "compile_linkage", "drive", "finish", "fmt_value", "loop_gap",
-           "periodic_plan", "plan_samples", "reversal_time", "step_schedule", "steps_to",
-           "time_of", "time_steps", "times_plan", "travel_time"]
+           "check_raw_state", "check_state", "compile_linkage", "drive", "finish",
+           "first_divergence", "fmt_value", "loop_gap", "loop_gaps", "periodic_plan",
+           "plan_samples", "reversal_time", "step_schedule", "steps_to", "time_of",
+           "time_steps", "times_plan", "travel_time"]

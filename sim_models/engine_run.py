@@ -49,28 +49,42 @@ class Recorder:
         self.qdd = np.full((N, nt), nan)
 
     def put_motion(self, rows, t: float, q, qd, qdd):
-        """Fill the motion of ``rows`` from tree coordinates (SimTree conventions):
-        absolute theta/omega/alpha, slider accelerations, the measured driver value, the
-        driver-rate deviation from the prescribed rate at ``t`` and the loop gap.
-        Returns ``(theta, omega, alpha, origin, v_origin, a_origin)`` of
-        :meth:`SimTree.propagate` (each with one row) for the force readout."""
+        """Fill the motion of ``rows`` from tree coordinates (SimTree conventions) at
+        time ``t``: :meth:`put_motions` with one record.  Returns ``(theta, omega,
+        alpha, origin, v_origin, a_origin)`` of :meth:`SimTree.propagate` (each with one
+        row) for the force readout."""
+        prop, _, _ = self.put_motions([rows], [t], np.asarray(q, float)[None],
+                                      np.asarray(qd, float)[None], np.asarray(qdd, float)[None])
+        return prop
+
+    def put_motions(self, rows, times, q, qd, qdd):
+        """Fill the motion of K records at once from tree coordinates ``q, qd, qdd`` (K,
+        nt) (SimTree conventions): record ``k`` at time ``times[k]`` (s) goes to the
+        sample rows ``rows[k]`` (a list, possibly empty).  Fills absolute
+        theta/omega/alpha, slider accelerations, the measured driver value, the
+        driver-rate deviation from the prescribed rate and the loop gap.
+
+        Returns ``prop`` (``theta, omega, alpha, origin, v_origin, a_origin`` of
+        :meth:`SimTree.propagate`, K rows each) and, per record, the loop gap (m) and
+        the driver's rate (for the run's divergence check)."""
         st = self.tree
         q, qd, qdd = (np.asarray(x, float) for x in (q, qd, qdd))
-        prop = st.propagate(q[None], qd[None], qdd[None])
+        prop = st.propagate(q, qd, qdd)
         th, om, al, org = prop[:4]
-        gap = loop_gap(st, th, org)
-        _, vel, _ = st.driver_path(t)
-        rate = st.driver_sigma * qd[st.driver_tree]
-        for i in np.atleast_1d(rows):
-            self.theta[i], self.omega[i], self.alpha[i] = th[0], om[0], al[0]
-            self.q[i], self.qd[i], self.qdd[i] = q, qd, qdd
-            self.measured[i] = st.driver_value(q[st.driver_tree])
-            self.viol[i] = gap
-            self.speed[i] = rate - float(vel)
-            for p, k in enumerate(st.prismatic):
-                ti = st.tree_joint_indices.index(k)
-                self.slider_acc[i, p] = st.joints[ti].sigma * qdd[ti]
-        return prop
+        gap = loop_gaps(st, th, org)
+        _, vel, _ = st.driver_path(np.asarray(times, float))
+        rate = st.driver_sigma * qd[:, st.driver_tree]
+        k, i = scatter_index(rows)
+        if len(i):
+            self.theta[i], self.omega[i], self.alpha[i] = th[k], om[k], al[k]
+            self.q[i], self.qd[i], self.qdd[i] = q[k], qd[k], qdd[k]
+            self.measured[i] = st.driver_value(q[k, st.driver_tree])
+            self.viol[i] = gap[k]
+            self.speed[i] = (rate - vel)[k]
+            for p, kj in enumerate(st.prismatic):
+                ti = st.tree_joint_indices.index(kj)
+                self.slider_acc[i, p] = st.joints[ti].sigma * qdd[k, ti]
+        return prop, gap, rate
 
     def put_absolute(self, rows, t: float, theta, omega, alpha, slider_acc, origin,
                      driver_value: float, driver_rate: float):
@@ -107,15 +121,41 @@ class Recorder:
             if effort_engine is not None:
                 self.effort_engine[i] = effort_engine
 
+    def put_forces_many(self, rows, joint_force, effort, normal=None, moment=None,
+                        force_engine=None, effort_engine=None):
+        """:meth:`put_forces` of K records at once: ``joint_force`` (K, J, 2), ``effort``
+        (K,), ``normal``/``moment`` (K, P), engine readings (K, J, 2) / (K,); record
+        ``k`` goes to the sample rows ``rows[k]``."""
+        k, i = scatter_index(rows)
+        if not len(i):
+            return
+        self.force[i] = np.asarray(joint_force)[k]
+        self.effort[i] = np.asarray(effort)[k]
+        for dest, src in ((self.normal, normal), (self.moment, moment),
+                          (self.force_engine, force_engine),
+                          (self.effort_engine, effort_engine)):
+            if src is not None:
+                dest[i] = np.asarray(src)[k]
+
+    def drop(self, rows) -> None:
+        """Samples ``rows`` were not reached (a run that ended before them): NaN in every
+        array, the measured driver value included."""
+        i = np.asarray(rows, dtype=int)
+        for arr in self._arrays() + (self.measured,):
+            arr[i] = np.nan
+
+    def _arrays(self) -> tuple:
+        return (self.theta, self.omega, self.alpha, self.slider_acc, self.effort,
+                self.force, self.normal, self.moment, self.viol, self.speed,
+                self.effort_engine, self.force_engine, self.q, self.qd, self.qdd)
+
     def fail(self, t_stop: float, reason: str) -> tuple[str, float]:
         """End a run at ``t_stop``: samples at or after it become NaN.  Returns the
         reason naming the (prescribed) driver value there, and that value."""
         st = self.tree
         fail = float(st.driver_path(t_stop)[0])
         late = np.asarray(self.times) >= t_stop - 1e-15
-        for arr in (self.theta, self.omega, self.alpha, self.slider_acc, self.effort,
-                    self.force, self.normal, self.moment, self.viol, self.speed,
-                    self.effort_engine, self.force_engine, self.q, self.qd, self.qdd):
+        for arr in self._arrays():
             arr[late] = np.nan
         return f"{reason} at driver {st.mech.driver.joint!r} = {fmt_value(st, fail)}", fail
 
@@ -128,6 +168,25 @@ def loop_gap(tree: SimTree, theta, origin) -> float:
         pb = tree.point_world(theta, origin, ch.body_b, ch.point_b)[0]
         gap = max(gap, float(np.linalg.norm(pa - pb)))
     return gap
+
+
+def loop_gaps(tree: SimTree, theta, origin) -> np.ndarray:
+    """Largest distance (m) between the two points of a loop-closing joint, per row of
+    ``theta`` (N, B) / ``origin`` (N, B, 2): (N,)."""
+    gap = np.zeros(len(theta))
+    for ch in tree.chords:
+        d = tree.point_world(theta, origin, ch.body_a, ch.point_a) \
+            - tree.point_world(theta, origin, ch.body_b, ch.point_b)
+        gap = np.maximum(gap, np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]))
+    return gap
+
+
+def scatter_index(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(k, i)``: record index and sample row of every row in ``rows`` (one list of
+    sample rows per record), for filling sample arrays from per-record arrays."""
+    k = [r for r, rr in enumerate(rows) for _ in np.atleast_1d(rr)]
+    i = [int(x) for rr in rows for x in np.atleast_1d(rr)]
+    return np.asarray(k, dtype=int), np.asarray(i, dtype=int)
 
 
 def fmt_value(tree: SimTree, v: float) -> str:
@@ -232,4 +291,5 @@ class EngineRun:
         return pd.DataFrame(cols)
 
 
-__all__ = ["EngineRun", "Recorder", "RunRequest", "fmt_value", "loop_gap"]
+__all__ = ["EngineRun", "Recorder", "RunRequest", "fmt_value", "loop_gap", "loop_gaps",
+           "scatter_index"]

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from .engine_base import HUGE, EngineRefusal, Recorder, Session
+from .engine_base import HUGE, EngineRefusal, Recorder, Session, check_raw_state
 from .mjcf import SCENES, MujocoSettings, build_mjcf, compile_spec, require_mujoco
 from .mujoco_scene import apply_scene
 from .tree import SimTree
@@ -79,6 +79,11 @@ class MujocoSession(Session):
                     for b, name in enumerate(st.body_names)}
         self.eq = [m.equality(ch.name).id for ch in st.chords]
         self.drive_dof = int(self.dadr[st.driver_tree])
+        # each tree joint's child body and the root of its kinematic subtree (readout)
+        self.child_bid = np.array([self.bid[tj.child] for tj in st.joints], dtype=int)
+        self.child_root = np.array([m.body_rootid[b] for b in self.child_bid], dtype=int)
+        # the prescribed driver acceleration is constant (SimTree.driver_path)
+        self.acc = float(st.mech.driver.acceleration)
         self.A = float(s.armature)
         self.loads = [(self.bid[st.body_names.index(ld.body)], ld) for ld in st.mech.loads]
         self.moving_loads = self._loads_move()
@@ -158,20 +163,22 @@ class MujocoSession(Session):
             return "non-finite or huge velocities (simulation diverged)"
         return None
 
-    def sample(self, t: float, rows, rec: Recorder) -> float:
-        _, _, acc = self.tree.driver_path(t)
-        self.set_drive(float(acc))
+    def record(self, t: float):
+        """``mj_forward`` at the state at ``t`` (the RK4 quirk), then the raw arrays the
+        readout needs (:meth:`_raw`); MuJoCo's bad-qacc warning and a non-finite or huge
+        state are reasons at once."""
+        mj, m, d = self.mj, self.model, self.data
+        self.set_drive(self.acc)
         self.apply_loads()
-        self.mj.mj_forward(self.model, self.data)
-        self.max_contacts = max(self.max_contacts, int(self.data.ncon))
-        if len(rows):
-            self._readout(rows, t, float(acc), rec)
-        return 0.0
-
-    def divergence(self, t: float) -> str | None:
-        if self.data.warning[self.mj.mjtWarning.mjWARN_BADQACC].number:
-            return "MuJoCo reported bad qacc (simulation diverged)"
-        return super().divergence(t)
+        mj.mj_forward(m, d)
+        self.max_contacts = max(self.max_contacts, int(d.ncon))
+        if d.warning[mj.mjtWarning.mjWARN_BADQACC].number:
+            return None, 0.0, "MuJoCo reported bad qacc (simulation diverged)"
+        q, qd = d.qpos[self.qadr], d.qvel[self.dadr]
+        why = check_raw_state(q, qd)
+        if why is not None:
+            return None, 0.0, why
+        return self._raw(self.acc), 0.0, None
 
     def forward_at(self, q, qd, acceleration: float, rows, rec: Recorder) -> None:
         mj, m, d = self.mj, self.model, self.data
@@ -180,48 +187,55 @@ class MujocoSession(Session):
         mj.mj_kinematics(m, d)
         self.apply_loads()
         mj.mj_forward(m, d)
-        self._readout(rows, 0.0, acceleration, rec)
+        self.convert(np.zeros(1), [self._raw(acceleration)], [list(np.atleast_1d(rows))], rec)
 
     # -- readout ------------------------------------------------------------------
-    def _readout(self, rows, t: float, a_prescribed: float, rec: Recorder) -> None:
-        """Fill ``rows`` from the current ``data`` (after ``mj_forward``)."""
-        mj, st, m, d = self.mj, self.tree, self.model, self.data
+    def _raw(self, a_prescribed: float) -> tuple:
+        """Copies of what the readout needs from the current ``data`` (after
+        ``mj_forward``): ``qpos, qvel, qacc`` of the tree joints, each tree joint's
+        child ``cfrc_int`` (6,) and its subtree's centre of mass (3,), each loop's
+        ``connect`` force (2,), and the prescribed driver acceleration."""
+        mj, m, d = self.mj, self.model, self.data
         mj.mj_rnePostConstraint(m, d)
-        q = d.qpos[self.qadr].copy()
-        qd = d.qvel[self.dadr].copy()
-        qdd = d.qacc[self.dadr].copy()
-        th, _, _, org, _, _ = rec.put_motion(rows, t, q, qd, qdd)
-        tau = self.A * (st.driver_sigma * a_prescribed - qdd[st.driver_tree])
-        mech = st.mech
-        J, P = len(mech.joints), len(st.prismatic)
-        force = np.zeros((J, 2))
-        normal, moment = np.zeros(P), np.zeros(P)
+        eq_rows = np.flatnonzero(d.efc_type == mj.mjtConstraint.mjCNSTR_EQUALITY)
+        ids = d.efc_id[eq_rows]
+        loops = np.array([d.efc_force[eq_rows[ids == e][:2]] for e in self.eq]) \
+            .reshape(len(self.eq), 2)
+        return (d.qpos[self.qadr], d.qvel[self.dadr], d.qacc[self.dadr],
+                d.cfrc_int[self.child_bid], d.subtree_com[self.child_root], loops,
+                a_prescribed)
+
+    def convert(self, times, raws, rows, rec: Recorder):
+        """The analytic conventions of K raw records (:meth:`_raw`), vectorised."""
+        st, mech = self.tree, self.tree.mech
+        q, qd, qdd, cfrc, com, loops, acc = (np.array(x) for x in zip(*raws, strict=True))
+        prop, gap, rate = rec.put_motions(rows, times, q, qd, qdd)
+        th, org = prop[0], prop[3]
+        tau = self.A * (st.driver_sigma * acc - qdd[:, st.driver_tree])
+        K, J, P = len(raws), len(mech.joints), len(st.prismatic)
+        force = np.zeros((K, J, 2))
+        normal, moment = np.zeros((K, P)), np.zeros((K, P))
         # tree joints: cfrc_int of the child = wrench by the parent on the child's subtree
-        for tj in st.joints:
-            bc = self.bid[tj.child]
-            c = d.subtree_com[m.body_rootid[bc]]
-            torque, f = d.cfrc_int[bc, :3], d.cfrc_int[bc, 3:]
+        for ti, tj in enumerate(st.joints):
+            torque, f, c = cfrc[:, ti, :3], cfrc[:, ti, 3:], com[:, ti]
             k = tj.joint
             jt = mech.joints[k]
             if tj.kind == "hinge":
-                force[k] = tj.sigma * f[:2]
-            else:
-                sb = st.body_names.index(jt.slider)
-                Pw = st.point_world(th, org, sb, st.mech.bodies[sb].points[jt.point])[0]
-                mz = torque[2] - _cross(Pw - c[:2], f[:2])
-                F = tj.sigma * f[:2]
-                gb = st.body_names.index(jt.guide)
-                ang = th[0, gb] + jt.direction
-                n = np.array([-math.sin(ang), math.cos(ang)])
-                p = st.prismatic.index(k)
-                force[k] = F
-                normal[p] = F @ n
-                moment[p] = tj.sigma * mz
-        for e, ch in zip(self.eq, st.chords, strict=True):
-            efc = np.flatnonzero((d.efc_type == mj.mjtConstraint.mjCNSTR_EQUALITY)
-                                 & (d.efc_id == e))
-            force[ch.joint] = d.efc_force[efc[:2]]
-        rec.put_forces(rows, force, st.driver_sigma * tau, normal, moment)
+                force[:, k] = tj.sigma * f[:, :2]
+                continue
+            sb = st.body_names.index(jt.slider)
+            Pw = st.point_world(th, org, sb, mech.bodies[sb].points[jt.point])
+            mz = torque[:, 2] - _cross(Pw - c[:, :2], f[:, :2])
+            F = tj.sigma * f[:, :2]
+            ang = th[:, st.body_names.index(jt.guide)] + jt.direction
+            p = st.prismatic.index(k)
+            force[:, k] = F
+            normal[:, p] = -F[:, 0] * np.sin(ang) + F[:, 1] * np.cos(ang)
+            moment[:, p] = tj.sigma * mz
+        for ci, ch in enumerate(st.chords):
+            force[:, ch.joint] = loops[:, ci]
+        rec.put_forces_many(rows, force, st.driver_sigma * tau, normal, moment)
+        return gap, rate
 
 
 __all__ = ["SCENES", "MujocoSession", "MujocoSettings"]

@@ -50,8 +50,6 @@ from .engine_base import (
     Recorder,
     Session,
     SettingsError,
-    check_motion,
-    loop_gap,
 )
 from .newton_euler import reconstruct
 from .tree import SimModelError, SimTree
@@ -251,7 +249,6 @@ class PybulletSession(Session):
         self.accel = tree.mech.driver.acceleration != 0.0
         self.sig = np.array([tj.sigma for tj in tree.joints])
         self.jnames = [j.name for j in tree.mech.joints]
-        self._last = None
         self.notes.append(
             "tree-joint forces and drive effort reconstructed by Newton-Euler from PyBullet's "
             "accelerations and loop forces; PyBullet's own readings in joint_force_engine "
@@ -310,71 +307,71 @@ class PybulletSession(Session):
         sim.set_drive(d.velocity + d.acceleration * t0)
         self.h = None
         self._set_step(h)
-        self._last = None
         for k in range(n_pre):
             self._one_step(h, t0 + k * h)
 
     def advance(self, t: float, h: float, n: int) -> str | None:
         self._set_step(h)
+        sim = self.sim
+        if not (self.accel or sim.loads):  # nothing to re-target per step: the bare loop
+            step, cid = sim.p.stepSimulation, sim.cid
+            for _ in range(n):
+                step(physicsClientId=cid)
+            return None
         step = self._one_step
         for k in range(n):
             step(h, t + k * h)
         return None
 
-    def sample(self, t: float, rows, rec: Recorder) -> float:
-        """The state at ``t``, then one more step for the finite differences (returns
-        that step's length)."""
-        st, sim, s = self.tree, self.sim, self.settings
-        prev_cf = prev_tau = None
-        if s.average_impulses:
-            prev_cf, prev_tau = sim.constraint_forces(), sim.states()[3]
-        q, v, _, _ = sim.states()
+    def record(self, t: float):
+        """The joint states at ``t``, then one more step for the finite differences
+        (``ahead`` = that step): positions, velocities of steps n and n+1, the reaction
+        and motor readings and loop forces of step n+1 (and of step n when impulses are
+        averaged).  A non-finite state is a reason at once."""
+        sim, s = self.sim, self.settings
+        q, v, rf, tau = sim.states()
+        prev = (sim.constraint_forces(), tau) if s.average_impulses else None
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            self._last = "non-finite state (simulation diverged)"
-            return 0.0
+            return None, 0.0, "non-finite state (simulation diverged)"
         h = self.h
         self._one_step(h, t)
         q1, v1, rf1, tau1 = sim.states()
+        if not (np.all(np.isfinite(q1)) and np.all(np.isfinite(v1))):
+            return None, h, "non-finite state (simulation diverged)"
         cf1 = sim.constraint_forces()
-        qdd = (v1 - v) / h
+        if prev is not None:
+            cf, tau = 0.5 * (prev[0] + cf1), 0.5 * (prev[1] + tau1)
+        else:
+            cf, tau = cf1, tau1
+        return (q, v, v1, rf1, cf1, cf, tau, h), h, None
+
+    def convert(self, times, raws, rows, rec: Recorder):
+        """Motion from the finite differences and (mid-step) velocities, tree-joint
+        forces and drive effort by Newton-Euler, of K raw records at once."""
+        st, s = self.tree, self.settings
+        q, v, v1, rf1, cf1, cf, tau, h = (np.array(x) for x in zip(*raws, strict=True))
+        qdd = (v1 - v) / h[:, None]
         # semi-implicit Euler: v_n lags the positions by about half a step, so the
         # velocity at the sample is the mean of v_n and v_{n+1} (second order)
         vm = 0.5 * (v + v1) if s.midpoint_velocity else v
-        th, om, al, org, _, a_org = rec.put_motion(rows, t, q, vm, qdd)
-        if s.average_impulses and prev_cf is not None:
-            cf, tau = 0.5 * (prev_cf + cf1), 0.5 * (prev_tau + tau1)
-        else:
-            cf, tau = cf1, tau1
-        self._last = (loop_gap(st, th, org), st.driver_sigma * vm[st.driver_tree], t,
-                      bool(np.all(np.isfinite(q1)) and np.all(np.isfinite(v1))))
-        if len(rows):
-            F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf[None])
-            force = np.full((len(self.jnames), 2), np.nan)
-            for name, val in F.items():
-                force[self.jnames.index(name)] = val[0]
-            names = [st.mech.joints[k].name for k in st.prismatic]
-            normal = np.array([Nn[n][0] for n in names])
-            moment = np.array([M[n][0] for n in names])
-            engine = np.full_like(force, np.nan)
-            for ti, tj in enumerate(st.joints):
-                engine[tj.joint] = self.sig[ti] * rf1[ti]
-            for ci, ch in enumerate(st.chords):
-                engine[ch.joint] = cf1[ci]
-            rec.put_forces(rows, force, eff[0], normal, moment, force_engine=engine,
-                           effort_engine=st.driver_sigma * tau)
-        return h
-
-    def divergence(self, t: float) -> str | None:
-        last, self._last = self._last, None
-        if isinstance(last, str):
-            return last
-        if last is None:
-            return super().divergence(t)
-        gap, rate, t_sample, finite = last
-        if not finite:
-            return "non-finite state (simulation diverged)"
-        return check_motion(self.tree, gap, rate, t_sample, self.max_violation,
-                            self.max_speed_error)
+        prop, gap, rate = rec.put_motions(rows, times, q, vm, qdd)
+        th, om, al, org, _, a_org = prop
+        K, J = len(raws), len(self.jnames)
+        F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf)
+        force = np.full((K, J, 2), np.nan)
+        for name, val in F.items():
+            force[:, self.jnames.index(name)] = val
+        names = [st.mech.joints[k].name for k in st.prismatic]
+        normal = np.array([Nn[n] for n in names]).reshape(len(names), K).T
+        moment = np.array([M[n] for n in names]).reshape(len(names), K).T
+        engine = np.full_like(force, np.nan)
+        for ti, tj in enumerate(st.joints):
+            engine[:, tj.joint] = self.sig[ti] * rf1[:, ti]
+        for ci, ch in enumerate(st.chords):
+            engine[:, ch.joint] = cf1[:, ci]
+        rec.put_forces_many(rows, force, eff, normal, moment, force_engine=engine,
+                            effort_engine=st.driver_sigma * tau)
+        return gap, rate
 
 
 def _require_pybullet():
