@@ -484,8 +484,9 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
              *(f"--set {s}" for s in sets)]
     words += [f"--revolutions {req['revolutions']}"] if req["revolutions"] != 2 else []
     words += [f"--samples {req['samples']}"] if req["samples"] != 36 else []
+    from analytic.tolerances import ENGINE_RELATIVE
     tols = {q.tolerance for r in baseline.runs for q in r.quantities}
-    if len(tols) == 1 and (t := tols.pop()) != 1e-3:
+    if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:
         words.append(f"--tolerance {t:g}")
     out = os.path.relpath(baseline.path.resolve(), cwd or os.getcwd())
     return " ".join([*words, f"--out {out}"])
@@ -494,9 +495,10 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
 def _overrides(rec: RunRecord) -> list[str]:
     """``ENGINE.KEY=VALUE`` for each recorded setting that is not the engine's default."""
     from sim_models.registry import get_engine
+    from sim_models.tree import SimModelError
     try:
         default = get_engine(rec.engine).settings().as_dict()
-    except Exception:  # noqa: BLE001 - an engine gone: the check reports it
+    except (SimModelError, ImportError):  # an engine gone: the check reports it
         return []
     out = []
     for k, v in sorted(rec.settings["fields"].items()):
