@@ -75,9 +75,9 @@ td.pass{background:#e3f4e3;color:#155d15;font-weight:bold}
 td.fail{background:#fbe0e0;color:#a00;font-weight:bold}
 td.wide{max-width:420px;text-align:left;font-size:11px;white-space:normal;word-break:break-word}
 details{margin:6px 0}summary{cursor:pointer;color:#246}
-.figs{display:flex;flex-wrap:wrap;gap:6px}
-figure{display:inline-block;vertical-align:top;margin:2px;max-width:49.5%}
-figure.full{max-width:100%}figure img{max-width:100%;height:auto}
+.figs{display:flex;flex-wrap:wrap;gap:8px;align-items:flex-start}
+figure{margin:0;flex:0 1 auto;max-width:calc(50% - 4px)}
+figure img{max-width:100%;height:auto;display:block}
 figcaption{font-size:12px;color:#555}
 .csv{font-size:12px}
 @media print{details{display:block}details>summary{display:none}nav.toc{display:none}
@@ -184,7 +184,14 @@ class Document:
                f"<h1 class='title'>{html.escape(title)}</h1>"]
         toc_done = False
         ids = self._anchors()
+        in_figs = False
         for i, (kind, data) in enumerate(self.parts):
+            if kind == "img" and not in_figs:  # consecutive figures share a flex row
+                out.append("<div class='figs'>")
+                in_figs = True
+            elif kind != "img" and in_figs:
+                out.append("</div>")
+                in_figs = False
             if kind == "h":
                 lv, text = data
                 if lv == 1 and not toc_done:
@@ -207,6 +214,8 @@ class Document:
                 out.append(f"<figure><img alt='{html.escape(cap or name)}' "
                            f"src='data:image/png;base64,{b64}'><figcaption>"
                            f"{html.escape(cap)}</figcaption></figure>")
+        if in_figs:
+            out.append("</div>")
         out.append("</body></html>")
         return "\n".join(out)
 

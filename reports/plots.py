@@ -299,13 +299,15 @@ def error_panels(fig_data) -> bytes:
     number) in grey on a second axis."""
     d = fig_data
     n = len(d.panels)
-    fig, axes = plt.subplots(1, n, figsize=(3.9 * n + 0.6, 3.1), sharey=True, squeeze=False)
-    for ax, (engine, p) in zip(axes[0], d.panels.items(), strict=True):
+    fig, axes = plt.subplots(n, 1, figsize=(7.4, 2.1 * n + 0.7), sharex=True, squeeze=False)
+    for ax, (engine, p) in zip(axes[:, 0], d.panels.items(), strict=True):
         draw_error_axes(ax, d, engine, p)
-    axes[0, 0].set_ylabel("|engine - analytic| / peak (-)")
+        ax.set_ylabel("error / peak (-)", fontsize=8)
+        if ax is not axes[-1, 0]:
+            ax.set_xlabel("")
     h, lab = axes[0, 0].get_legend_handles_labels()
     fig.legend(h, lab, fontsize=7, loc="lower center", ncol=len(lab),
-               bbox_to_anchor=(0.5, -0.06))
+               bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(d.title, fontsize=9.5)
     fig.tight_layout()
     return _png(fig)

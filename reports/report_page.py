@@ -54,6 +54,18 @@ HARD_CAPTIONS = {
     "long_run_timeseries": "long run: diagnostics against time",
 }
 
+#: Columns of the hard-case tables shown on the page (the CSV files keep all).
+HARD_COLUMNS = {
+    "high_speed": ["engine", "label", "steps_per_rev", "seconds_per_rev", "accel_error",
+                   "force_error", "worst_quantity", "ok", "reason"],
+    "near_toggle": ["case", "transmission_extreme_deg", "engine", "label", "accel_error",
+                    "force_error", "error_vs_seed_four_bar", "ok", "reason"],
+    "change_point": ["engine", "label", "timestep", "branch_after_singular", "final_branch",
+                     "flips", "max_deviation_deg", "max_loop_violation", "ok", "reason"],
+    "long_run": ["engine", "revolution", "loop_violation", "speed_deviation", "phase_drift",
+                 "energy_balance", "alpha_error", "effort_error"],
+}
+
 #: Display names of study columns (with units); ``ok`` is whether the run finished.
 STUDY_COLUMNS = {
     "engine": "engine", "label": "setting", "family": "family", "integrator": "integrator",
@@ -70,6 +82,10 @@ STUDY_COLUMNS = {
     "branches": "branches", "flips": "flips", "max_deviation_deg": "max deviation (deg)",
     "max_loop_violation": "max loop gap / size (-)", "revolutions": "revolutions",
     "variant": "variant", "slowdown": "slowdown (-)", "ngeom": "geoms",
+    "revolution": "revolution", "loop_violation": "loop gap / size (-)",
+    "speed_deviation": "crank rate error / omega (-)", "phase_drift": "phase drift (rad)",
+    "energy_balance": "energy balance / work per rev (-)", "alpha_error": "alpha error (-)",
+    "effort_error": "effort error (-)",
     "max_contacts": "max contacts", "notes": "notes",
 }
 
@@ -246,7 +262,9 @@ def _hard_section(doc, hard):
                     "engine").T.reset_index().rename(columns={"index": "quantity"})
                 doc.table(view, f"hard_{key}", cap, data=val)
             else:
-                doc.table(study_view(val), f"hard_{key}", cap, data=val)
+                cols = [c for c in HARD_COLUMNS.get(key, val.columns) if c in val.columns]
+                doc.table(study_view(val[cols]), f"hard_{key}", cap, data=val,
+                          wide=("why it stopped",))
         elif isinstance(val, bytes | bytearray):
             doc.image(bytes(val), f"hard-{key}", cap)
         elif isinstance(val, str) and key == "notes":
