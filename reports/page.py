@@ -77,6 +77,7 @@ td.wide{max-width:420px;text-align:left;font-size:11px;white-space:normal;word-b
 details{margin:6px 0}summary{cursor:pointer;color:#246}
 .figs{display:flex;flex-wrap:wrap;gap:8px;align-items:flex-start}
 figure{margin:0;flex:0 1 auto;max-width:calc(50% - 4px)}
+figure:only-child{max-width:100%}
 figure img{max-width:100%;height:auto;display:block}
 figcaption{font-size:12px;color:#555}
 .csv{font-size:12px}

@@ -136,9 +136,9 @@ def error_plot(x, errors: dict[str, np.ndarray], twin: tuple[str, np.ndarray] | 
     for label, e in errors.items():
         ax.semilogy(x, np.maximum(np.abs(e), 1e-16), label=label, lw=1)
     ax.set_xlabel(xlabel)
-    ax.set_ylabel("|error| / peak")
+    ax.set_ylabel("|error| / peak (-)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, ncol=2, loc="upper left")
+    ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.2))
     if twin is not None:
         ax2 = ax.twinx()
         ax2.plot(x, twin[1], color="grey", lw=0.8, alpha=0.7)
