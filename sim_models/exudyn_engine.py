@@ -59,8 +59,14 @@ the order of the peak, the measured ones are 1e-5):
   ``normal * n`` (the analytic joint force of a prismatic joint);
 * drive effort: minus the ``CoordinateConstraint``'s multiplier (torque on body_b,
   or force on the slider along the line);
-* accelerations are the solver's ``Coordinates_tt`` at the step end; ``s''`` of a
-  slider on a moving guide includes the guide's rotation and Coriolis terms.
+* accelerations are ``Coordinates_tt``; ``s''`` of a slider on a moving guide
+  includes the guide's rotation and Coriolis terms.
+
+Which accelerations and multipliers: by default (``sample_by="state"``) those of
+Exudyn's initial-value solve at the integrated positions and velocities of the sample
+(as MuJoCo samples by ``mj_forward``); with ``sample_by="integrator"`` the
+generalized-alpha step's own at the step end (which carry the disturbance of every
+step change; see :class:`ExudynSettings`).
 """
 
 from __future__ import annotations
@@ -112,38 +118,54 @@ class ExudynSettings(EngineSettings):
     newton_tolerance
         Relative and absolute tolerance of the Newton iteration (1e-12 cannot be met
         next to hibbeler-two-inclines' limit position; 1e-10 changes no other result).
+    sample_by
+        ``"integrator"``: accelerations and multipliers are the generalized-alpha
+        step's own (``Coordinates_tt`` and the Lagrange multipliers at the step end).
+        ``"state"``: they are Exudyn's initial-value solve of its equations at the
+        integrated positions and velocities, as MuJoCo samples by ``mj_forward``; the
+        integration itself is unchanged.  Measured 4-5x smaller errors at the same
+        steps (25-60x for accelerating inputs), see the README "Exudyn" section.
 
-    Evidence (speed-against-error grid over every built-in case, worst error relative
-    to peak over every judged quantity including prismatic normal force and couple, 36
-    samples of the 2nd revolution; ``/work/notes/exudyn_scratch/final_grid*.csv``):
+    Evidence: speed-against-error grids over every built-in case; the worst error is
+    taken relative to peak over every judged quantity, prismatic normal force and
+    couple included, 36 samples of the 2nd revolution, no step cap
+    (``/work/notes/exudyn_scratch/state_grid.csv``, ``final_grid_nocap.csv``):
 
-    ==========  ========  ========  ========  ========
-    steps/rev   rho 0.6   rho 0.7   rho 0.8   rho 0.9
-    ==========  ========  ========  ========  ========
-    720         4.6e-4    4.1e-4    7.9e-4    2.7e-3
-    1008        2.3e-4    2.1e-4    4.6e-4    2.8e-3
-    1440        1.2e-4    1.0e-4    9.6e-5    5.7e-4
-    2016        6.0e-5    5.3e-5    4.9e-5    2.5e-4
-    2880        2.9e-5    2.6e-5    2.4e-5    3.9e-5
-    ==========  ========  ========  ========  ========
+    =========  ==============================  ==============================
+    steps/rev  sample_by="state", rho 0.7/0.8  "integrator", rho 0.7/0.8/0.9
+    =========  ==============================  ==============================
+    360        3.3e-4 / 3.2e-4                 1.8e-3 / 4.0e-3 / 9.3e-3
+    720        8.3e-5 / 7.9e-5                 4.1e-4 / 7.9e-4 / 2.7e-3
+    1008       4.3e-5 / 4.0e-5                 2.1e-4 / 4.6e-4 / 2.8e-3
+    1440       2.1e-5 / 2.0e-5                 1.0e-4 / 9.6e-5 / 5.7e-4
+    2016       -                               5.3e-5 / 4.9e-5 / 2.5e-4
+    =========  ==============================  ==============================
 
-    (hibbeler-two-inclines excluded: its worst sample sits next to a limit position
-    and needs the step in seconds: 4.0e-4 at 2e-3 s, 2.3e-4 at 1e-3 s, 5.7e-5 at
-    5e-4 s, 1.4e-5 at 2.5e-4 s.)  The errors fall as dt^2.  rho 0.7 rather than 0.8:
-    the shared step schedule changes the step at every sample of an accelerating
-    input, a disturbance generalized-alpha damps by rho (at 720-1008 steps rho 0.8 is
-    2x worse than 0.7 on hibbeler-16-31/-121, 0.9 is 10x worse), while constant-speed
-    cases lose 8% at 2016 steps; rho 1 leaves the accelerations oscillating (7x peak on
-    the four-bar).  At the defaults every built-in case is within 5.7e-5 of peak
-    (worst: hibbeler-two-inclines bar.alpha, hibbeler-16-30 5.3e-5, quick-return
-    4.6e-5); a step costs about 25-55 us on a 2-core AMD EPYC (100-230 ms a
-    revolution on a busy machine, README "Exudyn").
+    Notes on the grid:
+
+    * hibbeler-two-inclines is not in it: its worst sample sits next to a limit position,
+      so it needs the step in seconds, hence the 5e-4 s cap;
+    * the errors fall as dt^2;
+    * sampling by state is 4-5x more accurate at the same steps, and 25-60x on
+      accelerating inputs, because the integrator's own accelerations carry the
+      disturbance of the step change the shared schedule makes at every sample of
+      such an input (rho 0.8 leaves 2x more of it than 0.7, and 0.9 10x more);
+    * sampling by state is insensitive to rho, and 0.8, the issue's value, is the best
+      there;
+    * rho 1 leaves the integrator's accelerations oscillating (7x peak on the
+      four-bar).
+
+    At the defaults every built-in case is within 3.7e-5 of peak (worst:
+    hibbeler-16-30 linkCB.alpha; quick-return 2.6e-5, hibbeler-two-inclines 1.0e-5).
+    The integrator's own readout needs 2016 steps for 5.7e-5.  A step costs about
+    25-55 us on a 2-core AMD EPYC (README "Exudyn").
     """
 
     timestep: float = 5e-4
-    steps_per_rev: int = 2016
-    spectral_radius: float = 0.7
+    steps_per_rev: int = 1008
+    spectral_radius: float = 0.8
     newton_tolerance: float = 1e-10
+    sample_by: str = "state"
 
     def __post_init__(self):
         bad = None
@@ -155,6 +177,8 @@ class ExudynSettings(EngineSettings):
             bad = ("spectral_radius", self.spectral_radius, "must be in [0, 1]")
         elif not self.newton_tolerance > 0:
             bad = ("newton_tolerance", self.newton_tolerance, "must be > 0")
+        elif self.sample_by not in ("integrator", "state"):
+            bad = ("sample_by", self.sample_by, "use integrator or state")
         if bad:
             raise SettingsError(f"engine 'exudyn' setting {bad[0]}={bad[1]!r}: {bad[2]}")
 
@@ -162,8 +186,9 @@ class ExudynSettings(EngineSettings):
         return min(float(self.timestep), plan.rev_time / int(self.steps_per_rev))
 
     def describe(self) -> str:
+        by = "" if self.sample_by == "integrator" else f" sampled by {self.sample_by}"
         return (f"gen-alpha rho={self.spectral_radius:g} steps/rev={self.steps_per_rev} "
-                f"dt<={self.timestep:g} newton tol={self.newton_tolerance:g}")
+                f"dt<={self.timestep:g} newton tol={self.newton_tolerance:g}{by}")
 
 
 def _rot(a: float, v) -> np.ndarray:
@@ -390,7 +415,7 @@ class ExudynSession(Session):
         value = float(st.driver_value(q[st.driver_tree]))
         rate = float(st.driver_sigma * qd[st.driver_tree])
         self._start(0.0, th[0], om[0], org[0], vo[0], value, rate, float(acceleration))
-        self.sample(0.0, rows, rec)
+        self._read(0.0, rows, rec)
 
     def _start(self, t, theta, omega, origin, v_origin, value, rate, acc) -> None:
         """Initial state from absolute body angles/rates and frame-origin positions and
@@ -549,6 +574,36 @@ class ExudynSession(Session):
     def sample(self, t: float, rows, rec: Recorder) -> float:
         if len(rows) == 0:
             return 0.0
+        if self.settings.sample_by == "state":
+            return self._sample_by_state(t, rows, rec)
+        return self._read(t, rows, rec)
+
+    def _sample_by_state(self, t: float, rows, rec: Recorder) -> float:
+        """Read Exudyn's initial-value solve at the integrated state, then give the
+        integrator its own state back (its next step starts from it)."""
+        sd = self.mbs.systemData
+        saved = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()),
+                 np.array(sd.GetODE2Coordinates_tt()), np.array(sd.GetAECoordinates()))
+        initial = self.exu.ConfigurationType.Initial
+        sd.SetODE2Coordinates(saved[0], configuration=initial)
+        sd.SetODE2Coordinates_t(saved[1], configuration=initial)
+        solver, sim = self.solver, self.sim
+        probe = self._initialise(t, compute=True)
+        acc = float(self.tree.driver_path(t)[2])
+        if acc != 0.0:
+            qdd, lam = self._with_drive_acceleration(probe, acc)
+            sd.SetODE2Coordinates_tt(qdd)
+            sd.SetAECoordinates(lam)
+        self._read(t, rows, rec)
+        sd.SetODE2Coordinates(saved[0])
+        sd.SetODE2Coordinates_t(saved[1])
+        sd.SetODE2Coordinates_tt(saved[2])
+        sd.SetAECoordinates(saved[3])
+        self.solver, self.sim = solver, sim
+        return 0.0
+
+    def _read(self, t: float, rows, rec: Recorder) -> float:
+        """Fill ``rows`` from the system's current state and multipliers."""
         st = self.tree
         mech = st.mech
         pose = self._poses()
