@@ -111,6 +111,18 @@ def test_integrator_readout_at_twice_the_steps(case):
     assert_run_within(r, mech, EXUDYN_MUST_SHOW, case)
 
 
+def test_sampling_by_state_leaves_the_integration_untouched():
+    """Sampling by state solves at the integrated state and hands the integrator its state
+    back: positions and velocities at every sample are bit-identical to the integrator's
+    readout of the same run; only the accelerations (and forces) differ."""
+    mech = load_case("hibbeler-16-31")
+    runs = [run(mech, "exudyn", get_engine("exudyn").settings({"sample_by": by}),
+                revolutions=2, samples=12) for by in ("state", "integrator")]
+    np.testing.assert_array_equal(runs[0].theta, runs[1].theta)
+    np.testing.assert_array_equal(runs[0].omega, runs[1].omega)
+    assert not np.array_equal(runs[0].alpha, runs[1].alpha)
+
+
 def test_seed_four_bar_figures_of_engine_notes():
     """The S4 four-bar at 60 deg (ENGINE_NOTES.md): coupler and rocker alpha, drive torque."""
     mech = load_case("seed-four-bar")
