@@ -258,6 +258,8 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         with ctx as fh:
             for a, kin, frc in evaluate_blocked(linkage, values, vel, None, forces, block):
                 write(convert(to_frame(linkage, kin, frc)), fh, a == 0)
+    except BrokenPipeError:  # the reader stopped (| head): xval ends quietly, not an error
+        raise
     except OSError as e:  # a full disk or a vanished folder, mid-way
         raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
     notes = []

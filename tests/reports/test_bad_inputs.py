@@ -375,6 +375,7 @@ def _xval(cmd: str, cwd=None) -> subprocess.CompletedProcess:
     "xval sweep six-bar --points 20000 | true",
     "xval sweep seed-four-bar --points 20000 --csv - | true",
     "xval solve quick-return --json | true",
+    "xval sweep seed-four-bar --points 300000 --csv - | true",  # streamed in blocks
 ])
 def test_closed_pipe_ends_quietly(cmd):
     """The reader exits before xval writes: no BrokenPipeError, status 141 (SIGPIPE's)."""
