@@ -51,7 +51,7 @@ _MODULES: dict[str, object] = {}
 
 def enabled() -> bool:
     """The fused path is on unless ``XVAL_FUSED=0`` or numba is missing."""
-    if os.environ.get("XVAL_FUSED", "1").strip() in ("0", "off", "no", "false"):
+    if os.environ.get("XVAL_FUSED", "1").strip().lower() in ("0", "off", "no", "false"):
         return False
     return importlib.util.find_spec("numba") is not None
 
@@ -363,6 +363,27 @@ def _compact(x: np.ndarray) -> np.ndarray:
     if x.ndim and x.size and (x.strides[0] == 0 or np.all(x == x[0])):
         return x[:1]
     return x
+
+
+#: ``Linkage.kinematics`` uses the kernel from this many input values on: below it the
+#: numpy path takes milliseconds, less than loading a kernel (0.5 s) or compiling one
+#: for a new structure (5-30 s, once per machine).  ``XVAL_FUSED_MIN`` overrides it.
+FUSED_MIN_POINTS = 16384
+
+
+def dispatch(linkage, n: int) -> FusedKernel | None:
+    """The kernel ``Linkage.kinematics`` should use for ``n`` input values, or ``None``
+    for the numpy path (no dyad plan, ``XVAL_FUSED=0``, no numba, or ``n`` below
+    :data:`FUSED_MIN_POINTS`; ``XVAL_FUSED=always`` uses it at any ``n``)."""
+    mode = os.environ.get("XVAL_FUSED", "1").strip()
+    if mode != "always":
+        try:
+            least = int(os.environ.get("XVAL_FUSED_MIN", FUSED_MIN_POINTS))
+        except ValueError:
+            least = FUSED_MIN_POINTS
+        if n < least:
+            return None
+    return kernel_for(linkage)
 
 
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:

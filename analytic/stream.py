@@ -57,9 +57,15 @@ class _Lazy:
         return len(self.value)
 
     def _collect(self, pick, forces: bool = False) -> np.ndarray:
-        parts = [np.array(pick(kin, frc)) for _, kin, frc in evaluate_blocked(
-            self.linkage, self.value, *self._rates, forces=forces, block=self._block)]
-        return np.concatenate(parts) if parts else np.zeros(0)
+        """One pass: ``pick(kin, frc)`` of every block, into one array."""
+        res = None
+        for a, kin, frc in evaluate_blocked(self.linkage, self.value, *self._rates,
+                                            forces=forces, block=self._block):
+            part = np.asarray(pick(kin, frc))
+            if res is None:
+                res = np.empty((self.n,) + part.shape[1:], part.dtype)
+            res[a:a + len(part)] = part
+        return res if res is not None else np.zeros(0)
 
     def _cached(self, key, pick, forces=False):
         if key not in self._cache:
@@ -124,16 +130,21 @@ class LazyKinematics(_Lazy):
         return {n: self._cached("tr " + n, lambda k, f, n=n: k.transmission[n]) for n in names}
 
     def point_c(self, body, point):
-        from .kinematics import Kinematics
-        return Kinematics.point_c(self, body, point)
+        """As :meth:`Kinematics.point_c`, in one pass (position, velocity and
+        acceleration of the point, complex ``(N,)`` each)."""
+        out = [np.empty(self.n, complex) for _ in range(3)]
+        for a, kin, _ in evaluate_blocked(self.linkage, self.value, *self._rates,
+                                          forces=False, block=self._block):
+            for o, z in zip(out, kin.point_c(body, point), strict=True):
+                o[a:a + kin.n] = z
+        return tuple(out)
 
     def point(self, body, point):
-        from .kinematics import Kinematics
-        return Kinematics.point(self, body, point)
+        from .positions import as_xy
+        return tuple(as_xy(z) for z in self.point_c(body, point))
 
     def com_c(self, b):
-        from .kinematics import Kinematics
-        return Kinematics.com_c(self, b)
+        return self.point_c(b, self.linkage.mech.bodies[b].com)
 
     def com(self, b):
         from .kinematics import Kinematics

@@ -18,8 +18,11 @@ Methods (configurations per second, min and median over the repeats):
 * ``fused_kinematics``: ``q, q', q''`` (every body's angle, rate, acceleration and
   every slider's); ``fused_kinematics_forces``: plus every joint force, the drive
   effort and the power terms, in the same pass (:meth:`analytic.fused.FusedKernel.state`);
+* ``fused_..._preallocated``: the same into outputs allocated once (blocked
+  evaluation reuses its outputs so; fresh outputs pay the kernel's page faults);
 * ``linkage_kinematics_forces``: ``Linkage.forces(Linkage.kinematics(x))`` through the
-  front door: the full :class:`Kinematics` and :class:`Forces` objects;
+  front door (``XVAL_FUSED=always``: the kernel at every size): the full
+  :class:`Kinematics` and :class:`Forces` objects (two passes of the kernel);
 * ``numpy_kinematics_forces``: the same on the numpy path (``XVAL_FUSED=0``), up to
   360k points (at 3.6M it holds several GB).
 
@@ -125,11 +128,14 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
         pl = pylinkage_four_bar(n)
         fns["pylinkage_positions"] = lambda: pl.step_fast(iterations=n)
         fns["pylinkage_kinematics"] = lambda: pl.step_fast_with_kinematics(iterations=n)
+    out2, out3 = fk4.alloc(n, 2), fk4.alloc(n, 3)
     fns.update({
         "fused_positions": lambda: fk4.poses(x),
         "fused_angles": lambda: fk4.state(x, level=1),
         "fused_kinematics": lambda: fk4.state(x, level=2),
         "fused_kinematics_forces": lambda: fk4.state(x, level=3),
+        "fused_kinematics_preallocated": lambda: fk4.state(x, level=2, out=out2),
+        "fused_kinematics_forces_preallocated": lambda: fk4.state(x, level=3, out=out3),
         "six_bar_fused_kinematics_forces": lambda: fk6.state(x, level=3),
         "linkage_kinematics_forces": lambda: lk4.forces(lk4.kinematics(x)),
     })
@@ -139,7 +145,7 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
             try:
                 return lk4.forces(lk4.kinematics(x))
             finally:
-                del os.environ["XVAL_FUSED"]
+                os.environ["XVAL_FUSED"] = "always"
         fns["numpy_kinematics_forces"] = numpy_kf
     return fns
 
@@ -238,6 +244,7 @@ def main(argv=None):
                          "/usr/bin/time -v")
     args = ap.parse_args(argv)
     tune_allocator()  # as the xval command does
+    os.environ["XVAL_FUSED"] = "always"  # Linkage's front door takes the kernel at any size
     try:
         import pylinkage  # noqa: F401
         with_pl = True
