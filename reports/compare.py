@@ -139,7 +139,8 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     mechanism.  Quantities: ``<body>.alpha`` for each moving body (one whose exact alpha
     is identically zero, such as a constant-speed crank or a piston, is judged against
     the largest body's peak), ``<joint>.a`` for each slider, ``drive.effort``,
-    ``<joint>.force`` for each joint (vector error), and, where the engine has its own
+    ``<joint>.force`` for each joint (vector error), ``<joint>.normal`` and
+    ``<joint>.moment`` for each prismatic joint, and, where the engine has its own
     reading, ``<joint>.force[engine]`` and ``drive.effort[engine]``.  ``at`` is in
     degrees for a revolute driver, m for a prismatic one.  A failed run's NaN samples
     make every quantity fail at the first such sample.  Raises
@@ -179,9 +180,15 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
         floor = alpha_scale if own <= ZERO_PEAK * alpha_scale else 0.0
         out.append(compare(f"{run_.body_names[b]}.alpha", kin.alpha[keep, b],
                            run_.alpha[keep, b], at, tol, peak_floor=floor))
+    # a slider whose exact acceleration is identically zero (a prismatic input at constant
+    # speed) is judged on the mechanism's linear-acceleration scale, its rate scale times
+    # its size, not on its own round-off peak
+    acc_scale = rate_scale * (mechanism_size(mech) if lk.driver_is_revolute else L)
     for p, name in enumerate(run_.prismatic_names):
-        out.append(compare(f"{name}.a", kin.slider(name)[2][keep], run_.slider_acc[keep, p],
-                           at, tol))
+        a_ref = kin.slider(name)[2][keep]
+        floor = acc_scale if float(np.max(np.abs(a_ref))) <= ZERO_PEAK * acc_scale else 0.0
+        out.append(compare(f"{name}.a", a_ref, run_.slider_acc[keep, p], at, tol,
+                           peak_floor=floor))
     if frc is not None:
         # an effort identically zero (no load, no gravity, no inertia torque: the
         # parallelogram) is judged on the joint forces' scale times the lever arm
@@ -194,6 +201,7 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
         for j, name in enumerate(run_.joint_names):
             out.append(compare(f"{name}.force", frc.joint_force[name][keep],
                                run_.joint_force[keep, j], at, tol))
+        out += _prismatic_reactions(run_, frc, keep, at, tol, f_peak, mechanism_size(mech))
         if run_.joint_force_engine is not None:
             for j, name in enumerate(run_.joint_names):
                 out.append(compare(f"{name}.force[engine]", frc.joint_force[name][keep],
@@ -201,6 +209,24 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
         if run_.drive_effort_engine is not None:
             out.append(compare("drive.effort[engine]", frc.effort[keep],
                                run_.drive_effort_engine[keep], at, tol))
+    return out
+
+
+def _prismatic_reactions(run_, frc, keep, at, tol: float, f_peak: float,
+                         size: float) -> list[Comparison]:
+    """``<joint>.normal`` (N) and ``<joint>.moment`` (N m) of each prismatic joint: the
+    guide's normal force on the slider and its couple about the slider point.  Either may
+    be identically zero (a piston carries no couple): it is then judged on the joint
+    forces' scale (times the mechanism's size for the couple) instead of its round-off."""
+    out = []
+    for p, name in enumerate(run_.prismatic_names):
+        for what, ref_all, test_all, scale in (
+                ("normal", frc.normal, run_.normal, f_peak),
+                ("moment", frc.moment, run_.moment, f_peak * size)):
+            ref = ref_all[name][keep]
+            floor = scale if float(np.max(np.abs(ref))) <= ZERO_PEAK * scale else 0.0
+            out.append(compare(f"{name}.{what}", ref, test_all[keep, p], at, tol,
+                               peak_floor=floor))
     return out
 
 

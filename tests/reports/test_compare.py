@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -43,7 +45,7 @@ def test_shape_mismatch_is_an_error():
 
 # --- engine runs: every driver motion ends in a verdict or a typed refusal (issue 8) -----
 
-BUGS = "/work/shared/bugs"
+BUGS = os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "bugs")
 
 
 @pytest.mark.parametrize("name", ["reversing-input.toml", "fast-accelerating.toml"])
@@ -139,3 +141,26 @@ def test_compare_set_and_integrator_options(capsys):
         code = main(["compare", "seed-four-bar", "--engine", "mujoco", *bad])
         _, err = capsys.readouterr()
         assert code == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_prismatic_normal_and_moment_are_judged():
+    """Each prismatic joint's normal force and couple are judged quantities of their own:
+    a run whose guide couple is displaced by 1% of the slot's force scale fails on
+    ``slot.moment`` alone (the quick-return's slot carries both a normal force and a couple)."""
+    pytest.importorskip("mujoco")
+    import dataclasses
+
+    from analytic import load_case
+    from reports.compare import compare_run
+    from sim_models.engines import run
+    r = run(load_case("quick-return"), "mujoco", samples=12)
+    names = {c.quantity: c for c in compare_run(r)}
+    for q in ("slot.normal", "slot.moment", "ram.normal", "ram.moment"):
+        assert names[q].passed, names[q]
+    moment = r.moment.copy()
+    p = list(r.prismatic_names).index("slot")
+    moment[:, p] += 1e-2 * names["slot.moment"].peak
+    bad = {c.quantity: c for c in compare_run(dataclasses.replace(r, moment=moment))}
+    assert not bad["slot.moment"].passed
+    assert bad["slot.moment"].normalised == pytest.approx(1e-2, rel=0.05)
+    assert bad["slot.normal"].passed and bad["slot.force"].passed

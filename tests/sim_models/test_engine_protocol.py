@@ -25,7 +25,7 @@ from .conftest import ENGINE_RELATIVE, assert_run_within
 
 ROOT = Path(__file__).resolve().parents[2]
 ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn"}
-BUGS = Path("/work/shared/bugs")
+BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs"
 
 
 def _imports(path: Path) -> set[str]:
