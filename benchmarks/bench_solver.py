@@ -216,6 +216,62 @@ def ratios(res: dict) -> dict:
     return out
 
 
+LABELS = {
+    "hand_kinematics": "hand closed form, four-bar kinematics (numpy, no forces)",
+    "pylinkage_positions": "pylinkage `step_fast`, four-bar positions",
+    "pylinkage_kinematics": "pylinkage `step_fast_with_kinematics`",
+    "fused_positions": "fused kernel, four-bar positions (poses)",
+    "fused_angles": "fused kernel, four-bar positions with angles",
+    "fused_kinematics": "fused kernel, four-bar kinematics",
+    "fused_kinematics_forces": "fused kernel, four-bar kinematics + forces",
+    "fused_kinematics_preallocated": "the same, kinematics into preallocated outputs",
+    "fused_kinematics_forces_preallocated": "the same, kinematics + forces preallocated",
+    "six_bar_fused_kinematics_forces": "fused kernel, six-bar kinematics + forces",
+    "linkage_kinematics_forces": "`Linkage.forces(Linkage.kinematics(x))`, four-bar",
+    "numpy_kinematics_forces": "the same on the numpy path (`XVAL_FUSED=0`)",
+}
+
+
+def markdown(info: dict, res: dict, rat: dict) -> str:
+    """The README's speed tables from one run."""
+    sizes = sorted(res)
+    lines = [f"One run, {info['machine']['cpu']} ({info['machine']['cores']} cores, shared), "
+             f"Python {info['machine']['python']}, numpy {info['machine']['numpy']}, numba "
+             f"{info['machine']['numba']}, pylinkage {info['machine']['pylinkage']}; "
+             f"{info['load_before']} before, {info['load_after']} after.  Millions of "
+             "configurations per second, min time (median) over the repeats; memory is "
+             "tracemalloc's peak per configuration at the largest size measured.", "",
+             "| method | " + " | ".join(f"{n:,}" for n in sizes) + " | B/config |",
+             "|---|" + "---|" * (len(sizes) + 1)]
+    for k, label in LABELS.items():
+        cells = []
+        for n in sizes:
+            v = res[n].get(k)
+            cells.append("-" if v is None else
+                         f"{v['rate_min_time'] / 1e6:.2f} ({v['rate_median'] / 1e6:.2f})")
+        big = max((n for n in sizes if k in res[n]), default=None)
+        mem = "-" if big is None else f"{res[big][k]['bytes_per_config_peak']:.0f}"
+        if any(c != "-" for c in cells):
+            lines.append(f"| {label} | " + " | ".join(cells) + f" | {mem} |")
+    lines += ["", "Ratios, each of two methods timed in the same repeats (min of each, "
+              "median of the per-repeat ratios):", "",
+              "| ratio | " + " | ".join(f"{n:,}" for n in sizes) + " |",
+              "|---|" + "---|" * len(sizes)]
+    keys = []
+    for n in sizes:
+        keys += [k for k in rat[n] if k not in keys]
+    for k in keys:
+        cells = [f"{rat[n][k]['min']:.2f} ({rat[n][k]['median']:.2f})" if k in rat[n] else "-"
+                 for n in sizes]
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    if "flatness" in rat:
+        a, b = rat["flatness_sizes"]
+        lines += ["", f"Cost per configuration at {b:,} points over that at {a:,} (min "
+                  "times): " + ", ".join(f"`{k}` {v:.2f}" for k, v in rat["flatness"].items())
+                  + "."]
+    return "\n".join(lines)
+
+
 def cli_sweep(points: int) -> dict:
     """``xval sweep seed-four-bar --points N --csv F`` under ``/usr/bin/time -v``."""
     with tempfile.TemporaryDirectory() as d:
@@ -239,6 +295,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default=",".join(map(str, SIZES)))
     ap.add_argument("--json", help="write the figures to this JSON file")
+    ap.add_argument("--markdown", help="write the README's speed tables to this file")
     ap.add_argument("--cli-points", type=int, default=0,
                     help="also run xval sweep seed-four-bar --points N --csv under "
                          "/usr/bin/time -v")
@@ -285,6 +342,9 @@ def main(argv=None):
     if args.cli_points:
         info["cli_sweep"] = cli_sweep(args.cli_points)
         print("xval sweep:", json.dumps(info["cli_sweep"]))
+    if args.markdown:
+        with open(args.markdown, "w") as f:
+            f.write(markdown(info, res, rat) + "\n")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"info": info, "results": {str(k): v for k, v in res.items()},
