@@ -1,7 +1,9 @@
 """The generated model files of the built-in cases (``sim_models/models/``).
 
 For each case ``<case>.xml`` (MJCF written by ``MjSpec.to_xml`` from
-:func:`sim_models.mjcf.build_mjcf`), ``<case>.urdf`` and ``<case>.closures.json``
+:func:`sim_models.viewer_model.viewer_spec`: :func:`sim_models.mjcf.build_mjcf` plus the
+drive as an actuator and the assembled state as a keyframe, so a viewer shows it
+turning), ``<case>.urdf`` and ``<case>.closures.json``
 (the loop-closing point-to-point constraints PyBullet needs; pivots in the links'
 centre-of-mass frames).  The files are generated, never edited: ``xval models``
 rewrites them and a test fails when the committed ones are stale.
@@ -20,23 +22,29 @@ from pathlib import Path
 
 from analytic import case_names, load_case
 
-from .mjcf import MujocoSettings, build_mjcf
+from .mjcf import MujocoSettings
 from .urdf import build_urdf
+from .viewer_model import viewer_xml
 
 MODELS_DIR = Path(__file__).parent / "models"
 
 
 def model_texts(case: str) -> dict[str, str]:
-    """File name -> text of the generated models of one built-in case."""
+    """File name -> text of the generated models of one built-in case or TOML file (the
+    files of a TOML file are named after it).  The MJCF is the viewer model
+    (:func:`sim_models.viewer_model.viewer_xml`): the harness's model with its drive as
+    an actuator and the assembled state as keyframe ``assembled``."""
     mech = load_case(case)
-    xml = build_mjcf(mech, MujocoSettings()).to_xml()
+    name = case if case in case_names() else Path(case).stem
+    xml = viewer_xml(mech, MujocoSettings())
     urdf, closures = build_urdf(mech)
-    return {f"{case}.xml": xml, f"{case}.urdf": urdf,
-            f"{case}.closures.json": json.dumps([asdict(c) for c in closures], indent=2) + "\n"}
+    return {f"{name}.xml": xml, f"{name}.urdf": urdf,
+            f"{name}.closures.json": json.dumps([asdict(c) for c in closures], indent=2) + "\n"}
 
 
 def write_models(out: str | Path = MODELS_DIR, cases: list[str] | None = None) -> list[Path]:
-    """Write every built-in case's model files into ``out``; returns the paths."""
+    """Write the model files of ``cases`` (built-in names or TOML files; default every
+    built-in case) into ``out``; returns the paths."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
