@@ -27,7 +27,12 @@ so the ratios hold on a shared, noisy machine even when the absolute times move:
   four-bar and six-bar have neither.
 
 Ratio = harness / bare, min over repeats of each (``min``) and median of each
-(``median``).  The machine's load (``os.getloadavg``) is printed before and after.
+(``median``), by the wall clock (``perf_counter``: what a user waits) and by the
+process's CPU time (``process_time``: all its threads, not the time other processes
+held the cores; on a loaded machine the wall clock of a 60 ms loop moves by 30%);
+``paired med`` is the median of each repeat's own ratio (the two runs of a repeat are
+adjacent in time, so a load change between repeats cancels).  The machine's load
+(``os.getloadavg``) is printed before and after.
 
     python benchmarks/bench_harness.py [--cases seed-four-bar,six-bar] [--engines all]
         [--repeats 15] [--json FILE] [--profile ENGINE:CASE]
@@ -63,10 +68,10 @@ def bare_mujoco(session, h: float, n: int) -> float:
     session.reset(0.0, h)
     m.opt.timestep = h
     step = mj.mj_step
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for _ in range(n):
         step(m, d)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def bare_pybullet(session, h: float, n: int) -> float:
@@ -74,10 +79,10 @@ def bare_pybullet(session, h: float, n: int) -> float:
     sim = session.sim
     session.reset(0.0, h)
     step, cid = sim.p.stepSimulation, sim.cid
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for _ in range(n):
         step(physicsClientId=cid)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def bare_exudyn(session, h: float, n: int) -> float:
@@ -87,19 +92,20 @@ def bare_exudyn(session, h: float, n: int) -> float:
     sol.it.endTime = n * h
     sol.it.currentStepSize = h
     sol.it.maxStepSize = h
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sol.SolveSteps(session.mbs, session.sim)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 BARE = {"mujoco": bare_mujoco, "pybullet": bare_pybullet, "exudyn": bare_exudyn}
 
 
 # ============================================================================ harness
-def harness(session, plan, request) -> tuple[float, object]:
-    t0 = time.perf_counter()
+def harness(session, plan, request) -> tuple[tuple[float, float], object]:
+    """``(wall, cpu)`` seconds of one :func:`drive`, and its run."""
+    t0, c0 = time.perf_counter(), time.process_time()
     r = drive(session, plan, request)
-    return time.perf_counter() - t0, r
+    return (time.perf_counter() - t0, time.process_time() - c0), r
 
 
 def library_steps(engine: str, session, plan, request) -> tuple[int, float, object]:
@@ -107,19 +113,32 @@ def library_steps(engine: str, session, plan, request) -> tuple[int, float, obje
     r = drive(session, plan, request)
     n = int(r.steps)
     if engine == "pybullet":  # count stepSimulation calls (pre-roll included)
-        sim, count = session.sim, [0]
-        real = sim.step
-
-        def counted():
-            count[0] += 1
-            real()
-        sim.step = counted
+        sim = session.sim
+        counter = _Counting(sim.p, "stepSimulation")
+        sim.p = counter
         try:
             drive(session, plan, request)
         finally:
-            del sim.step
-        n = count[0]
+            sim.p = counter.module
+        n = counter.calls
     return n, float(r.timestep), r
+
+
+class _Counting:
+    """A module stand-in that counts the calls of one of its functions."""
+
+    def __init__(self, module, name: str):
+        self.module, self.name, self.calls = module, name, 0
+
+    def __getattr__(self, attr):
+        fn = getattr(self.module, attr)
+        if attr != self.name:
+            return fn
+
+        def counted(*a, **k):
+            self.calls += 1
+            return fn(*a, **k)
+        return counted
 
 
 class Pair:
@@ -149,12 +168,20 @@ class Pair:
         self.cm.__exit__(None, None, None)
 
     def row(self) -> dict:
-        hs, bs = self.times["harness"], self.times["bare"]
-        return {"engine": self.engine, "case": self.case, "steps": self.n, "h": self.h,
-                "harness_min_ms": 1e3 * min(hs), "harness_median_ms": 1e3 * statistics.median(hs),
-                "bare_min_ms": 1e3 * min(bs), "bare_median_ms": 1e3 * statistics.median(bs),
-                "ratio_min": min(hs) / min(bs),
-                "ratio_median": statistics.median(hs) / statistics.median(bs)}
+        out = {"engine": self.engine, "case": self.case, "steps": self.n, "h": self.h}
+        for j, clock in enumerate(("wall", "cpu")):
+            hs = [x[j] for x in self.times["harness"]]
+            bs = [x[j] for x in self.times["bare"]]
+            out.update({
+                f"{clock}_harness_min_ms": 1e3 * min(hs),
+                f"{clock}_harness_median_ms": 1e3 * statistics.median(hs),
+                f"{clock}_bare_min_ms": 1e3 * min(bs),
+                f"{clock}_bare_median_ms": 1e3 * statistics.median(bs),
+                f"{clock}_ratio_min": min(hs) / min(bs),
+                f"{clock}_ratio_median": statistics.median(hs) / statistics.median(bs),
+                f"{clock}_ratio_paired_median": statistics.median(
+                    h / b for h, b in zip(hs, bs, strict=True))})
+        return out
 
 
 def profile(engine: str, case: str, top: int = 25) -> str:
@@ -203,13 +230,16 @@ def main(argv=None) -> int:
     rows = [p.row() for p in pairs]
     print(f"# {a.repeats} repeats, interleaved; load after {load1[0]:.2f} {load1[1]:.2f} "
           f"{load1[2]:.2f}")
-    print(f"{'engine':9s} {'case':15s} {'steps':>6s} {'harness ms min/med':>20s} "
-          f"{'bare ms min/med':>18s} {'ratio min':>9s} {'ratio med':>9s}")
-    for r in rows:
-        print(f"{r['engine']:9s} {r['case']:15s} {r['steps']:6d} "
-              f"{r['harness_min_ms']:9.2f}/{r['harness_median_ms']:8.2f}  "
-              f"{r['bare_min_ms']:8.2f}/{r['bare_median_ms']:8.2f} "
-              f"{r['ratio_min']:9.3f} {r['ratio_median']:9.3f}")
+    for clock in ("wall", "cpu"):
+        print(f"{clock:9s} {'case':15s} {'steps':>6s} {'harness ms min/med':>20s} "
+              f"{'bare ms min/med':>18s} {'ratio min':>9s} {'ratio med':>9s} "
+              f"{'paired med':>10s}")
+        for r in rows:
+            print(f"{r['engine']:9s} {r['case']:15s} {r['steps']:6d} "
+                  f"{r[clock + '_harness_min_ms']:9.2f}/{r[clock + '_harness_median_ms']:8.2f}  "
+                  f"{r[clock + '_bare_min_ms']:8.2f}/{r[clock + '_bare_median_ms']:8.2f} "
+                  f"{r[clock + '_ratio_min']:9.3f} {r[clock + '_ratio_median']:9.3f} "
+                  f"{r[clock + '_ratio_paired_median']:10.3f}")
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"load_before": load0, "load_after": load1, "repeats": a.repeats,

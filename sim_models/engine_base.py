@@ -316,9 +316,9 @@ def check_motion(tree: SimTree, gap: float, rate: float, t: float, max_violation
 def check_raw_state(q, qd) -> str | None:
     """The part of :func:`check_state` a raw record needs no conversion for: non-finite
     or huge tree coordinates ``q, qd`` (same messages)."""
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+    if not (np.isfinite(q).all() and np.isfinite(qd).all()):
         return "non-finite state (simulation diverged)"
-    if np.max(np.abs(qd), initial=0.0) > HUGE:
+    if np.abs(qd).max(initial=0.0) > HUGE:
         return "huge velocities (simulation diverged)"
     return None
 

@@ -84,6 +84,9 @@ class MujocoSession(Session):
         self.child_root = np.array([m.body_rootid[b] for b in self.child_bid], dtype=int)
         # the prescribed driver acceleration is constant (SimTree.driver_path)
         self.acc = float(st.mech.driver.acceleration)
+        # enum values as ints: comparing an array with the enum object costs 35 us
+        self._equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+        self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
         self.A = float(s.armature)
         self.loads = [(self.bid[st.body_names.index(ld.body)], ld) for ld in st.mech.loads]
         self.moving_loads = self._loads_move()
@@ -164,20 +167,23 @@ class MujocoSession(Session):
         return None
 
     def record(self, t: float):
-        """``mj_forward`` at the state at ``t`` (the RK4 quirk), then the raw arrays the
-        readout needs (:meth:`_raw`); MuJoCo's bad-qacc warning and a non-finite or huge
-        state are reasons at once."""
+        """``mj_forward`` at the state at ``t`` (the RK4 quirk), then copies of the arrays
+        the readout needs (:meth:`_raw`); MuJoCo's bad-qacc warning and a non-finite or
+        huge state are reasons at once."""
         mj, m, d = self.mj, self.model, self.data
         self.set_drive(self.acc)
         self.apply_loads()
         mj.mj_forward(m, d)
-        self.max_contacts = max(self.max_contacts, int(d.ncon))
-        if d.warning[mj.mjtWarning.mjWARN_BADQACC].number:
+        self.max_contacts = max(self.max_contacts, d.ncon)
+        if d.warning[self._badqacc].number:
             return None, 0.0, "MuJoCo reported bad qacc (simulation diverged)"
         q, qd = d.qpos[self.qadr], d.qvel[self.dadr]
-        why = check_raw_state(q, qd)
-        if why is not None:
-            return None, 0.0, why
+        # a cheap net (NaN fails both comparisons; |qd_i| > HUGE makes qd.qd > HUGE^2),
+        # then the exact check and its message
+        if not (math.isfinite(q.sum()) and qd @ qd <= HUGE * HUGE):
+            why = check_raw_state(q, qd)
+            if why is not None:
+                return None, 0.0, why
         return self._raw(self.acc), 0.0, None
 
     def forward_at(self, q, qd, acceleration: float, rows, rec: Recorder) -> None:
@@ -191,24 +197,47 @@ class MujocoSession(Session):
 
     # -- readout ------------------------------------------------------------------
     def _raw(self, a_prescribed: float) -> tuple:
-        """Copies of what the readout needs from the current ``data`` (after
-        ``mj_forward``): ``qpos, qvel, qacc`` of the tree joints, each tree joint's
-        child ``cfrc_int`` (6,) and its subtree's centre of mass (3,), each loop's
-        ``connect`` force (2,), and the prescribed driver acceleration."""
+        """Copies of ``data``'s arrays the readout needs (after ``mj_forward`` and
+        ``mj_rnePostConstraint``), whole (a copy is cheaper than an index): ``qpos,
+        qvel, qacc, cfrc_int, subtree_com`` and the constraint rows' type, id and force,
+        and the prescribed driver acceleration."""
         mj, m, d = self.mj, self.model, self.data
         mj.mj_rnePostConstraint(m, d)
-        eq_rows = np.flatnonzero(d.efc_type == mj.mjtConstraint.mjCNSTR_EQUALITY)
-        ids = d.efc_id[eq_rows]
-        loops = np.array([d.efc_force[eq_rows[ids == e][:2]] for e in self.eq]) \
-            .reshape(len(self.eq), 2)
-        return (d.qpos[self.qadr], d.qvel[self.dadr], d.qacc[self.dadr],
-                d.cfrc_int[self.child_bid], d.subtree_com[self.child_root], loops,
-                a_prescribed)
+        n = d.nefc
+        return (d.qpos.copy(), d.qvel.copy(), d.qacc.copy(), d.cfrc_int.copy(),
+                d.subtree_com.copy(), d.efc_type[:n].copy(), d.efc_id[:n].copy(),
+                d.efc_force[:n].copy(), a_prescribed)
+
+    def _loop_forces(self, efc_type, efc_id, efc_force) -> np.ndarray:
+        """(K, n_chords, 2): each loop's ``connect`` force (by body_a on body_b by
+        construction), from the first two of its equality rows, per record (one row
+        lookup when every record has the same constraint rows, as it usually has)."""
+        K, C = len(efc_force), len(self.eq)
+        out = np.zeros((K, C, 2))
+        if len({len(x) for x in efc_type}) == 1 and K:
+            T, I = np.array(efc_type), np.array(efc_id)
+            if np.all(T == T[0]) and np.all(I == I[0]):
+                F = np.array(efc_force)
+                eq_rows = np.flatnonzero(T[0] == self._equality)
+                for c, e in enumerate(self.eq):
+                    out[:, c] = F[:, eq_rows[I[0][eq_rows] == e][:2]]
+                return out
+        for k in range(K):
+            eq_rows = np.flatnonzero(efc_type[k] == self._equality)
+            for c, e in enumerate(self.eq):
+                out[k, c] = efc_force[k][eq_rows[efc_id[k][eq_rows] == e][:2]]
+        return out
 
     def convert(self, times, raws, rows, rec: Recorder):
         """The analytic conventions of K raw records (:meth:`_raw`), vectorised."""
         st, mech = self.tree, self.tree.mech
-        q, qd, qdd, cfrc, com, loops, acc = (np.array(x) for x in zip(*raws, strict=True))
+        qpos, qvel, qacc, cfrc, com, efc_type, efc_id, efc_force, acc = zip(*raws, strict=True)
+        q, qd, qdd = (np.array(x)[:, a] for x, a in ((qpos, self.qadr), (qvel, self.dadr),
+                                                      (qacc, self.dadr)))
+        cfrc = np.array(cfrc)[:, self.child_bid]
+        com = np.array(com)[:, self.child_root]
+        loops = self._loop_forces(efc_type, efc_id, efc_force)
+        acc = np.array(acc)
         prop, gap, rate = rec.put_motions(rows, times, q, qd, qdd)
         th, org = prop[0], prop[3]
         tau = self.A * (st.driver_sigma * acc - qdd[:, st.driver_tree])
