@@ -487,11 +487,31 @@ def write(an: Animator, out: str, fps: int = 24) -> None:
         if ext == ".mp4":
             anim.save(out, writer=animation.FFMpegWriter(fps=fps))
         else:
-            Path(out).write_text(anim.to_jshtml(fps=fps, default_mode="loop"))
+            Path(out).write_text(offline_html(anim.to_jshtml(fps=fps, default_mode="loop")))
     except OSError as e:
         raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
     finally:
         plots.plt.close(an.fig)
+
+
+#: The player's Font Awesome icons (fetched from a CDN by ``to_jshtml``) as characters,
+#: so the page needs no network.
+_ICONS = {"fa fa-minus": "&minus;", "fa fa-fast-backward": "&#x23EE;",
+          "fa fa-step-backward": "&#x23F4;&#x2759;", "fa fa-play fa-flip-horizontal": "&#x25C0;",
+          "fa fa-pause": "&#x23F8;", "fa fa-play": "&#x25B6;",
+          "fa fa-step-forward": "&#x2759;&#x23F5;", "fa fa-fast-forward": "&#x23ED;",
+          "fa fa-plus": "+"}
+
+
+def offline_html(html: str) -> str:
+    """matplotlib's JavaScript player without its one network reference (the icon
+    font's stylesheet): the icons become characters."""
+    import re
+    html = re.sub(r'<link rel="stylesheet"\s+href="https?://[^"]*font-awesome[^"]*">', "",
+                  html)
+    for cls, ch in _ICONS.items():
+        html = html.replace(f'<i class="{cls}"></i>', ch)
+    return html
 
 
 def cmd_animate(args) -> int:

@@ -1,0 +1,249 @@
+"""``xval plot`` and ``xval animate``: what is drawn is the analytic solution (checked
+against closed forms and finite differences computed here), engine poses are drawn where
+the engine put them, outputs and errors are one line.
+
+Expected positions come from the slider-crank's and the four-bar's geometry by hand
+(law of cosines / Pythagoras), never from the code under test.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import math
+from contextlib import redirect_stdout
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from analytic import Linkage, load_case
+from reports import animate, plot_cmd
+from reports.cli import main
+
+#: Positions drawn from the analytic solution agree with a closed form to round-off.
+POSE_TOL = 1e-9
+#: MuJoCo's poses at the recommended settings agree with the analytic ones to ~1e-8 of
+#: the size (README, Engines); a displacement of 0.05 rad is 1e5 times that.
+ENGINE_POSE_TOL = 1e-5
+#: The finite difference of the plotted angle over 1 deg steps: error ~ h^2/6 * omega'''.
+FD_REL = 2e-3
+
+
+def run(*argv) -> tuple[int, str]:
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        code = main(list(argv))
+    return code, buf.getvalue()
+
+
+def slider_crank_pose(theta: float) -> dict[str, np.ndarray]:
+    """seed-slider-crank (crank 0.1 m, rod 0.2 m, line through the crank pivot along
+    x) by hand: joint positions at crank angle ``theta``."""
+    r, l_ = 0.1, 0.2
+    B = np.array([r * math.cos(theta), r * math.sin(theta)])
+    C = np.array([B[0] + math.sqrt(l_ ** 2 - B[1] ** 2), 0.0])
+    return {"A": np.zeros(2), "B": B, "C": C, "slide": C}
+
+
+# ============================================================================ plot
+def test_plot_png_shows_the_analytic_cycle(tmp_path):
+    out = tmp_path / "x.png"
+    code, text = run("plot", "seed-four-bar", "--out", str(out))
+    assert code == 0 and "wrote" in text and "units: lengths m" in text
+    assert Image.open(out).format == "PNG"
+    figs, err, runs, _ = plot_cmd.case_figures(load_case("seed-four-bar"),
+                                               ["angle", "omega"], [], {})
+    assert err is None and not runs
+    ang, om = figs
+    by = {c.label: c for c in ang.curves}
+    assert np.ptp(ang.curves[0].x) == pytest.approx(359.0, abs=1.01)  # a full turn, deg
+    # omega = d(angle)/dt with dt = d(input)/15 rad/s: central differences of the
+    # plotted angle against the plotted omega
+    # (at the whole degrees: the line also holds points between them)
+    for c in om.curves:
+        x, th = by[c.label].x, by[c.label].y
+        k = np.abs(x - np.round(x)) < 1e-9
+        x, first = np.unique(np.round(x[k]), return_index=True)
+        th, w = th[k][first], c.y[k][first]
+        assert len(x) >= 300
+        dth = (th[2:] - th[:-2]) / (x[2:] - x[:-2]) * 15.0  # deg/deg * rad/s
+        np.testing.assert_allclose(dth, w[1:-1], atol=FD_REL * np.abs(w).max())
+    crank = next(c for c in om.curves if c.label == "crank")
+    assert np.all(crank.y == 15.0)
+
+
+def test_plot_units_convert_the_same_figures():
+    mech = load_case("seed-four-bar")
+    (om,), _, _, _ = plot_cmd.case_figures(mech, ["omega"], [], {})
+    from reports.display_units import DisplayUnits, convert_figure
+    c = convert_figure(om, DisplayUnits.parse("mm,rad,rpm"))
+    assert c.ylabel == "omega (rpm)" and c.xlabel == "input angle (rad)"
+    np.testing.assert_allclose(c.curves[1].y, om.curves[1].y * 60 / (2 * math.pi), rtol=1e-15)
+    np.testing.assert_allclose(c.curves[1].x, np.radians(om.curves[1].x), rtol=1e-15)
+
+
+@pytest.mark.parametrize("ext,magic", [(".svg", b"<?xml"), (".pdf", b"%PDF")])
+def test_plot_format_by_extension(tmp_path, ext, magic):
+    out = tmp_path / f"x{ext}"
+    assert run("plot", "seed-slider-crank", "--what", "slider,torque,transmission",
+               "--out", str(out))[0] == 0
+    assert out.read_bytes()[:5].startswith(magic[:4])
+
+
+def test_plot_bad_inputs_are_one_line(tmp_path, capsys, monkeypatch):
+    assert main(["plot", "seed-four-bar", "--out", str(tmp_path / "x.jpg")]) == 2
+    assert "must end in .png, .svg, .pdf" in capsys.readouterr().err
+    assert main(["plot", "seed-four-bar", "--what", "speed"]) == 2
+    assert "'speed' is not a quantity" in capsys.readouterr().err
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+    assert main(["plot", "seed-four-bar", "--show"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no display" in err
+
+
+def test_plot_with_engine_has_markers_and_errors(tmp_path):
+    pytest.importorskip("mujoco")
+    out = tmp_path / "e.png"
+    code, text = run("plot", "seed-four-bar", "--engine", "mujoco", "--what", "alpha",
+                     "--out", str(out))
+    assert code == 0 and "with mujoco" in text
+    figs, err, runs, _ = plot_cmd.case_figures(load_case("seed-four-bar"), ["alpha"],
+                                               ["mujoco"], _settings("mujoco"))
+    (alpha,) = figs
+    rocker = next(c for c in alpha.curves if c.label == "rocker")
+    x, y, judged = rocker.markers["mujoco"]
+    # each marker sits on the analytic line at its input (the verdict's reference)
+    line_at = np.interp(x, rocker.x, rocker.y)
+    assert np.max(np.abs(y - line_at)[judged]) < 1e-3 * np.abs(rocker.y).max()
+    assert err is not None and err.panels["mujoco"]["worst"][1] < err.tolerance
+
+
+def _settings(engine):
+    from reports.verdict_runs import settings_for
+    return settings_for([engine])
+
+
+# ============================================================================ animate
+def test_animate_gif_frames_and_first_pose(tmp_path):
+    out = tmp_path / "x.gif"
+    code, text = run("animate", "seed-slider-crank", "--out", str(out))
+    assert code == 0 and "72 frames" in text
+    gif = Image.open(out)
+    assert gif.n_frames >= 36
+    # the frames' data: frame 0 is the assembled reference pose (crank at 30 deg)
+    mech = load_case("seed-slider-crank")
+    fr = animate.analytic_frames(Linkage(mech))
+    expect = slider_crank_pose(math.radians(30.0))
+    got = animate.joint_positions(mech, fr.analytic, 0)
+    for j, p in expect.items():
+        np.testing.assert_allclose(got[j], p, atol=POSE_TOL)
+    # every frame is on the closed form at its own input
+    for i in range(0, fr.n, 7):
+        for j, p in slider_crank_pose(fr.values[i]).items():
+            np.testing.assert_allclose(animate.joint_positions(mech, fr.analytic, i)[j], p,
+                                       atol=POSE_TOL)
+    # the pixels: the joint C's ring (black edge) where C is in frame 0 of the file
+    an = animate.build_animation(fr, f"{mech.name}: analytic")
+    an.fig.canvas.draw()
+    px = an.ax.transData.transform(expect["C"])
+    H = an.fig.canvas.get_width_height()[1]
+    gif.seek(0)
+    f0 = np.asarray(gif.convert("RGB"))
+    assert f0.shape[0] == H
+    assert _ring_is_dark(f0, px)
+    gif.seek(36)  # half a turn later C is elsewhere: the check can fail
+    assert not _ring_is_dark(np.asarray(gif.convert("RGB")), px)
+
+
+def _ring_is_dark(img: np.ndarray, px) -> bool:
+    """A joint marker (white disc, black edge ~3.3 px radius at 80 dpi) at display point
+    ``px``: dark pixels on the ring in at least 3 of 4 directions, a light centre."""
+    H = img.shape[0]
+    cx, cy = px[0], H - px[1]
+    hits = 0
+    for ang in (0, 90, 180, 270):
+        dark = False
+        for r in np.arange(2.0, 5.0, 0.5):
+            x = int(round(cx + r * math.cos(math.radians(ang))))
+            y = int(round(cy - r * math.sin(math.radians(ang))))
+            dark |= bool(np.all(img[y, x] < 90))
+        hits += dark
+    centre = img[int(round(cy)), int(round(cx))]
+    return hits >= 3 and bool(np.all(centre > 150))
+
+
+def test_animate_limited_input_goes_back_and_forth():
+    lk = Linkage(load_case("hibbeler-16-30"))
+    values, times = animate.frame_inputs(lk, 72)
+    lo, hi = lk.feasible_ranges()[0]
+    v0 = lk.mech.driver.value
+    assert values[0] == v0
+    assert values.max() > hi - 0.03 * (hi - lo) and values.min() < lo + 0.03 * (hi - lo)
+    assert np.all(np.diff(times) > 0) and len(values) >= 36
+
+
+def test_engine_pose_displaced_is_drawn_displaced():
+    pytest.importorskip("mujoco")
+    from sim_models import compile_linkage
+    mech = load_case("seed-four-bar")
+    tree = compile_linkage(mech)
+    fr = animate.analytic_frames(tree.linkage, 36)
+    r = animate.engine_run(mech, tree, "mujoco", 36)
+    assert r.ok
+    honest = animate.engine_poses(r, tree, fr.values, True)
+    assert np.all(np.isfinite(honest.theta))
+    # the rocker's tree coordinate turned by delta at every sample, on purpose
+    delta = 0.05
+    k = next(i for i, tj in enumerate(tree.joints) if tj.name == "O4")
+    q = r.q.copy()
+    q[:, k] += tree.joints[k].sigma * delta
+    moved = animate.engine_poses(dataclasses.replace(r, q=q), tree, fr.values, True)
+    O4 = np.array([0.4, 0.0])
+    fr.engines[:] = [honest, moved]
+    an = animate.build_animation(fr)
+    for i in (0, 11, 23):
+        an.draw(i)
+        lines = [a for a in an.dynamic if getattr(a, "get_linestyle", lambda: "")() == "--"]
+        # body lines of each engine, in body order: crank, coupler, rocker
+        h_rocker = np.column_stack(lines[2].get_data())
+        m_rocker = np.column_stack(lines[5].get_data())
+        a_B = animate.joint_positions(mech, fr.analytic, i)["B"]
+        # honest engine: on the analytic rocker
+        assert np.min(np.linalg.norm(h_rocker - a_B, axis=1)) < ENGINE_POSE_TOL
+        # displaced engine: the analytic B turned by delta about O4, by hand
+        c, s = math.cos(delta), math.sin(delta)
+        b = a_B - O4
+        want = O4 + np.array([c * b[0] - s * b[1], s * b[0] + c * b[1]])
+        assert np.min(np.linalg.norm(m_rocker - want, axis=1)) < ENGINE_POSE_TOL
+        assert np.min(np.linalg.norm(m_rocker - a_B, axis=1)) > 0.5 * delta * 0.1
+    import matplotlib.pyplot as plt
+    plt.close(an.fig)
+
+
+def test_animate_html_is_self_contained(tmp_path):
+    out = tmp_path / "x.html"
+    assert run("animate", "seed-four-bar", "--out", str(out), "--frames", "36",
+               "--forces")[0] == 0
+    html = out.read_text()
+    assert "data:image/png;base64" in html and "<script" in html
+    assert "src=\"http" not in html and "href=\"http" not in html
+
+
+def test_animate_mp4_or_a_clear_line(tmp_path, capsys):
+    from matplotlib import animation
+    out = tmp_path / "x.mp4"
+    code = main(["animate", "seed-four-bar", "--out", str(out), "--frames", "36"])
+    if animation.writers.is_available("ffmpeg"):
+        assert code == 0 and out.stat().st_size > 0
+    else:
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and "needs ffmpeg" in err
+
+
+def test_animate_forces_need_masses(tmp_path, capsys):
+    assert main(["animate", "hibbeler-16-30", "--forces", "--out",
+                 str(tmp_path / "x.gif")]) == 2
+    assert "no masses" in capsys.readouterr().err
