@@ -16,7 +16,8 @@ from concurrent.futures import Executor, Future
 
 #: Lower runs first: the long hard-case runs are the full report's critical path; then
 #: the verdict runs, the figures of cases whose runs are in, the Pareto plots, the
-#: change-point and grid runs, the scene study.
+#: change-point and grid runs, the scene study.  The report runs the hard cases' other
+#: tasks in a lane of their own (:meth:`PriorityExecutor.submit_at`) ahead of the grids.
 PRIORITY = {"long_run_task": 0, "_task_entry": 1, "_figure_task": 2, "_pareto_task": 3,
             "change_point_task": 4, "grid_task": 5, "_scene_task": 6}
 
@@ -37,8 +38,11 @@ class PriorityExecutor(Executor):
         self._thread.start()
 
     def submit(self, fn, /, *args, **kwargs):
+        return self.submit_at(self.priority.get(getattr(fn, "__name__", ""), 9), fn, *args,
+                              **kwargs)
+
+    def submit_at(self, p: float, fn, /, *args, **kwargs):
         f: Future = Future()
-        p = self.priority.get(getattr(fn, "__name__", ""), 9)
         with self._cv:
             if self._closed:
                 raise RuntimeError("cannot submit after shutdown")
