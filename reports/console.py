@@ -60,12 +60,13 @@ def counts_line(summary: pd.DataFrame) -> str:
     s = margin_rows(summary)
     w = s.loc[s["ratio"].idxmax()]
     where = f"{w['case']} {w['engine']} {w['worst quantity'] or '(run)'}"
+    err = f"{sig2(w['worst error / peak'])} of {sig2(w['tolerance'])}"
     if math.isinf(w["ratio"]):
-        margin = f"failed: {where}"
-        label = "worst"
+        margin, label = f"{where} (run failed)", "worst"
+    elif w["ratio"] > 1:
+        margin, label = f"{where} {err}", "worst"
     else:
-        margin = f"{where} {sig2(w['worst error / peak'])} of {sig2(w['tolerance'])}"
-        label = "smallest margin"
+        margin, label = f"{where} {err}", "smallest margin"
     return f"{int(passed.sum())} of {len(summary)} pass ({per}); {label}: {margin}"
 
 
@@ -101,10 +102,22 @@ def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
     return [line(head)] + [line(r) for r in rows]
 
 
+def failure_notes(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
+    """Each failed row's note in full, wrapped to ``width``."""
+    import textwrap
+    out = []
+    for d in summary.to_dict("records"):
+        if d.get("verdict") != "pass" and _text(d.get("note")):
+            out += textwrap.wrap(f"{d['case']} / {d['engine']}: {_text(d['note'])}", width,
+                                 subsequent_indent="    ")
+    return out
+
+
 def print_verdict(summary: pd.DataFrame, echo=print) -> None:
-    for ln in verdict_table(summary):
+    for ln in verdict_table(summary) + failure_notes(summary):
         echo(ln)
     echo(counts_line(summary))
 
 
-__all__ = ["WIDTH", "counts_line", "margin_rows", "print_verdict", "sig2", "verdict_table"]
+__all__ = ["WIDTH", "counts_line", "failure_notes", "margin_rows", "print_verdict", "sig2",
+           "verdict_table"]
