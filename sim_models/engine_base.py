@@ -372,10 +372,11 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
     dt_max = session.settings.max_step(plan)
     order, stops, steps = step_schedule(plan.times, dt_max)
     sample_at: dict[float, list[int]] = {}
-    for i in order:
-        if np.isfinite(plan.times[i]):
-            key = float(plan.times[i]) if plan.times[i] > 1e-15 else 0.0
-            sample_at.setdefault(key, []).append(int(i))
+    times = np.asarray(plan.times, float).tolist()
+    for i in order.tolist():
+        if math.isfinite(times[i]):
+            key = times[i] if times[i] > 1e-15 else 0.0
+            sample_at.setdefault(key, []).append(i)
     dt_used = max((h for h, n in steps if n > 0), default=dt_max)
     t0 = time.perf_counter()
     log = _RawLog() if session.deferred else None

@@ -184,8 +184,11 @@ def loop_gaps(tree: SimTree, theta, origin) -> np.ndarray:
 def scatter_index(rows) -> tuple[np.ndarray, np.ndarray]:
     """``(k, i)``: record index and sample row of every row in ``rows`` (one list of
     sample rows per record), for filling sample arrays from per-record arrays."""
-    k = [r for r, rr in enumerate(rows) for _ in np.atleast_1d(rr)]
-    i = [int(x) for rr in rows for x in np.atleast_1d(rr)]
+    k, i = [], []
+    for r, rr in enumerate(rows):
+        for x in (rr if isinstance(rr, (list, tuple)) else np.atleast_1d(rr).tolist()):
+            k.append(r)
+            i.append(int(x))
     return np.asarray(k, dtype=int), np.asarray(i, dtype=int)
 
 

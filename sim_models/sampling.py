@@ -228,9 +228,10 @@ def step_schedule(times: np.ndarray, dt_max: float):
     if np.any(np.asarray(times)[np.isfinite(times)] <= 1e-15):
         stops.append(0.0)
         steps.append((dt_max, 0))
-    for i in order:
-        if np.isfinite(times[i]) and times[i] > stops[-1] + 1e-15:
-            stops.append(float(times[i]))
+    tl = np.asarray(times, float).tolist()  # Python floats: a loop over samples
+    for i in order.tolist():
+        if math.isfinite(tl[i]) and tl[i] > stops[-1] + 1e-15:
+            stops.append(tl[i])
     lengths = np.diff(stops[len(steps):]) if len(stops) > len(steps) + 1 else np.array([])
     h_common = None
     if len(lengths):

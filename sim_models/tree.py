@@ -303,11 +303,20 @@ class SimTree:
         th[:, g] = self.theta_ref[g]
         org[:, g] = self.origin_ref[g]
 
+        # element by element the same arithmetic as _rot / _perp (bitwise the same
+        # results), without stacking: this runs once per joint per call
         def rot(t, x):
-            c, s = np.cos(t)[:, None], np.sin(t)[:, None]
-            x = np.broadcast_to(x, (len(t), 2))
-            return np.stack([c[:, 0] * x[:, 0] - s[:, 0] * x[:, 1],
-                             s[:, 0] * x[:, 0] + c[:, 0] * x[:, 1]], axis=-1)
+            c, s = np.cos(t), np.sin(t)
+            out = np.empty((len(t), 2))
+            out[:, 0] = c * x[0] - s * x[1]
+            out[:, 1] = s * x[0] + c * x[1]
+            return out
+
+        def _perp(v):
+            out = np.empty_like(v)
+            out[:, 0] = -v[:, 1]
+            out[:, 1] = v[:, 0]
+            return out
 
         for i, tj in enumerate(self.joints):
             p, c = tj.parent, tj.child
