@@ -67,12 +67,14 @@ DEFAULT_FACTOR = 10.0
 
 #: Absolute floor (relative to peak) under the drift check: a quantity fails for drift
 #: only when its error exceeds ``factor * max(baseline, DRIFT_FLOOR)``.  Errors far
-#: below the tolerance include pure round-off (a constant-speed crank's alpha reads
-#: 0 or 1e-22), and a round-off-sized change moves them by a measured amount: scaling
-#: every mass by (1 + 1e-14) changed a recorded error by up to 6.6e-8 of peak (PyBullet,
-#: six-bar link.alpha: its iterative solver; Exudyn six-bar 3.2e-8; MuJoCo 8e-14), over
-#: every built-in case and engine.  With 1e-7 the smallest drift that fails (1e-6 at
-#: factor 10) is 15x that jitter, and still a thousandth of the 1e-3 tolerance.
+#: below the tolerance include pure round-off (a constant-speed crank's alpha reads 0 or
+#: 1e-22), and a perturbation the size of round-off moves them.  Measured over every
+#: built-in case in every engine, scaling every mass by (1 + 1e-14) changed the errors
+#: below 1e-6 of peak by at most 5e-9 of peak (PyBullet six-bar output.alpha; MuJoCo
+#: 8e-14, Exudyn 2e-15).  It changed larger errors by at most 7% of themselves (PyBullet
+#: six-bar link.alpha; Exudyn six-bar 2%), and the largest growth over max(error, 1e-7)
+#: was 1.07x.  With 1e-7 the smallest drift that fails (1e-6 at factor 10) is 200x the
+#: largest jitter of a small error, and still a thousandth of the 1e-3 tolerance.
 DRIFT_FLOOR = 1e-7
 
 #: Significant figures stored for errors (drift is judged by factors, not digits; fewer
