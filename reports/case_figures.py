@@ -22,13 +22,15 @@ from .reference import (
     analytic_line,
     axis_of,
     family_of,
+    line_breaks,
     reference_of,
     sample_errors,
     wrap_deg,
 )
 
 #: Families of judged quantities, in the order the error panels draw them.
-FAMILIES = ("body alpha", "slider s''", "drive effort", "joint forces")
+FAMILIES = ("body alpha", "slider s''", "drive effort", "joint forces",
+            "prismatic normal, moment")
 
 
 @dataclass
@@ -56,6 +58,7 @@ class CurveFigure:
     feasible: tuple[float, float] | None = None   # x range the input can reach
     covered: tuple[float, float] | None = None    # x range the engines covered
     png: bytes = b""
+    breaks: tuple[int, ...] = ()  # line indices that start a new stretch (not joined)
 
 
 @dataclass
@@ -93,6 +96,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     basis = list(runs.values()) or ([plan] if plan is not None else [])
     if not basis:
         return []
+    line_fn = line
     line = line(basis, linkage)
     if line is None:
         return []
@@ -163,6 +167,10 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
         curves = [Curve(f"at {k}", lu, np.asarray(v, float), {})
                   for k, v in lkin.transmission.items()]
         out.append(fig("transmission", "transmission angles", "angle (deg)", curves))
+    if line_fn is analytic_line:  # a drawn line must not join samples of other turns
+        brk = tuple(int(i) for i in line_breaks(basis, linkage))
+        for f in out:
+            f.breaks = brk
     return out
 
 

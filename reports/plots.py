@@ -239,7 +239,10 @@ def draw_curve_axes(ax, fig_data) -> None:
     allv = []
     for i, c in enumerate(d.curves):
         col = colors[i % len(colors)]
-        ax.plot(c.x, c.y, color=col, lw=1.3, label=c.label)
+        brk = list(getattr(d, "breaks", ()))
+        for k, (xs, ys) in enumerate(zip(np.split(np.asarray(c.x), brk),
+                                         np.split(np.asarray(c.y, float), brk), strict=True)):
+            ax.plot(xs, ys, color=col, lw=1.3, label=c.label if k == 0 else None)
         allv.append(np.asarray(c.y, float))
         for e, (x, y, judged) in c.markers.items():
             if e not in engines:
@@ -270,7 +273,19 @@ def draw_curve_axes(ax, fig_data) -> None:
         if d.covered[1] - d.covered[0] < 0.999 * (hi - lo):
             notes.append(f"engines covered {d.covered[0]:.4g} to {d.covered[1]:.4g} of "
                          f"{lo:.4g} to {hi:.4g} (grey: not reached)")
-    clip = _robust_ylim(np.concatenate(allv)) if allv else None
+    ax.ticklabel_format(axis="y", useOffset=False)
+    clip = None
+    if allv:
+        v = np.concatenate(allv)
+        v = v[np.isfinite(v)]
+        mag = float(np.max(np.abs(v))) if v.size else 0.0
+        if v.size and mag > 0 and np.ptp(v) < 0.02 * mag:
+            # a quantity (nearly) constant over the range: an axis around its round-off
+            # scatter would magnify it; show it against its own size
+            mid = 0.5 * (float(v.max()) + float(v.min()))
+            ax.set_ylim(mid - 0.1 * mag, mid + 0.1 * mag)
+        else:
+            clip = _robust_ylim(v)
     if clip is not None:
         lo, hi, n, (mn, mx) = clip
         ax.set_ylim(lo, hi)
@@ -287,7 +302,8 @@ def draw_curve_axes(ax, fig_data) -> None:
 
 
 _FAMILY_COLOURS = {"body alpha": "tab:blue", "slider s''": "tab:green",
-                   "drive effort": "tab:red", "joint forces": "tab:purple"}
+                   "drive effort": "tab:red", "joint forces": "tab:purple",
+                   "prismatic normal, moment": "tab:brown"}
 #: Errors below this are drawn at it (a log axis has no zero).
 ERROR_FLOOR = 1e-16
 

@@ -112,14 +112,10 @@ def reference_of(run_, reference=None) -> Reference:
     return Reference(lk, kin, frc, judged, u)
 
 
-def analytic_line(runs, linkage, points: int = LINE_POINTS):
-    """The analytic solution along the prescribed motion between the first and last
-    reached sample of ``runs`` (engine runs of one case on one plan), at ``points``
-    equal times plus every run's sample times: ``(u, kin, frc)`` sorted by ``u`` (the
-    plotted axis, :func:`axis_of`).  At a sample's own time the values are those of
-    :func:`analytic_reference` (same input, rate and acceleration)."""
-    mech = linkage.mech
-    d = mech.driver
+def _line_inputs(runs, linkage, points: int):
+    """The inputs of :func:`analytic_line`, sorted by the plotted axis: ``(u, t, value,
+    velocity, acceleration)``, or None when no sample was reached."""
+    d = linkage.mech.driver
     r0 = runs[0]
     ts = np.concatenate([np.asarray(r.times, float) for r in runs])
     ts = ts[np.isfinite(ts)]
@@ -138,21 +134,46 @@ def analytic_line(runs, linkage, points: int = LINE_POINTS):
             value = v0 + np.mod(value - v0, 2 * math.pi)
         u = np.degrees(value) if linkage.driver_is_revolute else value
     # the samples themselves, exactly as the reference has them
-    us, vals, vels, accs = [u], [value], [vel], [acc]
+    us, tt, vals, vels, accs = [u], [t], [value], [vel], [acc]
     for r in runs:
         ok = np.isfinite(r.times)
         ur, _ = axis_of(r, linkage)
         us.append(ur[ok])
+        tt.append(np.asarray(r.times, float)[ok])
         vals.append(np.asarray(r.values, float)[ok])
         vels.append(np.where(np.isfinite(r.driver_velocity), r.driver_velocity,
                              d.velocity)[ok])
         accs.append(np.asarray(r.driver_acceleration, float)[ok])
-    u, value, vel, acc = (np.concatenate(z) for z in (us, vals, vels, accs))
+    u, t, value, vel, acc = (np.concatenate(z) for z in (us, tt, vals, vels, accs))
     order = np.argsort(u, kind="stable")
-    u, value, vel, acc = u[order], value[order], vel[order], acc[order]
+    return u[order], t[order], value[order], vel[order], acc[order]
+
+
+def analytic_line(runs, linkage, points: int = LINE_POINTS):
+    """The analytic solution along the prescribed motion between the first and last
+    reached sample of ``runs`` (engine runs of one case on one plan), at ``points``
+    equal times plus every run's sample times: ``(u, kin, frc)`` sorted by ``u`` (the
+    plotted axis, :func:`axis_of`).  At a sample's own time the values are those of
+    :func:`analytic_reference` (same input, rate and acceleration)."""
+    inputs = _line_inputs(runs, linkage, points)
+    if inputs is None:
+        return None
+    u, _, value, vel, acc = inputs
     kin = _kinematics(linkage, value, vel, acc)
-    frc = linkage.forces(kin) if r0.has_forces and mech.has_mass else None
+    frc = linkage.forces(kin) if runs[0].has_forces and linkage.mech.has_mass else None
     return u, kin, frc
+
+
+def line_breaks(runs, linkage, points: int = LINE_POINTS) -> np.ndarray:
+    """Indices of :func:`analytic_line`'s points that start a new stretch of the line:
+    neighbours on the plotted axis far apart in time (a sample of another turn, reached
+    at another speed), which a drawn line must not join."""
+    inputs = _line_inputs(runs, linkage, points)
+    if inputs is None:
+        return np.zeros(0, int)
+    t = inputs[1]
+    step = (np.max(t) - np.min(t)) / max(points - 1, 1)
+    return np.flatnonzero(np.abs(np.diff(t)) > 3 * step) + 1 if step > 0 else np.zeros(0, int)
 
 
 def family_of(quantity: str) -> str:
@@ -165,6 +186,8 @@ def family_of(quantity: str) -> str:
         return "drive effort"
     if quantity.endswith(".force"):
         return "joint forces"
+    if quantity.endswith((".normal", ".moment")):
+        return "prismatic normal, moment"
     return quantity
 
 
@@ -182,6 +205,9 @@ def sample_errors(run_, ref: Reference, comparisons) -> dict[str, np.ndarray]:
     for p, name in enumerate(run_.prismatic_names):
         raw[f"{name}.a"] = np.abs(run_.slider_acc[:, p] - kin.slider(name)[2])
     if frc is not None:
+        for p, name in enumerate(run_.prismatic_names):
+            raw[f"{name}.normal"] = np.abs(run_.normal[:, p] - frc.normal[name])
+            raw[f"{name}.moment"] = np.abs(run_.moment[:, p] - frc.moment[name])
         raw["drive.effort"] = np.abs(run_.drive_effort - frc.effort)
         for j, name in enumerate(run_.joint_names):
             raw[f"{name}.force"] = np.linalg.norm(run_.joint_force[:, j]
@@ -201,4 +227,5 @@ def wrap_deg(d):
 
 
 __all__ = ["LINE_POINTS", "Reference", "analytic_line", "analytic_reference", "axis_of",
+           "line_breaks",
            "family_of", "reference_of", "sample_errors", "wrap_deg"]

@@ -4,8 +4,9 @@ For every built-in case and every registered engine, the figures' own plotted ar
 (:class:`reports.case_figures.CurveFigure`: the analytic line and the engine markers)
 are read back: at each judged marker, the distance to the analytic line at the same
 input, divided by the quantity's peak over the plotted samples, must not exceed that
-quantity's verdict error (:func:`reports.compare.compare_run`), or, for a quantity the
-verdict does not judge (angles, omegas), the run's worst verdict error, plus round-off.
+quantity's verdict error (:func:`reports.compare.compare_run`) plus round-off; for a
+quantity the verdict does not judge (angles, omegas) the line must be the verdict's own
+reference at every sample and the marker the engine's own value.
 The error panels' largest value per family must equal the verdict's.  A figure drawn
 against the description's nominal-speed sweep (what ``case_figures`` drew before issue
 10) must fail the same check wherever the input speed is not constant.
@@ -49,13 +50,18 @@ def runs_of(case: str):
     return _RUNS[case]
 
 
-def plotted_excess(fig, comps: dict) -> list[str]:
-    """Markers farther from the plotted analytic line than the verdict allows."""
+def plotted_excess(fig, comps: dict, refs: dict | None = None) -> list[str]:
+    """Markers farther from the plotted analytic line than the verdict allows.
+
+    A judged curve (alpha, s'', effort, |F|): the largest distance of a judged marker
+    from the line at its input, over the curve's peak there, within the quantity's
+    verdict error.  A curve the verdict does not judge (angle, omega): the line at each
+    marker is the verdict's reference there (``refs[engine]``:
+    :func:`reports.reference.reference_of`), to round-off, and the marker is the
+    engine's own value (angles: the same difference modulo a turn)."""
     by_q = {e: {c.quantity: c for c in cs} for e, cs in comps.items()}
-    worst = {e: max(c.normalised for c in cs if not c.quantity.endswith("[engine]"))
-             for e, cs in comps.items()}
-    # the peak of each curve over the plotted judged samples, from the plot itself
-    dist, peaks = {}, {}
+    out = []
+    dist, peaks, lines = {}, {}, {}
     for c in fig.curves:
         for e, (x, y, judged) in c.markers.items():
             if e not in comps:
@@ -69,18 +75,43 @@ def plotted_excess(fig, comps: dict) -> list[str]:
             ya = np.asarray(c.y, float)[k]
             dist[c.label, e] = float(np.max(np.abs(y[ok] - ya))) if ok.any() else 0.0
             peaks[c.label, e] = float(np.max(np.abs(ya))) if ok.any() else 0.0
-    out = []
+            lines[c.label, e] = (ok, ya, y[ok])
     for c in fig.curves:
         for e in [e for e in c.markers if e in comps]:
             top = max(v for (lab, ee), v in peaks.items() if ee == e)
             pk = peaks[c.label, e]
             pk = top if pk <= ZERO_PEAK * top else pk
-            rel = dist[c.label, e] / pk if pk > 0 else 0.0
-            bound = by_q[e][c.quantity].normalised if c.quantity else worst[e]
-            if not rel <= bound * (1 + ROUND_OFF_REL) + ROUND_OFF_ABS:
-                out.append(f"{fig.title}: {c.label} ({e}) plotted {rel:.3g} of peak, "
-                           f"verdict {bound:.3g}")
+            if c.quantity:
+                rel = dist[c.label, e] / pk if pk > 0 else 0.0
+                bound = by_q[e][c.quantity].normalised
+                if not rel <= bound * (1 + ROUND_OFF_REL) + ROUND_OFF_ABS:
+                    out.append(f"{fig.title}: {c.label} ({e}) plotted {rel:.3g} of peak, "
+                               f"verdict {bound:.3g}")
+                continue
+            if refs is None or fig.name not in ("angle", "omega"):
+                continue
+            ref, run_ = refs[e]
+            b = list(run_.body_names).index(c.label)
+            ok, ya, ye = lines[c.label, e]
+            if fig.name == "angle":
+                want_line = np.degrees(ref.kin.theta[ok, b])
+                want_gap = np.degrees(run_.theta[ok, b]) - want_line
+                off = np.mod(ya - want_line + 180.0, 360.0) - 180.0
+                gap = np.mod(ye - ya - want_gap + 180.0, 360.0) - 180.0
+                scale = 360.0
+            else:
+                off, gap = ya - ref.kin.omega[ok, b], ye - run_.omega[ok, b]
+                scale = pk
+            worst = float(np.max(np.abs(np.r_[off, gap]))) / scale if ok.any() else 0.0
+            if not worst <= ROUND_OFF_ABS:
+                out.append(f"{fig.title}: {c.label} ({e}) plotted {worst:.3g} of peak off "
+                           "the verdict's reference or the engine's value")
     return out
+
+
+def refs_of(tree, runs):
+    from reports.reference import reference_of
+    return {e: (reference_of(r, tree.linkage), r) for e, r in runs.items()}
 
 
 @pytest.mark.parametrize("case", case_names())
@@ -88,7 +119,7 @@ def test_plots_agree_with_verdict(case):
     tree, runs, comps = runs_of(case)
     figs = curve_figures(case, runs, tree.linkage)
     assert {f.name for f in figs} >= {"angle", "omega", "alpha"}
-    bad = [m for f in figs for m in plotted_excess(f, comps)]
+    bad = [m for f in figs for m in plotted_excess(f, comps, refs_of(tree, runs))]
     assert not bad, "\n".join(bad)
 
 
@@ -127,5 +158,5 @@ def test_nominal_speed_reference_is_caught(case):
     tree, runs, comps = runs_of(case)
     figs = curve_figures(case, runs, tree.linkage, line=nominal_line)
     for e in runs:
-        bad = [m for f in figs for m in plotted_excess(f, {e: comps[e]})]
+        bad = [m for f in figs for m in plotted_excess(f, {e: comps[e]}, refs_of(tree, runs))]
         assert bad, f"{case} / {e}: the nominal-speed figure passed the check"
