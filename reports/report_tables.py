@@ -107,8 +107,10 @@ def quantity_unit(quantity: str, revolute: bool) -> str:
         return "m/s^2"
     if q.startswith("drive.effort"):
         return "N m" if revolute else "N"
-    if q.endswith(".force"):
+    if q.endswith((".force", ".normal")):
         return "N"
+    if q.endswith(".moment"):
+        return "N m"
     return ""
 
 
