@@ -178,6 +178,15 @@ def cmd_plot(args) -> int:
                                           args.samples, quiet)
     title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
                                 " (markers; errors in the last row)" if runs else ""))
+    cannot_show = None
+    if args.show:
+        ok, why = has_display()
+        try:
+            if not ok:
+                raise NoDisplay(f"--show: {why}")
+            _interactive_backend()  # before the figure exists, so it gets a window
+        except NoDisplay as e:
+            cannot_show = e
     fig = draw(figs, err, units, title)
     out = args.out or (None if args.show else f"{mech.name}-plot.png")
     for n in notes:
@@ -189,30 +198,29 @@ def cmd_plot(args) -> int:
             raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
         print(f"wrote {out} ({len(figs)} panels{', with ' + ', '.join(runs) if runs else ''}; "
               f"{units.header()})")
+    if cannot_show is not None:
+        raise NoDisplay(f"{cannot_show}; the figure was written to {out}")
     if args.show:
-        ok, why = has_display()
-        if not ok:
-            raise NoDisplay(f"--show: {why}; the figure was written to {out}")
-        _show(fig)
+        import matplotlib.pyplot as plt
+        plt.show()  # pragma: no cover - needs a display
     return 0
 
 
-def _show(fig) -> None:  # pragma: no cover - needs a display
+def _interactive_backend() -> None:  # pragma: no cover - needs a display
+    """Switch matplotlib (set to Agg by :mod:`reports.plots`) to a toolkit that opens
+    windows; a NoDisplay error when none can."""
     import matplotlib
     import matplotlib.pyplot as plt
-    for backend in ("TkAgg", "QtAgg", "GTK3Agg", "MacOSX"):
+    for backend in ("TkAgg", "QtAgg", "GTK4Agg", "GTK3Agg", "MacOSX"):
         try:
             plt.switch_backend(backend)
-            break
+            plt.close(plt.figure())  # a toolkit that cannot reach the display fails here
+            return
         except Exception:  # noqa: BLE001 - try the next toolkit
+            plt.switch_backend("Agg")
             continue
-    else:
-        raise NoDisplay(f"--show: no interactive matplotlib backend (have "
-                        f"{matplotlib.get_backend()}); use --out")
-    manager = plt.figure().canvas.manager  # a window of the new backend holding ``fig``
-    manager.canvas.figure = fig
-    fig.set_canvas(manager.canvas)
-    plt.show()
+    raise NoDisplay(f"--show: no interactive matplotlib backend can open a window (have "
+                    f"{matplotlib.get_backend()})")
 
 
 def register(sub) -> None:

@@ -16,6 +16,10 @@ def cmd_view(args) -> int:
     from analytic import load_case
     mech = load_case(args.case)  # a bad case or file is reported before the display
     ok, why = has_display()
+    if ok:
+        from sim_models.viewer_model import viewer_unavailable
+        why = viewer_unavailable()
+        ok = why is None
     if not ok:
         raise NoDisplay(f"xval view: {why}, so MuJoCo's viewer cannot open; write the "
                         f"model with 'xval models {args.case} --out DIR' and open "

@@ -134,6 +134,26 @@ def viewer_xml(mech: Mechanism, settings: MujocoSettings | None = None) -> str:
 
 
 # ============================================================================ the viewer
+def viewer_unavailable() -> str | None:
+    """Why MuJoCo's viewer cannot open a window here (None when it can): its window
+    library, GLFW, must initialise on the display.  (Without this check the viewer
+    prints 'could not initialize GLFW' and ends the process.)"""
+    import warnings
+    try:
+        import glfw
+    except ImportError as e:  # pragma: no cover - installed with mujoco
+        return f"the viewer's window library glfw is missing ({e})"
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        ok = glfw.init()
+        if ok:
+            glfw.terminate()
+    if ok:
+        return None
+    msg = next((str(x.message) for x in w), "")
+    return "GLFW cannot open a window" + (f" ({msg})" if msg else "")
+
+
 def run_viewer(mech: Mechanism, settings: MujocoSettings | None = None,
                seconds: float | None = None, launch=None) -> str:
     """Open MuJoCo's viewer on the harness's own session of ``mech``
@@ -189,4 +209,4 @@ def run_viewer(mech: Mechanism, settings: MujocoSettings | None = None,
 
 
 __all__ = ["LIMIT_PAD", "SPIN_UP", "assembled_state", "limit_driver", "run_viewer",
-           "viewer_spec", "viewer_xml"]
+           "viewer_spec", "viewer_unavailable", "viewer_xml"]

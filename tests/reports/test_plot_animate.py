@@ -247,3 +247,14 @@ def test_animate_forces_need_masses(tmp_path, capsys):
     assert main(["animate", "hibbeler-16-30", "--forces", "--out",
                  str(tmp_path / "x.gif")]) == 2
     assert "no masses" in capsys.readouterr().err
+
+
+def test_plot_show_with_an_unreachable_display_writes_then_says_so(tmp_path, capsys,
+                                                                   monkeypatch):
+    monkeypatch.setenv("DISPLAY", ":97")  # no X server there
+    monkeypatch.setattr("sys.platform", "linux")
+    out = tmp_path / "s.png"
+    assert main(["plot", "seed-four-bar", "--what", "angle", "--show", "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err
+    assert out.is_file() and err.count("\n") == 1 and "written to" in err

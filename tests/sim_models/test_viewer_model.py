@@ -157,3 +157,13 @@ def test_view_without_display_is_one_line(monkeypatch, capsys):
     assert main(["view", "seed-four-bar"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no display" in err and "xval models" in err
+
+
+def test_view_with_an_unreachable_display_is_one_line(monkeypatch, capsys):
+    """DISPLAY set but no X server there: the viewer's GLFW cannot start; one line,
+    status 2 (MuJoCo's viewer itself would print an error and end the process)."""
+    monkeypatch.setenv("DISPLAY", ":97")
+    monkeypatch.setattr("sys.platform", "linux")
+    assert main(["view", "seed-four-bar"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "GLFW cannot open a window" in err
