@@ -204,13 +204,6 @@ def traced_points(mech) -> list[tuple[int, str]]:
     return [(b, pn) for b, pn in out if names[b] != mech.ground]
 
 
-def _size(fr: Frames) -> float:
-    pts = [p for i in range(fr.n) for o in body_outlines(fr.mech, fr.analytic, i).values()
-           for p in o]
-    pts = np.array(pts)
-    return float(np.max(np.ptp(pts, axis=0))) or 1.0
-
-
 def _nice(x: float) -> float:
     """A round number near ``x`` (1, 2, 5 x 10^k)."""
     if not (x > 0 and math.isfinite(x)):
@@ -271,69 +264,16 @@ class Animator:
 
 
 def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
-    """The figure of ``fr`` with its moving artists; frame 0 is drawn."""
-    from . import plots
-    plt = plots.plt
+    """The figure of ``fr`` with its moving artists; frame 0 is drawn.  Phases: the
+    axes and the still parts (:func:`_axes`, :func:`_ground_art`), the traced paths,
+    the bodies and joints, the engines' poses, the force arrows, then ``draw(i)``."""
     mech = fr.mech
-    size = _size(fr)
-    fig, ax = plt.subplots(figsize=(6.4, 4.8), dpi=dpi)
-    allpts = np.array([p for i in range(fr.n)
-                       for o in body_outlines(mech, fr.analytic, i).values() for p in o])
-    lo, hi = np.nanmin(allpts, axis=0), np.nanmax(allpts, axis=0)
-    pad = 0.15 * size
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad - 0.05 * size, hi[1] + pad + 0.1 * size)  # room for the text
-    ax.set_aspect("equal")
-    ax.grid(alpha=0.25)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(title or mech.name, fontsize=10)
+    fig, ax, size = _axes(fr, title, dpi)
     _ground_art(ax, mech, size, fr.analytic)
-    # paths of the traced points (full, thin grey) and the trace up to the frame
-    names = [b.name for b in mech.bodies]
-    traces = []
-    for b, pn in traced_points(mech):
-        p = np.asarray(mech.bodies[b].points[pn], float)
-        path = np.array([world(fr.analytic.theta[i, b], fr.analytic.origin[i, b], p)
-                         for i in range(fr.n)])
-        ax.plot(path[:, 0], path[:, 1], color="0.75", lw=0.7, zorder=2)
-        (ln,) = ax.plot([], [], color="tab:purple", lw=1.2, zorder=2)
-        traces.append((path, ln, f"{names[b]}.{pn}"))
-    ax.plot([], [], color="tab:purple", lw=1.2, label="point paths")
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    body_art = {}
-    for k, body in enumerate(mech.moving_bodies):
-        col = colours[k % len(colours)]
-        one = len(body.points) == 1  # a slider block: a square at its point
-        (ln,) = ax.plot([], [], "-", color=col, lw=2.5, solid_capstyle="round", zorder=4,
-                        marker="s" if one else None, ms=13, mfc=col, mec="k", alpha=0.9)
-        fill = ax.fill([0], [0], color=col, alpha=0.2, lw=0, zorder=3)[0]
-        txt = ax.text(0, 0, body.name, fontsize=8, fontweight="bold", ha="center",
-                      va="bottom", color="0.1", zorder=7)
-        body_art[body.name] = (ln, fill, txt)
-    ax.plot([], [], "-", color="0.3", lw=2.5, label="analytic")
-    (joints,) = ax.plot([], [], "o", ms=6, mfc="white", mec="k", mew=1.2, zorder=6)
-    jtext = {jt.name: ax.text(0, 0, jt.name, fontsize=7, color="darkred", zorder=7)
-             for jt in mech.joints}
-    eng_art = []
-    for e in fr.engines:
-        col = ENGINE_COLOURS.get(e.label, "tab:red")
-        lines = {n: ax.plot([], [], "--", color=col, lw=1.4, zorder=5)[0]
-                 for n in body_art}
-        (ej,) = ax.plot([], [], "x", color=col, ms=7, mew=1.5, zorder=6)
-        ax.plot([], [], "--x", color=col, lw=1.4, label=f"{e.label} (engine)")
-        eng_art.append((e, lines, ej))
-    quiv = None
-    if fr.forces is not None:
-        peak = max(float(np.nanmax(np.linalg.norm(f, axis=1))) for f in fr.forces.values())
-        scale = peak / (ARROW_FRACTION * size) if peak > 0 else 1.0  # N per m of arrow
-        quiv = ax.quiver(np.zeros(len(fr.forces)), np.zeros(len(fr.forces)),
-                         np.zeros(len(fr.forces)), np.zeros(len(fr.forces)),
-                         angles="xy", scale_units="xy", scale=scale, color="tab:red",
-                         width=0.006, zorder=8)
-        ref = _nice(0.5 * peak)
-        ax.quiverkey(quiv, 0.80, 0.04, ref, f"{ref:g} N (force by body_a on body_b)",
-                     labelpos="N", coordinates="axes", fontproperties={"size": 7})
+    traces = _traces(ax, fr)
+    body_art, joints, jtext = _bodies(ax, mech)
+    eng_art = _engines(ax, fr, list(body_art))
+    quiv = _force_arrows(ax, fr, size)
     info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", ha="left", fontsize=8,
                    family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
     ax.legend(fontsize=7, loc="upper right")
@@ -351,7 +291,7 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
         joints.set_data(xy[:, 0], xy[:, 1])
         for n, p in jp.items():
             jtext[n].set_position(p + np.array([0.02, -0.045]) * size)
-        for path, ln, _ in traces:
+        for path, ln in traces:
             ln.set_data(path[:i + 1, 0], path[:i + 1, 1])
         for e, lines, ej in eng_art:
             eo = body_outlines(mech, e, i)
@@ -372,12 +312,97 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
 
     labels = [txt for _, _, txt in body_art.values()] + list(jtext.values())
     dynamic = [a for ln, fill, _ in body_art.values() for a in (ln, fill)] + [joints, info]
-    dynamic += [ln for _, ln, _ in traces]
+    dynamic += [ln for _, ln in traces]
     dynamic += [a for _, lines, ej in eng_art for a in (*lines.values(), ej)]
     if quiv is not None:
         dynamic.append(quiv)
     draw(0)
     return Animator(fig, ax, draw, dynamic, fr.n, labels)
+
+
+def _axes(fr: Frames, title: str, dpi: int):
+    """``(fig, ax, size)``: equal axes around every frame's bodies, with room for the
+    text box; ``size`` (m) the largest extent of the motion."""
+    from . import plots
+    pts = np.array([p for i in range(fr.n)
+                    for o in body_outlines(fr.mech, fr.analytic, i).values() for p in o])
+    lo, hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
+    size = float(np.max(hi - lo)) or 1.0
+    fig, ax = plots.plt.subplots(figsize=(6.4, 4.8), dpi=dpi)
+    pad = 0.15 * size
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad - 0.05 * size, hi[1] + pad + 0.1 * size)  # room for the text
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.25)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title or fr.mech.name, fontsize=10)
+    return fig, ax, size
+
+
+def _traces(ax, fr: Frames) -> list:
+    """The traced points' whole paths (thin grey) and their lines up to the frame:
+    ``[(path (F, 2), line)]``."""
+    mech = fr.mech
+    out = []
+    for b, pn in traced_points(mech):
+        p = np.asarray(mech.bodies[b].points[pn], float)
+        path = np.array([world(fr.analytic.theta[i, b], fr.analytic.origin[i, b], p)
+                         for i in range(fr.n)])
+        ax.plot(path[:, 0], path[:, 1], color="0.75", lw=0.7, zorder=2)
+        out.append((path, ax.plot([], [], color="tab:purple", lw=1.2, zorder=2)[0]))
+    ax.plot([], [], color="tab:purple", lw=1.2, label="point paths")
+    return out
+
+
+def _bodies(ax, mech):
+    """``(body_art, joints, jtext)``: per moving body its outline line, fill and name
+    (a one-point body, a slider block, as a square); the joint markers; joint names."""
+    import matplotlib
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
+    body_art = {}
+    for k, body in enumerate(mech.moving_bodies):
+        col = colours[k % len(colours)]
+        one = len(body.points) == 1
+        (ln,) = ax.plot([], [], "-", color=col, lw=2.5, solid_capstyle="round", zorder=4,
+                        marker="s" if one else None, ms=13, mfc=col, mec="k", alpha=0.9)
+        fill = ax.fill([0], [0], color=col, alpha=0.2, lw=0, zorder=3)[0]
+        txt = ax.text(0, 0, body.name, fontsize=8, fontweight="bold", ha="center",
+                      va="bottom", color="0.1", zorder=7)
+        body_art[body.name] = (ln, fill, txt)
+    ax.plot([], [], "-", color="0.3", lw=2.5, label="analytic")
+    (joints,) = ax.plot([], [], "o", ms=6, mfc="white", mec="k", mew=1.2, zorder=6)
+    jtext = {jt.name: ax.text(0, 0, jt.name, fontsize=7, color="darkred", zorder=7)
+             for jt in mech.joints}
+    return body_art, joints, jtext
+
+
+def _engines(ax, fr: Frames, bodies: list[str]) -> list:
+    """Per engine pose set: its dashed body lines and joint crosses."""
+    out = []
+    for e in fr.engines:
+        col = ENGINE_COLOURS.get(e.label, "tab:red")
+        lines = {n: ax.plot([], [], "--", color=col, lw=1.4, zorder=5)[0] for n in bodies}
+        (ej,) = ax.plot([], [], "x", color=col, ms=7, mew=1.5, zorder=6)
+        ax.plot([], [], "--x", color=col, lw=1.4, label=f"{e.label} (engine)")
+        out.append((e, lines, ej))
+    return out
+
+
+def _force_arrows(ax, fr: Frames, size: float):
+    """The joint-force arrows (longest :data:`ARROW_FRACTION` of ``size``) and their
+    key, or None without ``--forces``."""
+    if fr.forces is None:
+        return None
+    n = len(fr.forces)
+    peak = max(float(np.nanmax(np.linalg.norm(f, axis=1))) for f in fr.forces.values())
+    scale = peak / (ARROW_FRACTION * size) if peak > 0 else 1.0  # N per m of arrow
+    quiv = ax.quiver(np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), angles="xy",
+                     scale_units="xy", scale=scale, color="tab:red", width=0.006, zorder=8)
+    ref = _nice(0.5 * peak)
+    ax.quiverkey(quiv, 0.80, 0.04, ref, f"{ref:g} N (force by body_a on body_b)",
+                 labelpos="N", coordinates="axes", fontproperties={"size": 7})
+    return quiv
 
 
 def frames_rgb(an: Animator):
