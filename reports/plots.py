@@ -313,20 +313,26 @@ def error_panels(fig_data) -> bytes:
     normalised error of each judged family against the input (log axis), the tolerance
     line labelled, the worst quantity named, the transmission angle (or condition
     number) in grey on a second axis."""
+    from matplotlib.ticker import LogLocator, NullLocator
     d = fig_data
     n = len(d.panels)
-    fig, axes = plt.subplots(n, 1, figsize=(7.4, 2.1 * n + 0.7), sharex=True, squeeze=False)
+    height = 2.1 * n + 1.1
+    fig, axes = plt.subplots(n, 1, figsize=(7.4, height), sharex=True, squeeze=False)
+    # laid out by hand: a tight layout of log axes with twins redraws every tick label
+    fig.subplots_adjust(left=0.11, right=0.86, top=1 - 0.62 / height, bottom=0.85 / height,
+                        hspace=0.45)
     for ax, (engine, p) in zip(axes[:, 0], d.panels.items(), strict=True):
         draw_error_axes(ax, d, engine, p)
+        ax.yaxis.set_major_locator(LogLocator(numticks=6))
+        ax.yaxis.set_minor_locator(NullLocator())
         ax.set_ylabel("error / peak (-)", fontsize=8)
         if ax is not axes[-1, 0]:
             ax.set_xlabel("")
     h, lab = axes[0, 0].get_legend_handles_labels()
     fig.legend(h, lab, fontsize=7, loc="lower center", ncol=len(lab),
-               bbox_to_anchor=(0.5, -0.02))
+               bbox_to_anchor=(0.5, 0.0))
     fig.suptitle(d.title, fontsize=9.5)
-    fig.tight_layout()
-    return _png(fig)
+    return _png(fig, tight=False)
 
 
 def draw_error_axes(ax, d, engine: str, p: dict) -> None:
