@@ -223,6 +223,9 @@ def cmd_sweep(args) -> int:
           + (f", {r.grashof}" if r.grashof else ""))
     if args.csv:
         print(f"table {units.header()}; the events and summary below in SI, angles in deg")
+    elif getattr(args, "units", None):
+        print("--units applies to the --csv table; the events and summary below are in SI, "
+              "angles in deg")
     for n in r.notes:
         print("note:", n)
     if len(r.events):
