@@ -294,6 +294,7 @@ class FusedKernel:
             jacobian=out["A"], determinant=out["det"], transmission_vectors=trans,
             joint_point=jp)
         kin._fused_branch = branch
+        kin._fused_kernel = self  # Linkage.forces(kin) runs the kernel's forces pass
         return kin, (self._forces(out) if forces else None)
 
     def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",

@@ -117,7 +117,7 @@ class LazyKinematics(_Lazy):
 
     @property
     def determinant(self):
-        return self._cached("determinant", lambda k, f: k.determinant)
+        return self._collect(lambda k, f: k.determinant)
 
     @property
     def condition(self):

@@ -97,11 +97,13 @@ def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
     out = []
     if len(sig) < 2:
         return out
-    pairs = list(zip(sig[:-1], sig[1:], strict=True))
+    a, b = sig[:-1], sig[1:]
     if periodic:
-        pairs.append((sig[-1], sig[0]))
+        a, b = np.append(a, sig[-1]), np.append(b, sig[0])
+    # only the pairs whose signs differ (a list of every pair held ~120 B a sample)
+    flip = np.flatnonzero(y[a] * y[b] < 0)
     period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    for i, k in pairs:
+    for i, k in zip(a[flip], b[flip], strict=True):
         y0, y1 = y[i], y[k]
         if y0 * y1 < 0:
             x1 = x[k] if k > i else x[k] + period
