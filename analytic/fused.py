@@ -177,6 +177,16 @@ class FusedKernel:
         if level >= 3 and not self.with_forces:
             raise ValueError("forces need masses")
         N = len(values)
+        # the kernel does not check bounds: every array it writes must hold N rows
+        need = {"q": level >= 1, "qd": level >= 2, "qdd": level >= 2, "jf": level >= 3,
+                "nm": level >= 3, "sc": level >= 3}
+        for k, a in out.items():
+            if (need.get(k) or a.shape[0]) and a.shape[0] < N:
+                raise ValueError(f"output {k!r} holds {a.shape[0]} rows, {N} needed")
+        if signs.shape != (1, self.n_branch) and signs.shape != (N, self.n_branch):
+            raise ValueError(f"signs must be (1 or {N}, {self.n_branch}), got {signs.shape}")
+        if len(velocity) not in (1, N) or len(acceleration) not in (1, N):
+            raise ValueError("velocity and acceleration: one value or one per input value")
         if carry is None:
             carry = np.zeros(1 + 2 * self.lk.topo.n_groups)
         stat = np.zeros(3, np.int64)
@@ -235,7 +245,7 @@ class FusedKernel:
             susp = np.arange(len(values))
         if not len(susp):
             return
-        cond = condition(A[susp])
+        cond = condition(A[susp] * self.lk.column_scale)  # as Kinematics.condition
         badm = ~(cond < SINGULAR_CONDITION)
         if not badm.any():
             return
