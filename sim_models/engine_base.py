@@ -95,9 +95,10 @@ Divergence (non-finite state, loop gap above ``max_violation`` of the mechanism'
 driver rate off by ``max_speed_error``) ends a run: ``ok = False``, ``reason``, NaN
 samples from there on.  Nothing raises for a diverging simulation.  It is checked at
 every stop of the step schedule (once per sample interval, never per step); for a
-deferred session the loop gap and driver rate of every stop are checked after the run
-(vectorised), and the run ends at the first stop that fails either check, exactly as a
-per-stop check would have ended it (``steps`` counted to there).
+deferred session the loop gap and driver rate of every stop are checked when its block
+of :data:`RAW_BLOCK` records is converted (vectorised), and the run ends at the first
+stop that fails either check, exactly as a per-stop check would have ended it (the
+same reason, ``steps`` counted to there, later samples NaN).
 """
 
 from __future__ import annotations
@@ -359,12 +360,13 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
     Resets to the analytic state at t = 0, then for each stop of
     :func:`step_schedule`: :meth:`Session.advance` to it, then read the samples there.
     A session with :meth:`Session.record` is read raw at every stop (with the checks
-    the raw state allows) and converted once after the loop
-    (:meth:`Session.convert`, vectorised), where the loop gap and driver rate of every
-    stop are checked; otherwise :meth:`Session.sample` and :meth:`Session.divergence`
-    at each stop.  A divergence ends the run at the first stop that shows it (``ok =
-    False``, NaN samples from there on, ``steps`` counted to there).  ``wall`` times
-    the whole loop and the conversion."""
+    the raw state allows) and converted :data:`RAW_BLOCK` stops at a time (a verdict
+    run's 36 samples: once, after the loop), vectorised (:meth:`Session.convert`),
+    where the loop gap and driver rate of every stop are checked; otherwise
+    :meth:`Session.sample` and :meth:`Session.divergence` at each stop.  A divergence
+    ends the run at the first stop that shows it (``ok = False``, NaN samples from
+    there on, ``steps`` counted to there).  ``wall`` times the whole loop and the
+    conversion."""
     request = request or RunRequest()
     session.max_violation = request.max_violation
     session.max_speed_error = request.max_speed_error
@@ -379,16 +381,13 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
             sample_at.setdefault(key, []).append(i)
     dt_used = max((h for h, n in steps if n > 0), default=dt_max)
     t0 = time.perf_counter()
-    log = _RawLog() if session.deferred else None
+    log = _RawLog(session, rec, request) if session.deferred else None
     reason, t_fail, nsteps = _step_through(session, steps, stops, dt_used, dt_max,
                                            sample_at, rec, log)
-    if log is not None and log.times:
-        gap, rate = session.convert(np.asarray(log.times), log.raws, log.rows, rec)
-        k, why = first_divergence(session.tree, gap, rate, log.times,
-                                  request.max_violation, request.max_speed_error)
-        if why is not None:  # every logged stop precedes a failure seen while stepping
-            reason, t_fail, nsteps = why, log.times[k], log.steps[k]
-            rec.drop([i for rows in log.rows[k + 1:] for i in rows])  # never reached
+    if log is not None:
+        earlier = log.flush()  # the records left all precede a failure seen while stepping
+        if earlier is not None:
+            reason, t_fail, nsteps = earlier
     fail = None
     if reason is not None:
         reason, fail = rec.fail(t_fail, reason)
@@ -396,15 +395,48 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
     return finish(session, plan, rec, request, reason, fail, wall, dt_used, nsteps)
 
 
+#: Raw records converted at a time (bounds a long run's memory, and the stepping a run
+#: does past a divergence that only the conversion shows, to one block).
+RAW_BLOCK = 1024
+
+
 class _RawLog:
     """Raw records of a run (:meth:`Session.record`): time (s), sample rows, raw state,
-    steps taken up to and including the record."""
+    steps taken up to and including the record; converted (:meth:`Session.convert`) and
+    checked (:func:`first_divergence`) a block at a time, in time order."""
 
-    def __init__(self):
+    def __init__(self, session: Session, rec: Recorder, request: RunRequest):
+        self.session, self.rec, self.request = session, rec, request
         self.times: list[float] = []
         self.rows: list[list[int]] = []
         self.raws: list = []
         self.steps: list[int] = []
+
+    def add(self, t: float, rows: list[int], raw, steps: int):
+        """Log one record; at a full block, :meth:`flush` (its failure, or None)."""
+        self.times.append(t)
+        self.rows.append(rows)
+        self.raws.append(raw)
+        self.steps.append(steps)
+        return self.flush() if len(self.times) >= RAW_BLOCK else None
+
+    def flush(self) -> tuple[str, float, int] | None:
+        """Convert the logged records into the recorder and check them: ``(reason,
+        t_stop, steps)`` of the first that fails (later rows of the block are dropped:
+        never reached), else None."""
+        if not self.times:
+            return None
+        req = self.request
+        gap, rate = self.session.convert(np.asarray(self.times), self.raws, self.rows,
+                                         self.rec)
+        k, why = first_divergence(self.session.tree, gap, rate, self.times,
+                                  req.max_violation, req.max_speed_error)
+        out = None
+        if why is not None:
+            out = (why, self.times[k], self.steps[k])
+            self.rec.drop([i for rows in self.rows[k + 1:] for i in rows])
+        self.times, self.rows, self.raws, self.steps = [], [], [], []
+        return out
 
 
 def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
@@ -436,10 +468,9 @@ def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
             if log is None:
                 reason = session.divergence(t + ahead)
             elif reason is None:
-                log.times.append(t_stop)
-                log.rows.append(rows)
-                log.raws.append(raw)
-                log.steps.append(nsteps)
+                failed = log.add(t_stop, rows, raw, nsteps)
+                if failed is not None:
+                    return failed
             t += ahead
         if reason is not None:
             return reason, t_stop, nsteps
@@ -471,7 +502,7 @@ def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
 
 __all__ = ["HUGE", "LIMITED_RANGE_CONDITION", "EngineRefusal", "EngineRun", "EngineSettings",
            "Plan", "Recorder", "RunRequest", "Session", "SettingsError", "check_motion",
-           "check_raw_state", "check_state", "compile_linkage", "drive", "finish",
+           "RAW_BLOCK", "check_raw_state", "check_state", "compile_linkage", "drive", "finish",
            "first_divergence", "fmt_value", "loop_gap", "loop_gaps", "periodic_plan",
            "plan_samples", "reversal_time", "step_schedule", "steps_to", "time_of",
            "time_steps", "times_plan", "travel_time"]

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from analytic import load_case
+from sim_models import engine_base
 from sim_models.engine_base import (
     check_motion,
     compile_linkage,
@@ -85,19 +86,26 @@ def assert_same(a, b):
 
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
 @pytest.mark.parametrize("case", ["six-bar", "seed-slider-crank", "quick-return"])
-def test_deferred_readout_equals_per_sample(engine, case):
+def test_deferred_readout_equals_per_sample(engine, case, monkeypatch):
     """Every sample array, verdict and step count; the seed slider-crank has a slider
-    and a load, the quick-return a slider on a moving guide."""
+    and a load, the quick-return a slider on a moving guide (converted in blocks of 7
+    records there)."""
+    if case == "quick-return":
+        monkeypatch.setattr(engine_base, "RAW_BLOCK", 7)
     deferred, each = both_runs(engine, case)
     assert deferred.ok and np.isfinite(deferred.alpha).all()
     assert_same(deferred, each)
 
 
-def test_failure_mid_run_ends_where_the_per_sample_check_ends_it():
+@pytest.mark.parametrize("block", [None, 4])
+def test_failure_mid_run_ends_where_the_per_sample_check_ends_it(block, monkeypatch):
     """PyBullet at 5 ms on the seed four-bar, with the loop-gap limit set between the
     gaps it shows, so that the run fails in mid-revolution: the same reason, driver
-    value, step count, and every later sample NaN, the measured driver value included."""
+    value, step count, and every later sample NaN, the measured driver value included;
+    also when the records are converted in blocks of 4 (the failure in a later block)."""
     pb = pytest.importorskip("sim_models.pybullet_engine")
+    if block:
+        monkeypatch.setattr(engine_base, "RAW_BLOCK", block)
     s = pb.PybulletSettings(timestep=5e-3)
     ok, _ = both_runs("pybullet", "seed-four-bar", s)
     assert ok.ok
