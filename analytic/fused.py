@@ -245,7 +245,7 @@ class FusedKernel:
             susp = np.arange(len(values))
         if not len(susp):
             return
-        cond = condition(A[susp] * self.lk.column_scale)  # as Kinematics.condition
+        cond = condition(A[susp] * getattr(self.lk, "column_scale", 1.0))  # as Kinematics
         badm = ~(cond < SINGULAR_CONDITION)
         if not badm.any():
             return
