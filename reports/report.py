@@ -348,10 +348,11 @@ def _collect(f, kind, label, src, cfg, ex, ph, results, figures, studies, grid_r
         ph.step("engine runs")
         per_case[label] -= 1
         if per_case[label] == 0:
-            runs = {r["engine"]: r["run"] for r in results
-                    if r["case"] == label and r["mode"] == "run" and r["run"] is not None}
-            comps = {r["engine"]: r["comparisons"] for r in results
-                     if r["case"] == label and r["mode"] == "run" and r["run"] is not None}
+            done_runs = sorted((r for r in results if r["case"] == label
+                                and r["mode"] == "run" and r["run"] is not None),
+                               key=lambda r: _engine_rank(cfg, r["engine"]))
+            runs = {r["engine"]: r["run"] for r in done_runs}
+            comps = {r["engine"]: r["comparisons"] for r in done_runs}
             ph.add("figures", 1)
             pending[ex.submit(_figure_task, label, src, runs, comps, tol)] = \
                 ("figures", label, src)
@@ -379,6 +380,12 @@ def _collect(f, kind, label, src, cfg, ex, ph, results, figures, studies, grid_r
     elif kind == "scene":
         studies["scene"] = _result_or_error(f)
         ph.step("scene economy")
+
+
+def _engine_rank(cfg: ReportConfig, engine: str) -> int:
+    """Registry order: every figure lists the engines in one order."""
+    order = engines_of(cfg)
+    return order.index(engine) if engine in order else len(order)
 
 
 def _submit_grids(cfg: ReportConfig, ex, cases, ph) -> tuple[dict, dict]:
