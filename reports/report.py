@@ -162,9 +162,11 @@ def _pareto_task(grid: pd.DataFrame, label: str, source: str, samples: int) -> d
     from reports import studies
     from reports.study_plots import pareto_frontier_plot
     t_an = studies.analytic_seconds_per_rev(source, points=samples)
-    w = studies.load(source).driver.velocity
-    png = pareto_frontier_plot(grid, f"{label} (input {w:g} rad/s or m/s): speed against "
-                               "error", t_an, analytic_points=samples)
+    from reports.report_tables import input_unit
+    mech = studies.load(source)
+    unit = "rad/s" if input_unit(mech) == "deg" else "m/s"
+    png = pareto_frontier_plot(grid, f"{label} (input {mech.driver.velocity:g} {unit}): "
+                               "speed against error", t_an, analytic_points=samples)
     return {"png": png, "analytic_s_per_rev": t_an}
 
 
