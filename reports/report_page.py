@@ -158,8 +158,10 @@ def _card(doc, summary, cases, engines, meta, cfg):
                       line.split(": ", 1)[1] if ": " in line else line))
     items.append(("cases", str(len(cases))))
     items.append(("engines", ", ".join(engines)))
+    load = meta.get("load average at start (1, 5, 15 min)", "")
     items.append(("run", f"{meta['mode']}, {cfg.samples} samples per revolution, "
-                         f"{meta['cpu']}, {meta['cores']} cores"))
+                         f"{meta['wall_seconds']:.0f} s on {meta['cpu']}, {meta['cores']} "
+                         f"cores" + (f" (load at start {load.split()[0]})" if load else "")))
     doc.card(items)
 
 
