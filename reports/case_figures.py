@@ -144,20 +144,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
             curves.append(Curve(jn, lu, lkin.slider(jn)[2], mk, f"{jn}.a"))
         out.append(fig("slider", "slider accelerations", "s'' (m/s^2)", curves))
     if lfrc is not None:
-        rev = linkage.driver_is_revolute
-        mk = {e: (refs[e].u, r.drive_effort, refs[e].judged) for e, r in runs.items()}
-        out.append(fig("drive", "drive effort", "torque (N m)" if rev else "force (N)",
-                       [Curve("drive", lu, lfrc.effort, mk, "drive.effort")]))
-        curves = []
-        for jt in mech.joints:
-            mk = {}
-            for e, r in runs.items():
-                k = r.joint_names.index(jt.name)
-                mk[e] = (refs[e].u, np.linalg.norm(r.joint_force[:, k], axis=1),
-                         refs[e].judged)
-            curves.append(Curve(jt.name, lu, np.linalg.norm(lfrc.joint_force[jt.name], axis=1),
-                                mk, f"{jt.name}.force", "magnitude"))
-        out.append(fig("forces", "joint force magnitudes", "|F| (N)", curves))
+        out += [fig(*spec) for spec in _force_figures(linkage, lu, lfrc, runs, refs)]
     if "slider_s" in extra and linkage.topo.prismatic:  # drawn only (engines: no markers)
         curves = [Curve(linkage.topo.joint_names[j], lu,
                         lkin.slider(linkage.topo.joint_names[j])[0], {})
@@ -171,6 +158,24 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
         brk = tuple(int(i) for i in line_breaks(basis, linkage))
         for f in out:
             f.breaks = brk
+    return out
+
+
+def _force_figures(linkage, lu, lfrc, runs, refs) -> list[tuple]:
+    """``(name, title, ylabel, curves)`` of the drive-effort and joint-force figures."""
+    rev = linkage.driver_is_revolute
+    mk = {e: (refs[e].u, r.drive_effort, refs[e].judged) for e, r in runs.items()}
+    out = [("drive", "drive effort", "torque (N m)" if rev else "force (N)",
+            [Curve("drive", lu, lfrc.effort, mk, "drive.effort")])]
+    curves = []
+    for jt in linkage.mech.joints:
+        mk = {}
+        for e, r in runs.items():
+            k = r.joint_names.index(jt.name)
+            mk[e] = (refs[e].u, np.linalg.norm(r.joint_force[:, k], axis=1), refs[e].judged)
+        curves.append(Curve(jt.name, lu, np.linalg.norm(lfrc.joint_force[jt.name], axis=1),
+                            mk, f"{jt.name}.force", "magnitude"))
+    out.append(("forces", "joint force magnitudes", "|F| (N)", curves))
     return out
 
 
