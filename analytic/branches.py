@@ -116,8 +116,10 @@ class BranchSchedule:
             else:
                 prev = np.concatenate([[np.inf], d[:-1]])
                 nxt = np.concatenate([d[1:], [np.inf]])
-            # candidate minima near zero; the refined minimum decides
-            for i in np.flatnonzero((d <= prev) & (d <= nxt) & (np.abs(d) < 1e-3)):
+            # candidate minima near zero; the refined minimum decides.  A double root's
+            # sampled minimum is up to curvature * (spacing / 2)^2 ~ 1e-6 curvature; 0.1
+            # admits curvatures to 1e5 (an RRR discriminant's grows with L1 / L2)
+            for i in np.flatnonzero((d <= prev) & (d <= nxt) & (np.abs(d) < 1e-1)):
                 xm = self._refine_min(x[i], x[1] - x[0], signs, k)
                 dm = float(self.cf.run(np.array([xm]), signs)[3][0, k])
                 if abs(dm) <= CHANGE_POINT_DISC:

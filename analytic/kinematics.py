@@ -25,7 +25,7 @@ from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
 from .position_solver import PositionSolver
-from .positions import as_xy, cplx
+from .positions import as_xy, cplx, size_of
 from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
 
@@ -73,13 +73,19 @@ class Kinematics:
     joint_point: dict[int, np.ndarray] = field(default_factory=dict)
     # joint index -> world position (complex) of its point on body_b (the slider point
     # for a prismatic joint)
+    #: per sample, where the loop Jacobian is singular: 0 regular, 1 the rates are
+    #: their limits along the branch (passed through), 3 not determined (NaN); see
+    #: :mod:`analytic.singular`.  ``None``: no singular sample was processed.
+    at_singular: np.ndarray | None = None
 
     @cached_property
     def condition(self) -> np.ndarray:
-        """2-norm condition number of the loop Jacobian in the unknowns (computed on
-        first use: it is a diagnostic, not on the solver's path)."""
+        """2-norm condition number of the loop Jacobian in the unknowns, with each
+        slider's displacement measured in mechanism sizes (so that the number, and the
+        singular test against it, is the same in any length unit and at any scale);
+        computed on first use: it is a diagnostic, not on the solver's path."""
         A = self.jacobian
-        return condition(A) if A.shape[-1] else np.ones(self.n)
+        return condition(A * self.linkage.column_scale) if A.shape[-1] else np.ones(self.n)
 
     @cached_property
     def transmission(self) -> dict[str, np.ndarray]:
@@ -181,8 +187,19 @@ class Linkage:
     def driver_is_revolute(self) -> bool:
         return isinstance(self.mech.driver_joint, Revolute)
 
+    @cached_property
+    def column_scale(self) -> np.ndarray:
+        """Scale of each column of the loop Jacobian in the unknowns (``(n,)``): 1 for
+        an angle (its column is in m/rad, about a link length), the mechanism's size for
+        a slider (its column is dimensionless), so that every column of ``A * scale`` is
+        in metres and its condition number does not depend on the length unit."""
+        topo = self.topo
+        cols = [i for i in range(topo.nq) if i != topo.driven_var]
+        return np.array([size_of(topo) if i >= topo.n_groups else 1.0 for i in cols])
+
     def kinematics(self, values=None, velocity=None, acceleration=None,
-                   on_singular: str = "raise", branch: str = "continued") -> Kinematics:
+                   on_singular: str = "raise", branch: str = "continued",
+                   limits: bool = True) -> Kinematics:
         """Solve positions, velocities and accelerations.
 
         Parameters
@@ -204,7 +221,12 @@ class Linkage:
             ``"raise"``: a :class:`SingularConfigurationError` naming the input
             value where the loop Jacobian is singular (condition number above
             :data:`analytic.tolerances.SINGULAR_CONDITION`); ``"flag"``: return the
-            result, rates at such points are not meaningful and ``condition`` says so.
+            result; at such points the rates are their limits along the branch where
+            the linkage passes through, else NaN (``at_singular`` says which;
+            :mod:`analytic.singular`), and ``condition`` flags them.
+        limits
+            ``False``: leave the linear solve's values at singular points (used by
+            :mod:`analytic.singular` itself, on regular samples).
         """
         d = self.mech.driver
         values = np.atleast_1d(np.asarray(d.value if values is None else values, float))
@@ -222,8 +244,9 @@ class Linkage:
         if n:
             colnorm = np.ones(N)
             cmax, cmin = np.zeros(N), np.full(N, np.inf)
-            for c in range(n):  # column norms, short axes unrolled
-                cn = np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
+            cs = self.column_scale
+            for c in range(n):  # column norms (sliders in sizes), short axes unrolled
+                cn = np.sqrt(sum(A[:, r, c] ** 2 for r in range(n))) * cs[c]
                 colnorm *= cn
                 cmax, cmin = np.maximum(cmax, cn), np.minimum(cmin, cn)
             det = det_small(A) / np.where(colnorm > 0, colnorm, 1.0)
@@ -233,7 +256,7 @@ class Linkage:
             with np.errstate(divide="ignore", invalid="ignore"):
                 bound = n ** (n / 2) / np.abs(det) * (cmax / cmin)
             suspect = np.flatnonzero(~(bound < SINGULAR_CONDITION))
-            cond_s = condition(A[suspect]) if suspect.size else np.zeros(0)
+            cond_s = condition(A[suspect] * cs) if suspect.size else np.zeros(0)
             bad = suspect[~(cond_s < SINGULAR_CONDITION)]
         else:
             det, bad = np.ones(N), np.zeros(0, int)
@@ -250,8 +273,12 @@ class Linkage:
             qdd = eqs.solve_rates(J, -eqs.gamma(q, qd, pre), acc)
         omega, alpha = self._group_rates(qd), self._group_rates(qdd)
         zv, za, jp = self._propagate(qd, qdd, E, O, omega, alpha)
-        return Kinematics(self, values, vel, acc, q, qd, qdd, theta, omega, alpha,
-                          E, O, zv, za, A, det, trans, jp)
+        kin = Kinematics(self, values, vel, acc, q, qd, qdd, theta, omega, alpha,
+                         E, O, zv, za, A, det, trans, jp)
+        if bad.size and limits:  # singular samples: the limits along the branch, or NaN
+            from .singular import rate_limits
+            rate_limits(self, kin, bad, branch)
+        return kin
 
     def _group_rates(self, x: np.ndarray) -> np.ndarray:
         g = self.topo.group_of

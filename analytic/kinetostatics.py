@@ -35,6 +35,7 @@ from .errors import MissingMassError
 from .linalg import solve_small
 from .mechanism import Revolute
 from .positions import as_xy, cross
+from .singular import force_limits, singular_samples
 from .tolerances import POWER_BALANCE
 
 
@@ -65,6 +66,10 @@ class Forces:
     kinetic_rate: np.ndarray
     load_power: np.ndarray
     power_residual: np.ndarray
+    #: per sample where the loop Jacobian is singular: 1 every value is its limit along
+    #: the branch, 2 some joint forces are unbounded there (NaN), 3 not determined (NaN);
+    #: 0 regular (:mod:`analytic.singular`).  ``None``: no singular sample.
+    at_singular: np.ndarray | None = None
 
     def power_balance_error(self) -> float:
         """Max |residual| over the batch relative to the peak of the largest power term."""
@@ -179,8 +184,15 @@ def solve_forces(linkage, kin) -> Forces:
     # chord reactions, then that row for the effort.
     rows = [t for t in range(nt) if t != td]
     x = np.empty((N, n_x))
+    # at a singular sample the chord rows are singular too (they are the loop
+    # Jacobian's transpose): solved for their limits below, not divided by zero here
+    sing = singular_samples(kin)
     if n_x > 1:
-        x[:, :-1] = solve_small(A[:, rows, :-1], rhs[:, rows])
+        As = A[:, rows, :-1]
+        if sing.size:
+            As = As.copy()
+            As[sing] = np.eye(n_x - 1)
+        x[:, :-1] = solve_small(As, rhs[:, rows])
     x[:, -1] = (rhs[:, td] - np.einsum("nx,nx->n", A[:, td, :-1], x[:, :-1])) / sd
 
     joint_force, normal, moment = {}, {}, {}
@@ -213,4 +225,7 @@ def solve_forces(linkage, kin) -> Forces:
     power = effort * kin.velocity
     resid = power - (ke_rate - load_pow)
     ordered = {jt.name: joint_force[jt.name] for jt in joints}
-    return Forces(ordered, normal, moment, effort, power, ke_rate, load_pow, resid)
+    frc = Forces(ordered, normal, moment, effort, power, ke_rate, load_pow, resid)
+    if sing.size:  # the limits along the branch, or NaN where unbounded (and said so)
+        force_limits(linkage, kin, frc, sing)
+    return frc

@@ -63,6 +63,19 @@ def size_of(topo: Topology) -> float:
     return s or 1.0
 
 
+def rrr_disc_factor(c1: complex, c2: complex) -> float:
+    """The factor that makes an RRR dyad's ``h^2`` (m^2, the squared distance of the
+    inner joint from the line of the outer joints) its relative discriminant
+    ``h^2 (L1 + L2) / (L1 L2 max(L1, L2))``.  Placing the inner joint on that line
+    (h = 0, the toggle) shortens the links' reach by ``h^2 (1/L1 + 1/L2) / 2``, which
+    is ``disc * max(L1, L2) / 2``: a discriminant below :data:`TOGGLE_SNAP` is snapped
+    with a loop gap below half of :data:`LOOP_RESIDUAL` of the mechanism's size, for
+    any ratio of the two links (``h^2 / L1^2`` alone left a gap of ``L1 / (2 L2)`` times
+    that: 1.3e-12 of the size for a parallelogram with L1 = 12 L2, an assembly refused)."""
+    L1, L2 = abs(c1), abs(c2)
+    return (L1 + L2) / (L1 * L2 * max(L1, L2))
+
+
 class ClosedForm:
     """Evaluate the dyad plan for a batch of input values and fixed branch signs.
 
@@ -139,7 +152,7 @@ class ClosedForm:
                 Dsafe = np.where(D > 0, D, 1.0)
                 a = (L1s - L2s + D2) / (2 * Dsafe)
                 h2 = L1s - a * a
-                disc = np.where(D > 0, h2 / L1s, -1.0)
+                disc = np.where(D > 0, h2 * rrr_disc_factor(c1, c2), -1.0)
                 discs.append(disc)
                 h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
                 sg = next(si)
@@ -398,7 +411,7 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
 
     ``signs`` restricts the test to one branch combination (default: any).  The
     intervals are found on ``n`` samples, then each end is refined by bisection to
-    1e-12 of the span.  A mechanism without a closed form reports the whole span.
+    1e-16 of the span (the last bits).  A mechanism without a closed form reports the whole span.
     """
     lo, hi = input_span(topo)
     if topo.plan is None:
@@ -424,7 +437,10 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
                 a = m
             else:
                 b = m
-            if abs(b - a) < 1e-12 * (hi - lo):
+            # to the last bits: the feasible end must lie within TOGGLE_SNAP of the toggle
+            # (snapped, exactly singular), and an RRR discriminant's slope there grows
+            # with the links' ratio
+            if abs(b - a) < 1e-16 * (hi - lo):
                 break
         return a
 

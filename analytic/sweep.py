@@ -35,6 +35,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
+from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
 
@@ -383,9 +384,84 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
         cols["power_residual"] = frc.power_residual
     cols["jacobian_condition"] = kin.condition
     cols["jacobian_det"] = kin.determinant
+    cols["singular"] = singular_status(kin, frc)
     for jn, tr in kin.transmission.items():
         cols[f"transmission_deg.{jn}"] = tr
     return pd.DataFrame(cols)
+
+
+def singular_status(kin: Kinematics, frc: Forces | None) -> np.ndarray:
+    """The ``singular`` column: 0 regular; at a singular sample 1 (every value is its
+    limit along the branch), 2 (as 1, but some joint forces are unbounded there: empty
+    cells), 3 (not passed through: rates and forces not determined, empty cells); see
+    :mod:`analytic.singular`."""
+    st = getattr(frc, "at_singular", None) if frc is not None else None
+    if st is None:
+        st = getattr(kin, "at_singular", None)
+    if st is None:  # not processed (a path without the limits): say undetermined
+        st = np.where(kin.condition < SINGULAR_CONDITION, REGULAR, UNDETERMINED)
+    return np.asarray(st, np.int8)
+
+
+def _unbounded(frc: Forces, i: int) -> list[str]:
+    """The joints whose force (or couple) is NaN at sample ``i``."""
+    out = [k for k, F in frc.joint_force.items() if not np.all(np.isfinite(F[i]))]
+    return out + [k for k, m in frc.moment.items()
+                  if not np.isfinite(m[i]) and k not in out]
+
+
+def singular_notes(linkage: Linkage, kin: Kinematics, frc: Forces | None,
+                   singular: np.ndarray) -> list[str]:
+    """What the sweep writes at its singular samples, one note per kind of sample."""
+    if not singular.size:
+        return []
+    st = singular_status(kin, frc)
+    conv = math.degrees if linkage.driver_is_revolute else float
+    unit = "deg" if linkage.driver_is_revolute else "m"
+
+    def at(idx):
+        return ", ".join(f"{conv(kin.value[i]):.6g}" for i in idx[:6]) + \
+            (", ..." if len(idx) > 6 else "") + f" {unit}"
+    notes = []
+    lim = singular[st[singular] == LIMIT]
+    if lim.size:
+        notes.append(f"{lim.size} sample(s) at singular positions the linkage passes through "
+                     f"({at(lim)}): every value there is its limit along the branch "
+                     "(column singular = 1)")
+    unb = singular[st[singular] == UNBOUNDED_FORCES]
+    if unb.size:
+        joints = sorted({j for i in unb for j in _unbounded(frc, i)})
+        notes.append(f"{unb.size} sample(s) at change points ({at(unb)}): the rates, drive "
+                     "effort and power are their limits along the branch; the force at "
+                     f"joint(s) {', '.join(joints)} is unbounded there (the links are "
+                     "collinear and the load has a component in the motion they leave free: "
+                     "the force grows as 1/distance, with opposite signs either side), its "
+                     "cells left empty (column singular = 2)")
+    und = singular[st[singular] == UNDETERMINED]
+    if und.size:
+        notes.append(f"{und.size} sample(s) at singular positions the linkage does not pass "
+                     f"through ({at(und)}: a dead centre or limit position): the rates"
+                     + (" and forces" if frc is not None else "") + " are not determined by "
+                     "the input there, cells left empty (column singular = 3)")
+    return notes
+
+
+def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.DataFrame:
+    """``unbounded_force`` events at the samples whose joint forces have no limit."""
+    if frc is None or not singular.size:
+        return events
+    st = singular_status(kin, frc)
+    conv = math.degrees if linkage.driver_is_revolute else float
+    rows = [("unbounded_force", ", ".join(_unbounded(frc, i)), float(conv(kin.value[i])),
+             "joint force unbounded at this change point (grows as 1/distance, opposite "
+             "signs either side); drive effort and power finite (their limits)")
+            for i in singular[st[singular] == UNBOUNDED_FORCES]]
+    if not rows:
+        return events
+    ev = pd.concat([events, pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])],
+                   ignore_index=True) if len(events) else \
+        pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
+    return ev.sort_values("input", kind="stable").reset_index(drop=True)
 
 
 def rates_by_continuity(linkage: Linkage, kin: Kinematics, idx: np.ndarray) -> list[int]:
@@ -452,29 +528,12 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")
     singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
-    through = rates_by_continuity(linkage, kin, singular)
     if forces is None:
         forces = linkage.mech.has_mass
-    with np.errstate(all="ignore"):  # singular samples: their forces are set to NaN below
-        frc = linkage.forces(kin) if forces else None
-    notes = []
-    if singular.size:
-        for arr in ([] if frc is None else
-                    [*frc.joint_force.values(), *frc.normal.values(), *frc.moment.values(),
-                     frc.effort, frc.power, frc.kinetic_rate, frc.load_power,
-                     frc.power_residual]):
-            arr[singular] = np.nan
-        conv = math.degrees if linkage.driver_is_revolute else float
-        unit = "deg" if linkage.driver_is_revolute else "m"
-        at = ", ".join(f"{conv(v):.6g}" for v in values[singular][:6]) + \
-            (", ..." if singular.size > 6 else "")
-        notes.append(f"{singular.size} sample(s) at singular positions ({at} {unit}): the "
-                     "rates there are "
-                     + ("the limits of the motion through them" if len(through) ==
-                        singular.size else "by continuity where the linkage passes through, "
-                        "else NaN")
-                     + (", the forces NaN (statically indeterminate there)" if frc is not None
-                        else ""))
+    # at singular samples the solver gives the limits along the branch, or NaN where
+    # there is none (analytic.singular); the notes, the events and the rows say which
+    frc = linkage.forces(kin) if forces else None
+    notes = singular_notes(linkage, kin, frc, singular)
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
@@ -487,6 +546,7 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
     events = find_events(linkage, kin, full, None if full else feas, crossings)
+    events = _unbounded_events(linkage, kin, frc, singular, events)
     res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
                       full, feas, grashof(linkage), notes, crossings)
     res.summary = summarise(res, nearest_event)

@@ -13,13 +13,17 @@ crossings do not blow them up.
 #: four orders of magnitude for the rounding of sums of ~10 loop vectors.
 LOOP_RESIDUAL = 1e-12
 
-#: Dyad discriminants (h^2 / L^2, the squared distance of the inner joint from the
-#: line of the outer joints, relative) inside [-TOGGLE_SNAP, TOGGLE_SNAP] are taken
-#: as exactly 0: the dyad is at its toggle.  Rounding leaves |h^2 / L^2| of a few
-#: eps at an exact toggle (so h ~ 1e-8 L would be pure noise); setting h^2 to 0
-#: moves the inner joint along its link by h^2 / (2 L) <= 5e-13 L, inside
-#: LOOP_RESIDUAL, and makes the Jacobian exactly singular there, so a requested
-#: dead-centre position is reported as one.  Below -TOGGLE_SNAP the loop cannot close.
+#: Dyad discriminants (relative: for an RRR dyad h^2 (L1 + L2) / (L1 L2 max(L1, L2)),
+#: h the distance of the inner joint from the line of the outer joints; for RRP h^2 / L^2;
+#: for RPR 1 - cos^2) inside [-TOGGLE_SNAP, TOGGLE_SNAP] are taken as exactly 0: the dyad
+#: is at its toggle.  Rounding leaves a few eps at an exact toggle (so h ~ 1e-8 L would
+#: be pure noise); setting h to 0 makes the Jacobian exactly singular there, so a
+#: requested dead-centre position is reported as one.  The snap shortens the links'
+#: reach by h^2 (1/L1 + 1/L2) / 2 = disc * max(L1, L2) / 2 <= 5e-13 of the mechanism's
+#: size: half of LOOP_RESIDUAL, the other half left for rounding.  (The discriminant was
+#: h^2 / L1^2, whose snap left a gap of disc * L1^2 / (2 L2): next to a parallelogram's
+#: change point, with L1 = 12 L2, 1.3e-12 of the size, and an assembly that exists was
+#: refused by the residual check.)  Below -TOGGLE_SNAP the loop cannot close.
 TOGGLE_SNAP = 1e-12
 
 #: Newton-Raphson iteration cap.  Quadratic convergence from a continuation
@@ -105,3 +109,31 @@ CHANGE_POINT_DISC = 1e-12
 #: by O(step * curvature) ~ 1e-3 of it (step 1e-4).  Otherwise continuity cannot decide and the
 #: ``branch_rule`` option does.
 CONTINUITY_RATIO = 0.1
+
+#: Side steps (rad of a revolute input, mechanism sizes of a prismatic one) from which
+#: the rates and forces at a singular sample are extrapolated to their limits along the
+#: branch (:mod:`analytic.singular`), tried in this order.  Close to a toggle the closed
+#: form's inner joint carries a rounding error ~ eps / (step^2 curvature) relative (the
+#: discriminant cancels), which the accelerations amplify further: at 1e-4 rad from the
+#: parallelogram's change point 4e-5 of omega^2, at 1e-3 ~1e-9; Richardson's truncation
+#: at 1e-3 is O(h^4) ~ 1e-12.  1e-2 and 1e-4 are the fallbacks (a strongly curved branch,
+#: a neighbouring singular position).
+LIMIT_STEP = (1e-3, 1e-2, 1e-4)
+
+#: The one-sided extrapolations of a rate or force to a singular sample must agree to
+#: this fraction of its scale for the value to have a limit there.  A smooth branch
+#: leaves them 12 h^3 (third derivative) apart (~1e-8 of it at h = 1e-3) plus the
+#: rounding above (~1e-9); a kink (a held branch) or a
+#: divergence (a dead centre's rates; an unbounded reaction ~ c / s, which leaves them
+#: 3 c / h apart) is O(1).
+LIMIT_CONTINUITY = 1e-6
+
+#: The same for the forces at a singular sample: steps of 1e-2 rad (or sizes), then 1e-3.
+#: The reactions near a singular position amplify the positions' rounding once more (by
+#: the condition number ~1/step): 3e-4 of the reactions at 1e-3 rad from the hard-case
+#: parallelogram's flat position, 1e-6 at 1e-2, where Richardson's truncation is
+#: ~1e-8.  A bounded reaction's one-sided extrapolations then agree to ~1e-5; an
+#: unbounded one's (~ c / s) differ by 3 c / h, so 1e-3 of the force scale flags a
+#: divergence that reaches 3e-4 of the finite part at 1e-2 rad.
+FORCE_LIMIT_STEP = (1e-2, 1e-3)
+FORCE_LIMIT_CONTINUITY = 1e-3

@@ -178,6 +178,8 @@ def column_kind(col: str, revolute: bool) -> str:
         return "ratio"
     if col == "power_residual":
         return "residual"  # a diagnostic: shown as it is, never snapped
+    if col == "singular":
+        return "status"  # a code (analytic.singular), no unit: as it is
     if col == "drive.power":
         return "power"
     if col == "drive.torque" or col.endswith(".moment"):
@@ -202,7 +204,7 @@ def convert_frame(frame, units: DisplayUnits, revolute: bool, rename: bool | Non
     kinds = {c: column_kind(c, revolute) for c in frame.columns}
     if rename is None:
         rename = not units.is_si
-    for kind in set(kinds.values()) - {"residual"}:
+    for kind in set(kinds.values()) - {"residual", "status"}:
         cols = [c for c, k in kinds.items() if k == kind]
         f = units.factor(kind)
         if kind == "angle":  # the table's angles are degrees
@@ -217,7 +219,7 @@ def convert_frame(frame, units: DisplayUnits, revolute: bool, rename: bool | Non
         def name(c):
             base = c.replace(".angle_deg", ".angle").replace("transmission_deg",
                                                               "transmission")
-            return f"{base} [{units.unit(kinds[c])}]"
+            return base if kinds[c] == "status" else f"{base} [{units.unit(kinds[c])}]"
         out.columns = [name(c) for c in frame.columns]
     return out
 

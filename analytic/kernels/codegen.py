@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..mechanism import Revolute
-from ..positions import cplx
+from ..positions import cplx, rrr_disc_factor
 from ..tolerances import SINGULAR_CONDITION, TOGGLE_SNAP
 
 #: layout of the per-call status outputs (``stat`` int64, ``statf`` float64)
@@ -198,7 +198,7 @@ class KernelSource:
         s.emit(f"a = ({L1s} - {L2s} + D2) / (2 * Dsafe)")
         s.emit("iD = 1.0 / Dsafe")
         s.emit(f"h2 = {L1s} - a * a")
-        s.emit(f"dsc = h2 / {L1s} if D > 0 else -1.0")
+        s.emit(f"dsc = h2 * {s.f(rrr_disc_factor(c1, c2))} if D > 0 else -1.0")
         self._disc("dsc")
         s.emit(f"h = math.sqrt(max(h2, 0.0)) if dsc > {TOGGLE_SNAP!r} else 0.0")
         s.emit(f"P2 = P1 + d * complex(a * iD, {self._sign()} * h * iD)")
@@ -415,8 +415,10 @@ class KernelSource:
             s.emit("colnorm = 1.0")
             s.emit("cmax = 0.0")
             s.emit("cmin = np.inf")
+            cs = self.lk.column_scale  # sliders in sizes, as Kinematics.condition
             for ci in range(n):
-                s.emit(f"cn = math.sqrt({' + '.join(f'A[{r}, {ci}] ** 2' for r in range(n))})")
+                s.emit(f"cn = math.sqrt({' + '.join(f'A[{r}, {ci}] ** 2' for r in range(n))})"
+                       + ("" if self.cols[ci] < self.ng else f" * {s.f(cs[ci])}"))
                 s.emit("colnorm *= cn")
                 s.emit("cmax = max(cmax, cn)")
                 s.emit("cmin = min(cmin, cn)")
