@@ -104,6 +104,23 @@ class Recorder:
             self.viol[i] = gap
             self.speed[i] = driver_rate - float(vel)
 
+    def put_absolutes(self, rows, times, theta, omega, alpha, slider_acc, origin,
+                      driver_value, driver_rate):
+        """:meth:`put_absolute` of K records at once (arrays with a leading K axis;
+        record ``k`` at ``times[k]`` goes to the sample rows ``rows[k]``)."""
+        k, i = scatter_index(rows)
+        if not len(i):
+            return
+        st = self.tree
+        th = np.asarray(theta, float)[k]
+        _, vel, _ = st.driver_path(np.asarray(times, float)[k])
+        self.theta[i], self.omega[i] = th, np.asarray(omega, float)[k]
+        self.alpha[i] = np.asarray(alpha, float)[k]
+        self.slider_acc[i] = np.asarray(slider_acc, float)[k]
+        self.measured[i] = np.asarray(driver_value, float)[k]
+        self.viol[i] = loop_gaps(st, th, np.asarray(origin, float)[k])
+        self.speed[i] = np.asarray(driver_rate, float)[k] - vel
+
     def put_forces(self, rows, joint_force, effort, normal=None, moment=None,
                    force_engine=None, effort_engine=None):
         """Fill the forces of ``rows``: ``joint_force`` (J, 2) by body_a on body_b,

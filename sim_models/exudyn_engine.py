@@ -62,11 +62,24 @@ the order of the peak, the measured ones are 1e-5):
 * accelerations are ``Coordinates_tt``; ``s''`` of a slider on a moving guide
   includes the guide's rotation and Coriolis terms.
 
-Which accelerations and multipliers: by default (``sample_by="state"``) those of
-Exudyn's initial-value solve at the integrated positions and velocities of the sample
-(as MuJoCo samples by ``mj_forward``); with ``sample_by="integrator"`` the
+Which accelerations and multipliers: by default (``sample_by="state"``) the ones
+consistent with the integrated positions and velocities of the sample (as MuJoCo
+samples by ``mj_forward``): one linear solve per sample, ``[M C^T; C 0] [q'';
+lambda] = [f; gamma]``, with Exudyn's mass matrix ``M`` (constant), and its constraint
+Jacobian ``C`` and applied forces ``f`` at the sample's state (read through a solver
+initialised once, whose structures are reused; no re-initialisation per sample), and
+``gamma = -(C q')_q q'`` plus the prescribed drive acceleration written out per joint
+(:meth:`ExudynSession._gamma`; the row signs checked against Exudyn's Jacobian when the
+session is built).  This is the equation system of Exudyn's own initial-value solve,
+whose ``gamma`` is a finite difference: at the exact state it is off by 1e-8..1.2e-6
+of peak, the exact ``gamma`` by 1e-15..3e-11.  With ``sample_by="integrator"`` the
 generalized-alpha step's own at the step end (which carry the disturbance of every
 step change; see :class:`ExudynSettings`).
+
+The readout is deferred (:meth:`ExudynSession.record` copies the raw state at each stop
+of the run, :meth:`ExudynSession.convert` solves and converts every record at once,
+vectorised) and the divergence check (loop gap, driver rate) runs on the converted
+records, once per sample interval.
 """
 
 from __future__ import annotations
@@ -85,7 +98,6 @@ from .engine_base import (
     Recorder,
     Session,
     SettingsError,
-    check_motion,
 )
 from .tree import SimModelError, SimTree
 
@@ -121,9 +133,10 @@ class ExudynSettings(EngineSettings):
     sample_by
         ``"integrator"``: accelerations and multipliers are the generalized-alpha
         step's own (``Coordinates_tt`` and the Lagrange multipliers at the step end).
-        ``"state"``: they are Exudyn's initial-value solve of its equations at the
-        integrated positions and velocities, as MuJoCo samples by ``mj_forward``; the
-        integration itself is unchanged.  Measured 4-5x smaller errors at the same
+        ``"state"``: they are the ones consistent with the integrated positions and
+        velocities (one linear solve with Exudyn's mass matrix, constraint Jacobian and
+        forces there; see the module docstring), as MuJoCo samples by ``mj_forward``;
+        the integration itself is unchanged.  Measured 4-5x smaller errors at the same
         steps (25-60x for accelerating inputs), see the README "Exudyn" section.
 
     Evidence: speed-against-error grids over every built-in case; the worst error is
@@ -204,6 +217,30 @@ def _cross(a, b) -> float:
     return float(a[0] * b[1] - a[1] * b[0])
 
 
+def _world(theta, r) -> np.ndarray:
+    """(K, 2): body offset ``r`` (2,) turned by each angle of ``theta`` (K,)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([c * r[0] - s * r[1], s * r[0] + c * r[1]], axis=1)
+
+
+def _world_many(theta, r) -> np.ndarray:
+    """(K, B, 2): offsets ``r`` (B, 2) turned by angles ``theta`` (K, B)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([c * r[:, 0] - s * r[:, 1], s * r[:, 0] + c * r[:, 1]], axis=2)
+
+
+def _perp_rows(v) -> np.ndarray:
+    return np.stack([-v[:, 1], v[:, 0]], axis=1)
+
+
+def _dot(a, b) -> np.ndarray:
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]
+
+
+def _cross_rows(a, b) -> np.ndarray:
+    return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+
+
 class ExudynSession(Session):
     """A linkage in Exudyn (see the module docstring for the model and the readout)."""
 
@@ -225,6 +262,27 @@ class ExudynSession(Session):
         self.solver = None
         self.sim = None
         self.t = 0.0
+        self._probe_setup()
+
+    def _probe_setup(self):
+        """A solver initialised once at the reference state whose structures the
+        readout reuses (Jacobian, forces: :meth:`_jacobian_and_forces`), the constant
+        mass matrix, and the joints' geometry and row signs for :meth:`_gamma`."""
+        self.n_ae = self.mbs.systemData.AEsize()
+        size = self.n_ode2 + self.n_ae
+        self._zero_jacobian = np.zeros((size, size))
+        self.probe = self._initialise(0.0, compute=False)
+        self._probe_sim = self.sim  # the solver keeps a reference to its settings
+        self.probe.ComputeMassMatrix(self.mbs)   # rigid bodies in 2D: constant
+        self.M = np.array(self.probe.GetSystemMassMatrix())
+        self._joints = self._geometry()
+        self._signs = self._row_signs()
+
+    def _ref_point(self, b: int, r) -> np.ndarray:
+        """World position (m) of offset ``r`` of body ``b`` in the reference pose."""
+        if b == self.g:
+            return _rot(float(self.tree.kin_ref.theta[0, self.g]), r)
+        return self.ref[b][:2] + _rot(self.ref[b][2], r)
 
     # ------------------------------------------------------------------ model
     def _build(self):
@@ -415,7 +473,11 @@ class ExudynSession(Session):
         value = float(st.driver_value(q[st.driver_tree]))
         rate = float(st.driver_sigma * qd[st.driver_tree])
         self._start(0.0, th[0], om[0], org[0], vo[0], value, rate, float(acceleration))
-        self._read(0.0, rows, rec)
+        sd = self.mbs.systemData
+        self._readout(np.zeros(1), [list(np.atleast_1d(rows))], rec,
+                      *(np.array(x)[None] for x in (
+                          sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(),
+                          sd.GetODE2Coordinates_tt(), sd.GetAECoordinates())))
 
     def _start(self, t, theta, omega, origin, v_origin, value, rate, acc) -> None:
         """Initial state from absolute body angles/rates and frame-origin positions and
@@ -519,137 +581,245 @@ class ExudynSession(Session):
         return None
 
     # ------------------------------------------------------------------ readout
-    def _poses(self):
-        """theta, omega, alpha (B,), centre of mass position/velocity/acceleration (B, 2)."""
+    def record(self, t: float):
+        """Copies of the state at ``t``: coordinates, velocities, and either the
+        integrator's own accelerations and multipliers (``sample_by="integrator"``) or
+        Exudyn's constraint Jacobian and applied forces there (``"state"``: the
+        accelerations and multipliers are solved from them in :meth:`convert`).  A
+        non-finite state is a reason at once."""
         sd = self.mbs.systemData
-        Q, Qt, Qtt = (sd.GetODE2Coordinates(), sd.GetODE2Coordinates_t(),
-                      sd.GetODE2Coordinates_tt())
-        B = len(self.tree.body_names)
-        th, om, al = np.zeros(B), np.zeros(B), np.zeros(B)
-        xG, vG, aG = np.zeros((B, 2)), np.zeros((B, 2)), np.zeros((B, 2))
-        th[self.g] = self.tree.kin_ref.theta[0, self.g]
-        for b, ltg in self.ltg.items():
-            th[b] = self.ref[b][2] + Q[ltg[2]]
-            om[b], al[b] = Qt[ltg[2]], Qtt[ltg[2]]
-            xG[b] = self.ref[b][:2] + Q[ltg[:2]]
-            vG[b], aG[b] = Qt[ltg[:2]], Qtt[ltg[:2]]
-        return th, om, al, xG, vG, aG, Q, Qt
+        q, qd = np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t())
+        if not (math.isfinite(q.sum()) and math.isfinite(qd.sum())):
+            return None, 0.0, "non-finite state (simulation diverged)"
+        if self.settings.sample_by == "integrator":
+            return (q, qd, np.array(sd.GetODE2Coordinates_tt()),
+                    np.array(sd.GetAECoordinates())), 0.0, None
+        C, f = self._jacobian_and_forces()
+        return (q, qd, C, f), 0.0, None
 
-    def _point(self, pose, b: int, p):
-        """World position, velocity, acceleration of body-frame point ``p`` of body ``b``."""
-        th, om, al, xG, vG, aG = pose[:6]
-        p = np.asarray(p, float)
-        if b == self.g:
-            return _rot(th[b], p), np.zeros(2), np.zeros(2)
-        r = _rot(th[b], p - self.com[b])
-        return xG[b] + r, vG[b] + om[b] * _perp(r), aG[b] + al[b] * _perp(r) - om[b] ** 2 * r
+    def _jacobian_and_forces(self):
+        """Exudyn's constraint Jacobian ``C`` (nAE, nODE2; the drive's velocity-level row
+        included) and its generalized applied forces ``f`` (nODE2) at the current state,
+        from the probe solver's structures (no re-initialisation)."""
+        pr, n = self.probe, self.n_ode2
+        pr.SetSystemJacobian(self._zero_jacobian)  # ComputeJacobianAE adds into it
+        pr.ComputeJacobianAE(self.mbs, 1.0, 1.0, 0.0, False)
+        C = np.array(pr.GetSystemJacobian())[n:, :n]
+        pr.ComputeODE2RHS(self.mbs)
+        return C, np.array(pr.GetSystemResidual())[:n]
 
-    def _driver(self, pose):
-        """The driver's value (rad or m, unwrapped) and rate in the engine."""
-        d = self.tree.mech.driver
-        Q, Qt = pose[6], pose[7]
-        if self.sigma is not None:
-            ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
-            return d.value + Q[ls], Qt[ls]
+    def convert(self, times, raws, rows, rec: Recorder):
+        """The analytic conventions of K records at once.  Sampling by state solves
+        ``[M C^T; C 0] [q''; lambda] = [f; gamma]`` per record (one batched solve) with
+        Exudyn's mass matrix, constraint Jacobian and forces at the record's state, and
+        ``gamma`` the constraints' exact velocity terms (:meth:`_gamma`)."""
+        q, qd, a3, a4 = (np.array(x) for x in zip(*raws, strict=True))
+        times = np.asarray(times, float)
+        if self.settings.sample_by == "integrator":
+            qdd, lam = a3, a4
+        else:
+            qdd, lam = self._solve_state(times, q, qd, a3, a4)
+        return self._readout(times, rows, rec, q, qd, qdd, lam)
 
-        def rotation(x):  # rotation displacement and rate of body x (ground: 0)
-            return (Q[self.ltg[x][2]], Qt[self.ltg[x][2]]) if x != self.g else (0.0, 0.0)
+    def _solve_state(self, times, q, qd, C, f):
+        """Accelerations and multipliers consistent with the state (K records)."""
+        K, n = q.shape
+        m = C.shape[1]
+        A = np.zeros((K, n + m, n + m))
+        A[:, :n, :n] = self.M
+        A[:, :n, n:] = C.transpose(0, 2, 1)
+        A[:, n:, :n] = C
+        b = np.concatenate([f, self._gamma(times, q, qd)], axis=1)
+        try:
+            x = np.linalg.solve(A, b[..., None])[..., 0]
+        except np.linalg.LinAlgError:  # a singular record (a singular position): NaN there
+            x = np.full_like(b, np.nan)
+            for k in range(K):
+                try:
+                    x[k] = np.linalg.solve(A[k], b[k])
+                except np.linalg.LinAlgError:
+                    pass
+        return x[:, :n], x[:, n:]
 
-        (qa, wa), (qb, wb) = rotation(self._drive_a), rotation(self._drive_b)
-        return d.value + qb - qa, wb - wa
-
-    def _gap(self, pose) -> float:
-        """Largest distance (m) between the two points of any revolute joint."""
-        st = self.tree
-        idx = {n: i for i, n in enumerate(st.body_names)}
-        gap = 0.0
-        for jt in st.mech.joints:
-            if isinstance(jt, Revolute):
-                a, b = idx[jt.body_a], idx[jt.body_b]
-                pa = self._point(pose, a, st.mech.bodies[a].points[jt.point_a])[0]
-                pb = self._point(pose, b, st.mech.bodies[b].points[jt.point_b])[0]
-                gap = max(gap, float(np.hypot(*(pa - pb))))
-        return gap
-
-    def sample(self, t: float, rows, rec: Recorder) -> float:
-        if len(rows) == 0:
-            return 0.0
-        if self.settings.sample_by == "state":
-            return self._sample_by_state(t, rows, rec)
-        return self._read(t, rows, rec)
-
-    def _sample_by_state(self, t: float, rows, rec: Recorder) -> float:
-        """Read Exudyn's initial-value solve at the integrated state, then give the
-        integrator its own state back (its next step starts from it)."""
-        sd = self.mbs.systemData
-        saved = (np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t()),
-                 np.array(sd.GetODE2Coordinates_tt()), np.array(sd.GetAECoordinates()))
-        initial = self.exu.ConfigurationType.Initial
-        sd.SetODE2Coordinates(saved[0], configuration=initial)
-        sd.SetODE2Coordinates_t(saved[1], configuration=initial)
-        solver, sim = self.solver, self.sim
-        probe = self._initialise(t, compute=True)
-        acc = float(self.tree.driver_path(t)[2])
-        if acc != 0.0:
-            qdd, lam = self._with_drive_acceleration(probe, acc)
-            sd.SetODE2Coordinates_tt(qdd)
-            sd.SetAECoordinates(lam)
-        self._read(t, rows, rec)
-        sd.SetODE2Coordinates(saved[0])
-        sd.SetODE2Coordinates_t(saved[1])
-        sd.SetODE2Coordinates_tt(saved[2])
-        sd.SetAECoordinates(saved[3])
-        self.solver, self.sim = solver, sim
-        return 0.0
-
-    def _read(self, t: float, rows, rec: Recorder) -> float:
-        """Fill ``rows`` from the system's current state and multipliers."""
+    def _geometry(self):
+        """Per joint, the marker data the velocity terms need (built once)."""
         st = self.tree
         mech = st.mech
-        pose = self._poses()
-        th, om, al, xG = pose[:4]
-        origin = np.array([xG[b] - _rot(th[b], self.com[b]) if b != self.g
-                           else st.kin_ref.origin[0, b] for b in range(len(th))])
-        lam = self.mbs.systemData.GetAECoordinates()
-        idx = {n: i for i, n in enumerate(st.body_names)}
-        J, P = len(mech.joints), len(st.prismatic)
-        force = np.zeros((J, 2))
-        sacc, normal, moment = np.zeros(P), np.zeros(P), np.zeros(P)
-        effort = -float(lam[self.drive_ae])
+        idx = {nm: i for i, nm in enumerate(st.body_names)}
+        out = []
         for k, jt in enumerate(mech.joints):
-            L = lam[self.joint_ae[k]]
-            if isinstance(jt, Revolute):
-                force[k] = -L
+            a, b = idx[jt.body_a], idx[jt.body_b]
+            pa = np.asarray(mech.bodies[a].points[jt.point_a], float)
+            pb = np.asarray(mech.bodies[b].points[jt.point_b], float)
+            ra = pa if a == self.g else pa - self.com[a]
+            rb = pb if b == self.g else pb - self.com[b]
+            extra = None
+            if isinstance(jt, Prismatic):
+                nn = jt.direction + math.pi / 2 - jt.angle
+                extra = (np.array([math.cos(jt.direction), math.sin(jt.direction)]),
+                         np.array([math.cos(nn), math.sin(nn)]))
+            out.append((k, a, b, ra, rb, extra))
+        return out
+
+    def _bodies(self, q, qd, qdd=None):
+        """theta, omega, alpha (K, B) and centre-of-mass position, velocity,
+        acceleration (K, B, 2) of every body (the ground: fixed, its reference pose)."""
+        K, B = len(q), len(self.tree.body_names)
+        th = np.full((K, B), float(self.tree.kin_ref.theta[0, self.g]))
+        om, al = np.zeros((K, B)), np.zeros((K, B))
+        xG, vG, aG = np.zeros((K, B, 2)), np.zeros((K, B, 2)), np.zeros((K, B, 2))
+        for b, ltg in self.ltg.items():
+            th[:, b] = self.ref[b][2] + q[:, ltg[2]]
+            om[:, b] = qd[:, ltg[2]]
+            xG[:, b] = self.ref[b][:2] + q[:, ltg[:2]]
+            vG[:, b] = qd[:, ltg[:2]]
+            if qdd is not None:
+                al[:, b] = qdd[:, ltg[2]]
+                aG[:, b] = qdd[:, ltg[:2]]
+        return th, om, al, xG, vG, aG
+
+    def _gamma(self, times, q, qd):
+        """``gamma = -(C q')_q q'`` per record (K, nAE), exactly, from the joints'
+        geometry, in Exudyn's row signs (:meth:`_row_signs`), plus the prescribed driver
+        acceleration on the drive row (which Exudyn's own initial solve leaves out)."""
+        th, om, _, xG, vG, _ = self._bodies(q, qd)
+        g = np.zeros((len(q), self.n_ae))
+        for k, a, b, ra, rb, line in self._joints:
+            Ra, va_, wa = _world(th[:, a], ra), vG[:, a], om[:, a]
+            Rb, vb_, wb = _world(th[:, b], rb), vG[:, b], om[:, b]
+            rows = self.joint_ae[k]
+            if line is None:   # p_b - p_a = 0
+                g[:, rows] = (wb * wb)[:, None] * Rb - (wa * wa)[:, None] * Ra
+                continue
+            t0, n1 = _world(th[:, a], line[0]), _world(th[:, b], line[1])
+            d = (xG[:, b] + Rb) - (xG[:, a] + Ra if a != self.g else Ra)
+            dv = (vb_ + wb[:, None] * _perp_rows(Rb)) - (va_ + wa[:, None] * _perp_rows(Ra))
+            g[:, rows[0]] = (_dot(wb[:, None] ** 2 * Rb - wa[:, None] ** 2 * Ra, n1)
+                             - 2 * wb * _dot(dv, _perp_rows(n1)) + wb * wb * _dot(d, n1))
+            g[:, rows[1]] = (wb - wa) ** 2 * _dot(t0, n1)
+        g *= self._signs
+        g[:, self.drive_ae] = self._drive_sign * self.tree.driver_path(times)[2]
+        return g
+
+    def _row_signs(self):
+        """Exudyn's sign of each joint's constraint rows relative to the ones
+        :meth:`_gamma` is written for, from its Jacobian at the reference state (checked
+        entry by entry: a different constraint form is an error here, not a wrong
+        reading later)."""
+        C, _ = self._jacobian_and_forces()
+        q = np.zeros((1, self.n_ode2))
+        th, _, _, _, _, _ = self._bodies(q, q)
+        mine = np.zeros_like(C)
+        for k, a, b, ra, rb, line in self._joints:
+            rows = self.joint_ae[k]
+            for body, r, s in ((a, ra, -1.0), (b, rb, 1.0)):
+                if body == self.g:
+                    continue
+                cols = self.ltg[body]
+                R = _world(th[:, body], r)[0]
+                if line is None:
+                    mine[rows[0], cols] = [s, 0.0, -s * R[1]]
+                    mine[rows[1], cols] = [0.0, s, s * R[0]]
+                    continue
+                n1 = _world(th[:, b], line[1])[0]
+                t0 = _world(th[:, a], line[0])[0]
+                if body == b:   # (p_b - p_a) . n1 and t0 . n1, n1 turning with body b
+                    d = self._ref_point(b, rb) - self._ref_point(a, ra)
+                    mine[rows[0], cols] = [n1[0], n1[1], _perp(R) @ n1 + d @ _perp(n1)]
+                    mine[rows[1], cols[2]] = t0 @ _perp(n1)
+                else:
+                    mine[rows[0], cols] = [-n1[0], -n1[1], -(_perp(R) @ n1)]
+                    mine[rows[1], cols[2]] = _perp(t0) @ n1
+        signs = np.ones(self.n_ae)
+        for k, *_ in self._joints:
+            for r in self.joint_ae[k]:
+                s = 1.0 if C[r] @ mine[r] >= 0 else -1.0
+                scale = max(np.abs(C[r]).max(), 1e-300)
+                if np.abs(C[r] - s * mine[r]).max() > 1e-9 * scale:
+                    raise SimModelError(
+                        f"mechanism {self.tree.mech.name!r}: Exudyn's constraint row {r} "
+                        f"(joint {self.tree.mech.joints[k].name!r}) is not the expected "
+                        f"form: {C[r]} vs {s * mine[r]}")
+                signs[r] = s
+        # the drive row is q_b - q_a (rates): its acceleration equation is
+        # row . q'' = +-acc with the sign of body b's (or sigma's) entry
+        row = C[self.drive_ae]
+        if self.sigma is not None:
+            self._drive_sign = float(row[self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]])
+        elif self._drive_b != self.g:
+            self._drive_sign = float(row[self.ltg[self._drive_b][2]])
+        else:
+            self._drive_sign = -float(row[self.ltg[self._drive_a][2]])
+        return signs
+
+    def _readout(self, times, rows, rec: Recorder, q, qd, qdd, lam):
+        """Fill ``rec`` from K records of coordinates, velocities, accelerations and
+        multipliers; returns the loop gap (largest revolute gap, m) and driver rate."""
+        st = self.tree
+        mech = st.mech
+        th, om, al, xG, vG, aG = self._bodies(q, qd, qdd)
+        K, B = th.shape
+        origin = xG - _world_many(th, np.array([self.com.get(b, np.zeros(2))
+                                                for b in range(B)]))
+        origin[:, self.g] = st.kin_ref.origin[0, self.g]
+        J, P = len(mech.joints), len(st.prismatic)
+        force = np.zeros((K, J, 2))
+        sacc, normal, moment = np.zeros((K, P)), np.zeros((K, P)), np.zeros((K, P))
+        effort = -lam[:, self.drive_ae]
+        gap = np.zeros(K)
+
+        def point(b, r):  # world position, velocity, acceleration of offset r of body b
+            R = _world(th[:, b], r)
+            if b == self.g:
+                z = np.zeros_like(R)
+                return R, z, z
+            pR = _perp_rows(R)
+            return (xG[:, b] + R, vG[:, b] + om[:, b, None] * pR,
+                    aG[:, b] + al[:, b, None] * pR - (om[:, b] ** 2)[:, None] * R)
+
+        for k, a, b, ra, rb, line in self._joints:
+            L = lam[:, self.joint_ae[k]]
+            jt = mech.joints[k]
+            if line is None:
+                force[:, k] = -L
+                d = point(a, ra)[0] - point(b, rb)[0]
+                gap = np.maximum(gap, np.hypot(d[:, 0], d[:, 1]))
                 continue
             p = st.prismatic.index(k)
-            gb, sb = idx[jt.guide], idx[jt.slider]
-            ang = th[gb] + jt.direction
-            u = np.array([math.cos(ang), math.sin(ang)])
-            n = _perp(u)
-            O, Ov, Oa = self._point(pose, gb, mech.bodies[gb].points[jt.origin])
-            S, Sv, Sa = self._point(pose, sb, mech.bodies[sb].points[jt.point])
+            ang = th[:, a] + jt.direction
+            u = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+            n = _perp_rows(u)
+            O, Ov, Oa = point(a, ra)
+            S, Sv, Sa = point(b, rb)
             dd, dv, da = S - O, Sv - Ov, Sa - Oa
-            wg, ag = om[gb], al[gb]
+            wg, ag = om[:, a], al[:, a]
             # s = u . (S - O) differentiated twice with u turning with the guide
-            sacc[p] = (ag * n - wg * wg * u) @ dd + 2 * wg * (n @ dv) + u @ da
-            normal[p] = -L[0]
-            moment[p] = L[1] + L[0] * (u @ dd)
+            sacc[:, p] = (_dot(ag[:, None] * n - (wg * wg)[:, None] * u, dd)
+                          + 2 * wg * _dot(n, dv) + _dot(u, da))
+            normal[:, p] = -L[:, 0]
+            moment[:, p] = L[:, 1] + L[:, 0] * _dot(u, dd)
             if jt.name == mech.driver.joint:
-                G = xG[sb]
-                moment[p] += _cross(G - S, u) * effort
-            force[k] = normal[p] * n
-        value, rate = self._driver(pose)
-        rec.put_absolute(rows, t, th, om, al, sacc, origin, value, rate)
-        rec.put_forces(rows, force, effort, normal, moment)
-        return 0.0
+                G = xG[:, b]
+                moment[:, p] += _cross_rows(G - S, u) * effort
+            force[:, k] = normal[:, p, None] * n
+        value, rate = self._drivers(q, qd)
+        rec.put_absolutes(rows, times, th, om, al, sacc, origin, value, rate)
+        rec.put_forces_many(rows, force, effort, normal, moment)
+        return gap, rate
 
-    def divergence(self, t: float) -> str | None:
-        pose = self._poses()
-        if not all(np.all(np.isfinite(x)) for x in pose):
-            return "non-finite state (simulation diverged)"
-        _, rate = self._driver(pose)
-        return check_motion(self.tree, self._gap(pose), float(rate), t, self.max_violation,
-                            self.max_speed_error)
+    def _drivers(self, q, qd):
+        """The driver's value (rad or m, unwrapped) and rate in the engine (K,)."""
+        d = self.tree.mech.driver
+        if self.sigma is not None:
+            ls = self.mbs.systemData.GetNodeLTGODE2(self.sigma)[0]
+            return d.value + q[:, ls], qd[:, ls]
+
+        def rotation(x, v):  # rotation displacement (or rate) of body x (ground: 0)
+            return v[:, self.ltg[x][2]] if x != self.g else np.zeros(len(v))
+
+        a, b = self._drive_a, self._drive_b
+        return (d.value + rotation(b, q) - rotation(a, q),
+                rotation(b, qd) - rotation(a, qd))
 
     def extra(self) -> dict:
         return {"massless_exact": True}

@@ -85,6 +85,42 @@ def test_instantaneous_mode_every_case(case):
     assert_run_within(r, tree.mech, EXUDYN_INSTANTANEOUS, case)
 
 
+#: Sampling by state at the exact analytic state: one linear solve with Exudyn's mass
+#: matrix, constraint Jacobian and forces and the exact velocity terms.  Measured
+#: 1e-15..3e-11 of the state's own scale over the built-in cases (Exudyn's own
+#: initial-value solve, whose velocity term is a finite difference: 1e-8..1.2e-6), so
+#: 1e-9 holds round-off and fails a wrong sign or term of any joint's velocity term.
+EXUDYN_STATE_EXACT = 1e-9
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_state_readout_is_exact_at_the_exact_state(case):
+    """The deferred readout (record, then convert) at the analytic reference state: the
+    accelerations and reactions must be the analytic ones up to round-off."""
+    from sim_models.engine_base import Recorder, plan_samples
+    tree = compile_linkage(load_case(case))
+    session = get_engine("exudyn").session_class(tree)
+    try:
+        rec = Recorder(tree, plan_samples(tree, 1, 4))
+        session.reset(0.0, 1e-3)
+        raw, ahead, why = session.record(0.0)
+        assert why is None and ahead == 0.0
+        session.convert(np.zeros(1), [raw], [[0]], rec)
+    finally:
+        session.close()
+    kin = tree.kin_ref
+    scale = max(np.max(np.abs(kin.alpha[0])), np.max(np.abs(kin.omega[0])) ** 2)
+    np.testing.assert_allclose(rec.alpha[0], kin.alpha[0], rtol=0, atol=EXUDYN_STATE_EXACT * scale)
+    if tree.has_mass:
+        frc = tree.linkage.forces(kin)
+        F = np.array([frc.joint_force[j.name][0] for j in tree.mech.joints])
+        fscale = np.max(np.abs(F))
+        np.testing.assert_allclose(rec.force[0], F, rtol=0, atol=EXUDYN_STATE_EXACT * fscale)
+        np.testing.assert_allclose(rec.effort[0], frc.effort[0], rtol=0,
+                                   atol=EXUDYN_STATE_EXACT * max(abs(frc.effort[0]),
+                                                                 fscale * tree.size))
+
+
 @pytest.mark.parametrize("velocity, acceleration", [(15.0, -10.0), (0.0, 300.0)])
 def test_reversing_and_from_rest_inputs(velocity, acceleration):
     """A crank that slows down and turns back (sampled by time, from t = 0) and one that
