@@ -121,8 +121,9 @@ class Summary:
                          f"{ev.input:.6g} {u}")
             out.append(line)
         if self.singular_samples:
-            out.append(f"{self.singular_samples} sample(s) at singular positions: forces there "
-                       "are indeterminate (left out above)")
+            out.append(f"{self.singular_samples} sample(s) at singular positions: left out "
+                       "of the peaks above (their values are limits along the branch, or "
+                       "empty where unbounded or not determined: column singular)")
         return out
 
 

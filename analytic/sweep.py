@@ -18,7 +18,12 @@ Columns of :attr:`SweepResult.frame` (SI unless the name says otherwise)
 ``drive.power``               W, positive when the driver does work
 ``power_residual``            drive power - (dKE/dt - load power), W (rounding level)
 ``jacobian_condition``        condition number of the loop Jacobian in the unknowns
+                              (sliders in mechanism sizes: the same at any scale)
 ``jacobian_det``              its determinant normalised by its column norms, [-1, 1]
+``singular``                  0 regular; at a singular sample (analytic.singular) 1: every
+                              value is its limit along the branch; 2: as 1, but joint
+                              forces unbounded there (empty cells); 3: not passed through,
+                              rates and forces not determined (empty cells)
 ``transmission_deg.<joint>``  transmission angle at a dyad's inner joint, deg
 """
 
@@ -462,31 +467,6 @@ def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.D
                    ignore_index=True) if len(events) else \
         pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
     return ev.sort_values("input", kind="stable").reset_index(drop=True)
-
-
-def rates_by_continuity(linkage: Linkage, kin: Kinematics, idx: np.ndarray) -> list[int]:
-    """At singular samples ``idx`` the loop equations do not fix the rates.  Where the
-    linkage passes through (both sides regular, as at a change point), set them to the
-    motion's own: the mean of the rates 1e-4 (rad or sizes) before and after, which
-    differs from the limit by O(1e-8).  Elsewhere set them to NaN.  Returns the samples
-    set by continuity."""
-    done = []
-    if not idx.size:
-        return done
-    d = 1e-4 * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))
-    for i in idx:
-        x = kin.value[i] + np.array([-d, d])
-        fields = ("qd", "qdd", "omega", "alpha", "zv", "za")
-        try:
-            side = linkage.kinematics_along(x, kin.velocity[i], kin.acceleration[i])
-            ok = bool(np.all(side.condition < SINGULAR_CONDITION))
-        except LinkageError:
-            ok = False
-        for f in fields:
-            getattr(kin, f)[i] = getattr(side, f).mean(axis=0) if ok else np.nan
-        if ok:
-            done.append(int(i))
-    return done
 
 
 def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
