@@ -184,7 +184,7 @@ def timeseries_plot(t, series: dict[str, np.ndarray], title: str, ylabel: str) -
     ax.set_xlabel("time (s)")
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     ax.set_title(title, fontsize=10)
     return _png(fig)
 

@@ -263,7 +263,7 @@ def _hard_section(doc, hard):
             if key == "long_run_summary":
                 view = val.drop(columns=[c for c in ("settings",) if c in val]).set_index(
                     "engine").T.reset_index().rename(columns={"index": "quantity"})
-                doc.table(view, f"hard_{key}", cap, data=val)
+                doc.table(view, f"hard_{key}", cap, data=val, fold=None)
             else:
                 cols = [c for c in HARD_COLUMNS.get(key, val.columns) if c in val.columns]
                 doc.table(study_view(val[cols]), f"hard_{key}", cap, data=val,
