@@ -272,7 +272,10 @@ class FusedKernel:
                                         level)
         self._check(values, bad, wi, worst)
         self._singular(values, susp, out["A"], on_singular)
-        return self._wrap(values, vel, acc, out, branch, forces)
+        kin, frc = self._wrap(values, vel, acc, out, branch, forces)
+        # a sample near a singular position (bound on the condition number reached)
+        kin._fused_singular = susp is None or len(susp) > 0
+        return kin, frc
 
     def solve_block(self, values, velocity, acceleration, out: dict, carry: np.ndarray,
                     level: int = 3, branch: str = "continued", on_singular="flag"):
@@ -288,7 +291,9 @@ class FusedKernel:
         cut = {k: (a[:N] if a.shape[0] else a) for k, a in out.items()}
         self._check(values, bad, wi, worst)
         self._singular(values, susp, cut["A"], on_singular)
-        return self._wrap(values, vel, acc, cut, branch, level >= 3)
+        kin, frc = self._wrap(values, vel, acc, cut, branch, level >= 3)
+        kin._fused_singular = susp is None or len(susp) > 0
+        return kin, frc
 
     def _wrap(self, values, vel, acc, out, branch, forces):
         from .kinematics import Kinematics

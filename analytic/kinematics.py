@@ -21,6 +21,7 @@ from functools import cached_property
 import numpy as np
 
 from .errors import SingularConfigurationError
+from .fused import dispatch as fused_dispatch
 from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
@@ -228,6 +229,11 @@ class Linkage:
             ``False``: leave the linear solve's values at singular points (used by
             :mod:`analytic.singular` itself, on regular samples).
         """
+        fk = fused_dispatch(self, 1 if values is None else np.size(values))
+        if fk is not None:  # the fused kernel (analytic/fused.py): the same numbers, one pass
+            kin = fk.kinematics(values, velocity, acceleration, "flag", branch)
+            if not kin._fused_singular:  # singular samples are the numpy path's to treat
+                return kin
         d = self.mech.driver
         values = np.atleast_1d(np.asarray(d.value if values is None else values, float))
         N = len(values)
@@ -358,6 +364,8 @@ class Linkage:
     # convenience wrappers ----------------------------------------------------
     def forces(self, kin: Kinematics):
         """Kinetostatic solution for a :class:`Kinematics` (see :mod:`analytic.kinetostatics`)."""
+        if getattr(kin, "_fused_kernel", None) is not None:  # the kernel's forces pass
+            return kin._fused_kernel.forces(kin)
         from .kinetostatics import solve_forces
         return solve_forces(self, kin)
 

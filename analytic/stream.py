@@ -201,6 +201,10 @@ def evaluate_blocked(linkage, values, velocity=None, acceleration=None, forces=N
     for a, b in _blocks(len(values), block):
         kin, frc = fk.solve_block(values[a:b], velocity, acceleration, out, carry, level,
                                   branch, on_singular)
+        if kin._fused_singular:  # a singular sample: the numpy path treats the block
+            kin = linkage.kinematics(values[a:b], velocity, acceleration,
+                                     on_singular=on_singular)
+            frc = linkage.forces(kin) if forces else None
         yield a, kin, frc
 
 

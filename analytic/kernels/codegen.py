@@ -124,9 +124,12 @@ class KernelSource:
         return f"(O{b} + E{b} * {self._at(j, b)})"
 
     def _unit(self, z: str, c: str) -> str:
-        """``z / |z| * c`` without a complex division."""
+        """``z / |z| * c`` as numpy computes it: ``|z|`` by :func:`cabs`, a complex divided
+        by a real is multiplied by its reciprocal (Smith's division with a zero imaginary
+        part), so the two paths agree to the last bit near limit positions, where the
+        rates amplify any difference by the Jacobian's condition number."""
         t = self.s.tmp("iz")
-        self.s.emit(f"{t} = 1.0 / math.sqrt({z}.real * {z}.real + {z}.imag * {z}.imag)")
+        self.s.emit(f"{t} = 1.0 / cabs({z}.real, {z}.imag)")
         return f"complex({z}.real * {t}, {z}.imag * {t}) * {c}"
 
     def _place(self, b, th: str, e: str | None = None):
@@ -201,7 +204,8 @@ class KernelSource:
         s.emit(f"dsc = h2 * {s.f(rrr_disc_factor(c1, c2))} if D > 0 else -1.0")
         self._disc("dsc")
         s.emit(f"h = math.sqrt(max(h2, 0.0)) if dsc > {TOGGLE_SNAP!r} else 0.0")
-        s.emit(f"P2 = P1 + d * complex(a * iD, {self._sign()} * h * iD)")
+        s.emit(f"w = d * complex(a, {self._sign()} * h)")
+        s.emit("P2 = P1 + complex(w.real * iD, w.imag * iD)")
         s.emit(f"{t}a = P2 - P1")
         s.emit(f"{t}b = P3 - P2")
         s.emit(f"E{x1} = {self._unit(f'{t}a', n1)}")
@@ -266,7 +270,7 @@ class KernelSource:
         s.emit(f"PG = {self._pt(kg, jg)}")
         s.emit(f"PSr = {self._pt(ks, js)}")
         s.emit("d = PSr - PG")
-        s.emit("D = abs(d)")
+        s.emit("D = cabs(d.real, d.imag)")
         s.emit("Dsafe = D if D > 0 else 1.0")
         s.emit(f"ratio = -{s.f(kconst)} / Dsafe")
         s.emit("dsc = 1.0 - ratio * ratio if D > 0 else -1.0")
@@ -702,8 +706,8 @@ class KernelSource:
             "import math",
             "import numpy as np",
             "from numba import njit",
-            "from analytic.kernels.smallmat import (det_small, lu_det, lu_factor, lu_solve,",
-            "                                       solve_small)",
+            "from analytic.kernels.smallmat import (cabs, det_small, lu_det, lu_factor,",
+            "                                       lu_solve, solve_small)",
             "",
             "",
             "@njit(cache=True, error_model='numpy', nogil=True)",
