@@ -272,3 +272,16 @@ def test_failed_newton_is_a_failed_run_not_an_exception():
     r = run(load_case("seed-four-bar"), "exudyn", s, revolutions=1, samples=6)
     assert not r.ok and "Exudyn solver failed" in r.reason
     assert np.isnan(r.alpha[r.times > 0]).all()  # the t = 0 sample precedes any step
+
+
+def test_change_point_is_a_failed_run_that_names_it():
+    """The parallelogram four-bar's links are collinear at theta2 = 0 and 180 deg (its
+    description): a change point, where Exudyn's index-3 Newton is not to be trusted.
+    Assembled at 30 deg and turning forward, the first one met is 180 deg: the run fails
+    there with a reason naming it, and no sample is read past it."""
+    from pathlib import Path
+    mech = load_case(Path(__file__).parents[2] / "reports/hard_cases/parallelogram-four-bar.toml")
+    r = run(mech, "exudyn", revolutions=2, samples=36)
+    assert not r.ok
+    assert "change point of driver 'O2' at 180 deg" in r.reason
+    assert np.isnan(r.alpha).all() and np.isnan(r.joint_force).all()
