@@ -251,9 +251,10 @@ class Linkage:
             colnorm = np.ones(N)
             cmax, cmin = np.zeros(N), np.full(N, np.inf)
             cs = self.column_scale
-            for c in range(n):  # column norms (sliders in sizes), short axes unrolled
-                cn = np.sqrt(sum(A[:, r, c] ** 2 for r in range(n))) * cs[c]
+            for c in range(n):  # column norms, short axes unrolled
+                cn = np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
                 colnorm *= cn
+                cn = cn * cs[c]  # the bound is on the condition with sliders in sizes
                 cmax, cmin = np.maximum(cmax, cn), np.minimum(cmin, cn)
             det = det_small(A) / np.where(colnorm > 0, colnorm, 1.0)
             # cond(A) <= n^(n/2) / |det of the column-normalised A| * (max/min column

@@ -421,9 +421,10 @@ class KernelSource:
             s.emit("cmin = np.inf")
             cs = self.lk.column_scale  # sliders in sizes, as Kinematics.condition
             for ci in range(n):
-                s.emit(f"cn = math.sqrt({' + '.join(f'A[{r}, {ci}] ** 2' for r in range(n))})"
-                       + ("" if self.cols[ci] < self.ng else f" * {s.f(cs[ci])}"))
+                s.emit(f"cn = math.sqrt({' + '.join(f'A[{r}, {ci}] ** 2' for r in range(n))})")
                 s.emit("colnorm *= cn")
+                if self.cols[ci] >= self.ng:  # the bound: sliders in sizes
+                    s.emit(f"cn = cn * {s.f(cs[ci])}")
                 s.emit("cmax = max(cmax, cn)")
                 s.emit("cmin = min(cmin, cn)")
             if n > 3:  # one LU for the determinant, the rates and the accelerations
