@@ -237,8 +237,13 @@ class BranchSchedule:
         for d, end, segs in ((1, hi, segs_up), (-1, lo, segs_dn)):
             x, s = self.reference, self.signs0
             guard = 0
+            # a reference on a change point: the signs are the assembly's going up; going
+            # down the change point at the reference itself is decided like any other, so
+            # the branch is smooth through the reference (not kinked there)
+            eps = 1e-9 * (1.0 if self.revolute else self.size)
             while (end - x) * d > 0:
-                nx = self._next(x, s, d)
+                probe = x + 2 * eps if (d < 0 and guard == 0) else x
+                nx = self._next(probe, s, d)
                 if nx is None or (nx[0] - end) * d >= 0:
                     segs.append((x, end, s))
                     break

@@ -81,9 +81,19 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
         return a + 2 * math.pi * np.arange(points) / points, True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
-            # stay a hair inside the limit positions, where the Jacobian is singular
-            pad = 1e-6 * (hi - lo)
-            return np.linspace(lo + pad, hi - pad, points), False, feas
+            # stay a hair inside the limit positions, where the Jacobian is singular:
+            # 1e-6 of the range, more where that is still singular (a range of 1e-7 rad
+            # of a linkage with a link 1e-6 of the others)
+            for frac in (1e-6, 1e-5, 1e-4, 1e-3):
+                pad = frac * (hi - lo)
+                x = np.linspace(lo + pad, hi - pad, points)
+                try:
+                    ends = linkage.kinematics(x[[0, -1]], on_singular="flag", limits=False)
+                except LinkageError:
+                    continue
+                if np.all(ends.condition < SINGULAR_CONDITION):
+                    break
+            return x, False, feas
     raise AssemblyError(f"mechanism {linkage.mech.name!r}: the reference input is not in a "
                         f"feasible range {feas}", v0, feas)
 
@@ -445,7 +455,9 @@ def singular_notes(linkage: Linkage, kin: Kinematics, frc: Forces | None,
     und = singular[st[singular] == UNDETERMINED]
     if und.size:
         notes.append(f"{und.size} sample(s) at singular positions the linkage does not pass "
-                     f"through ({at(und)}: a dead centre or limit position): the rates"
+                     f"through smoothly ({at(und)}: a dead centre, a limit position, or a "
+                     "change point where the branch followed has a kink, as when the "
+                     "reference value sits on one): the rates"
                      + (" and forces" if frc is not None else "") + " are not determined by "
                      "the input there, cells left empty (column singular = 3)")
     return notes

@@ -121,12 +121,14 @@ CONTINUITY_RATIO = 0.1
 LIMIT_STEP = (1e-3, 1e-2, 1e-4)
 
 #: The one-sided extrapolations of a rate or force to a singular sample must agree to
-#: this fraction of its scale for the value to have a limit there.  A smooth branch
-#: leaves them 12 h^3 (third derivative) apart (~1e-8 of it at h = 1e-3) plus the
-#: rounding above (~1e-9); a kink (a held branch) or a
-#: divergence (a dead centre's rates; an unbounded reaction ~ c / s, which leaves them
-#: 3 c / h apart) is O(1).
-LIMIT_CONTINUITY = 1e-6
+#: this fraction of its scale (an acceleration's: at least the velocities' squared) for
+#: the value to have a limit there.  A smooth branch leaves them 12 h^3 (third
+#: derivative) apart: accelerations curve sharply near a change point, 6e-6 of omega^2
+#: at h = 1e-3 on a Grashof-boundary four-bar (0.05 / 0.6 / 0.73 / 0.18) found by the
+#: fuzz, plus the rounding above; a kink (a held branch, a reference on a change point)
+#: or a divergence (a dead centre's rates; an unbounded reaction ~ c / s, which leaves
+#: them 3 c / h apart) is O(1).
+LIMIT_CONTINUITY = 1e-4
 
 #: The same for the forces at a singular sample: steps of 1e-2 rad (or sizes), then 1e-3.
 #: The reactions near a singular position amplify the positions' rounding once more (by
