@@ -193,3 +193,36 @@ def test_parallelogram_engine_samples_leave_no_inf_or_nan():
         assert np.isfinite(F).all()
     assert np.isfinite(frc.effort).all()
     assert list(np.flatnonzero(frc.at_singular)) == [0, 18]
+
+
+def test_reference_on_a_change_point_is_crossed_smoothly():
+    """Found by the fuzz: a parallelogram assembled exactly at its change point (180 deg).
+    The branch is smooth through the reference: the one-sided difference quotients of the
+    positions either side agree (a held kink would differ by the speed ratio), and the
+    sweep's samples there are limits (singular 1 or 2), not 'not determined'."""
+    kw = dict(ground=0.287, crank=1.1118, coupler=1.1118, rocker=0.287, theta=math.pi,
+              omega=363.7, alpha=0.0, masses=(4.6, 1.6, 6.8), open_branch=False,
+              gravity=(0.0, -9.81))
+    from tests.test_fuzz import with_exact_hint
+    lk = Linkage(with_exact_hint("four-bar", four_bar(**kw), kw))
+    d = 1e-4
+    th = lk.kinematics_along(math.pi + np.array([-2 * d, -d, d, 2 * d]), 0.0, 0.0).theta
+    left = (th[1] - th[0]) / d
+    right = (th[3] - th[2]) / d
+    np.testing.assert_allclose(left, right, atol=1e-2)
+    st = lk.sweep(6, start=0.0).frame["singular"].to_numpy()
+    assert set(st[[0, 3]]) <= {1, 2} and not (st == 3).any()
+
+
+def test_tiny_limited_range_sweep_ends_are_regular():
+    """Found by the fuzz: a four-bar with a rocker 1e-6 of its other links, feasible over
+    3e-7 rad only: the sweep's ends stay inside the limit positions far enough to be
+    regular (no row singular, every cell finite)."""
+    kw = dict(ground=2.575207176278855e-07, crank=2.2756063160020336e-07,
+              coupler=4.4612105295080817e-07, rocker=6.815326071148512e-14,
+              theta=-2.3329117064344254, omega=1000.0, alpha=-89148.02406538547,
+              masses=None, open_branch=False, gravity=(3.0, -1000.0))
+    from tests.test_fuzz import with_exact_hint
+    lk = Linkage(with_exact_hint("four-bar", four_bar(**kw), kw))
+    f = lk.sweep(6).frame
+    assert (f["singular"] == 0).all() and np.isfinite(f.to_numpy()).all()
