@@ -14,7 +14,8 @@ Every task (engine runs, study runs, the figures of each case, the Pareto plots)
 one process pool, or on an existing Dask distributed scheduler with ``--dask ADDRESS``,
 and the figures of a case are drawn as soon as its runs are in.  A task that fails (an
 engine that diverges, is missing, or raises) becomes a failed row of the verdict table;
-the report is still written.  The run times each phase and prints its wall time.
+the report is still written.  The run times each phase and prints its wall time; it
+exits with status 1 when any verdict fails (DEVELOPERS.md), 0 when all pass.
 """
 
 from __future__ import annotations
@@ -487,7 +488,7 @@ def main(args) -> int:
     print(f"wall time {wall:.1f} s ("
           + ", ".join(f"{r.phase} {r.seconds:.1f} s" for r in phases.itertuples()) + ")")
     print(f"report: {path / 'index.html'}  ({path / 'report.md'})")
-    return 0
+    return 0 if (summary["verdict"] == "pass").all() else 1  # a failed verdict: status 1
 
 
 __all__ = ["ReportConfig", "build_report", "engine_task", "main"]
