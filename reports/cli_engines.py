@@ -30,7 +30,7 @@ def cmd_models(args) -> int:
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import comparison_frame, near_event, verdict
+    from reports.compare import comparison_frame, near_event, step_note, verdict
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
@@ -54,6 +54,7 @@ def cmd_compare(args) -> int:
             "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if ok else "fail",
             "near_event": near, "wall_seconds_per_revolution": r.wall_per_rev,
             "timestep": r.timestep, "notes": list(r.notes),
+            "step_note": None if ok else step_note(r, tree.linkage.driver_is_revolute),
             "comparisons": [asdict(c) for c in comps]} for r, comps, ok, near in out],
             indent=2))
     else:
@@ -70,6 +71,8 @@ def cmd_compare(args) -> int:
                     print(f"run failed: {r.reason}")
                 if near:
                     print(f"near an event: {near}")
+                if not ok and r.ok and (sn := step_note(r, tree.linkage.driver_is_revolute)):
+                    print(f"step: {sn}")
                 df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
                                                  "at", "tolerance", "passed"]]
                 print(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))

@@ -278,6 +278,31 @@ def near_event(comparisons: list[Comparison], linkage) -> str | None:
             "is a large error")
 
 
+def step_note(run_, revolute: bool) -> str | None:
+    """For a failed verdict: how far the input moves in one engine step at its fastest.
+
+    A fixed-step engine's error grows with that increment, and the recommended steps are
+    absolute times measured on the built-in cases (seed-slider-crank, the fastest, turns
+    0.05 rad per MuJoCo step), so a much faster input (the fast-accelerating reproducer
+    reaches about 1100 rad/s) needs a smaller step; halving ``--timestep`` then tells the
+    engine's step (the error falls as a power of dt) from a model or solver fault (it does
+    not).  None when the rate is unknown."""
+    rate = np.abs(np.asarray(run_.driver_velocity, float))
+    rate = rate[np.isfinite(rate)]
+    if not rate.size or not math.isfinite(run_.timestep) or run_.timestep <= 0:
+        return None
+    k = float(np.max(rate))
+    inc = k * run_.timestep
+    if revolute:
+        return (f"the input turns up to {inc:.3g} rad ({math.degrees(inc):.3g} deg) per engine "
+                f"step at its fastest ({k:.4g} rad/s x dt {run_.timestep:.3g} s): rerun with "
+                f"--timestep {run_.timestep / 4:.2g} to see whether the error falls with the "
+                "step (the engine's step) or not (the model or the solver)")
+    return (f"the input moves up to {inc:.3g} m per engine step at its fastest ({k:.4g} m/s "
+            f"x dt {run_.timestep:.3g} s): rerun with --timestep {run_.timestep / 4:.2g} to see "
+            "whether the error falls with the step (the engine's step) or not")
+
+
 def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
     """One row per quantity: case, engine, settings and the diagnostic."""
     rows = []
