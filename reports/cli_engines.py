@@ -138,7 +138,8 @@ def register(sub) -> None:
     s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
     s.add_argument("--out", type=opt.output_dir,
                    help="output directory (default reports/out/<timestamp>)")
-    s.add_argument("--quick", action="store_true", help="the quick variant (about 25 s on an idle 2-core machine)")
+    s.add_argument("--quick", action="store_true",
+                   help="the quick variant (about 25 s on an idle 2-core machine)")
     s.add_argument("--cases", nargs="+", type=opt.case_or_file,
                    help="only these cases (built-in names or TOML files)")
     s.add_argument("--workers", type=opt.workers,
