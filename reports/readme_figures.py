@@ -26,7 +26,9 @@ def verdict_block(run: Path) -> str:
     s = pd.read_csv(run / "verdict_summary.csv")
     meta = pd.read_csv(run / "run_metadata.csv").set_index("key")["value"]
     lines = [f"Full report run of {meta['date']} ({meta['cpu']}, {meta['cores']} cores, "
-             f"mujoco {meta['mujoco']}, pybullet {meta['pybullet']}; "
+             + "".join(f"{e} {meta[e]}, " for e in ("mujoco", "pybullet", "exudyn")
+                       if e in meta.index)
+             + f"{meta.get('samples', 36)} samples per revolution; "
              f"{meta['wall_seconds']} s):", "",
              "| case | engine | verdict | worst quantity | worst error / peak | at |",
              "|---|---|---|---|---|---|"]
