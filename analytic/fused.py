@@ -88,6 +88,15 @@ def _load(source: str):
     return mod
 
 
+#: the kernel's output arguments, in its order
+_OUT_KEYS = ("q", "qd", "qdd", "theta", "omega", "alpha", "E", "zO", "zv", "za", "A", "det",
+             "trv", "jp", "jf", "nm", "sc")
+#: outputs the kernel writes at each level whatever their size (the others it writes
+#: only when they have rows)
+_NEED = (frozenset(), frozenset({"q"}), frozenset({"q", "qd", "qdd"}),
+         frozenset({"q", "qd", "qdd", "jf", "nm", "sc"}))
+
+
 @dataclass
 class State:
     """The compact result of one pass (SI, world axes), from which every other
@@ -148,24 +157,32 @@ class FusedKernel:
         3: + forces.  ``full`` adds what :class:`Kinematics` holds besides ``q, q',
         q''`` (angles, poses, origin rates, Jacobian, transmission and joint points).
         """
-        def n_(ok):
-            return N if ok else 0
-        B, J = self.B, self.J
-        return dict(
-            q=np.empty((n_(level >= 1), self.nq)), qd=np.empty((n_(level >= 2), self.nq)),
-            qdd=np.empty((n_(level >= 2), self.nq)),
-            theta=np.empty((n_(full and level >= 1), B)),
-            omega=np.empty((n_(full and level >= 2), B)),
-            alpha=np.empty((n_(full and level >= 2), B)),
-            E=np.empty((n_(full), B), complex), zO=np.empty((n_(full), B), complex),
-            zv=np.empty((n_(full and level >= 2), B), complex),
-            za=np.empty((n_(full and level >= 2), B), complex),
-            A=np.empty((n_(full and level >= 2), self.n, self.n)),
-            det=np.empty(n_(full and level >= 2)),
-            trv=np.empty((n_(full and level >= 2), 2 * self.T), complex),
-            jp=np.empty((n_(full and level >= 2), J), complex),
-            jf=np.empty((n_(level >= 3), J, 2)), nm=np.empty((n_(level >= 3), self.P, 2)),
-            sc=np.empty((n_(level >= 3), 5)))
+        B, J, n = self.B, self.J, self.n
+        shapes = (("q", level >= 1, (self.nq,), float), ("qd", level >= 2, (self.nq,), float),
+                  ("qdd", level >= 2, (self.nq,), float),
+                  ("theta", full and level >= 1, (B,), float),
+                  ("omega", full and level >= 2, (B,), float),
+                  ("alpha", full and level >= 2, (B,), float), ("E", full, (B,), complex),
+                  ("zO", full, (B,), complex), ("zv", full and level >= 2, (B,), complex),
+                  ("za", full and level >= 2, (B,), complex),
+                  ("A", full and level >= 2, (n, n), float),
+                  ("det", full and level >= 2, (), float),
+                  ("trv", full and level >= 2, (2 * self.T,), complex),
+                  ("jp", full and level >= 2, (J,), complex), ("jf", level >= 3, (J, 2), float),
+                  ("nm", level >= 3, (self.P, 2), float), ("sc", level >= 3, (5,), float))
+        # arrays not wanted are zero-sized: one shared per key (never written), so a
+        # call allocates only what it returns
+        empty = self.__dict__.setdefault("_empty", {})
+        out = {}
+        for k, ok, tail, dt in shapes:
+            if ok:
+                out[k] = np.empty((N, *tail), dt)
+            else:
+                e = empty.get(k)
+                if e is None:
+                    e = empty[k] = np.empty((0, *tail), dt)
+                out[k] = e
+        return out
 
     def run(self, values, velocity, acceleration, signs, out: dict, level: int = 3,
             carry=None):
@@ -178,11 +195,19 @@ class FusedKernel:
             raise ValueError("forces need masses")
         N = len(values)
         # the kernel does not check bounds: every array it writes must hold N rows
-        need = {"q": level >= 1, "qd": level >= 2, "qdd": level >= 2, "jf": level >= 3,
-                "nm": level >= 3, "sc": level >= 3}
-        for k, a in out.items():
-            if (need.get(k) or a.shape[0]) and a.shape[0] < N:
-                raise ValueError(f"output {k!r} holds {a.shape[0]} rows, {N} needed")
+        need = _NEED[min(max(level, 0), 3)]
+        # views of N rows (zero-sized arrays stay zero-sized; arrays of N rows are
+        # passed as they are)
+        v = []
+        for k in _OUT_KEYS:
+            a = out[k]
+            r = len(a)
+            if r != N:
+                if r < N and (r or k in need):
+                    raise ValueError(f"output {k!r} holds {r} rows, {N} needed")
+                if r:
+                    a = a[:N]
+            v.append(a)
         if signs.shape != (1, self.n_branch) and signs.shape != (N, self.n_branch):
             raise ValueError(f"signs must be (1 or {N}, {self.n_branch}), got {signs.shape}")
         if len(velocity) not in (1, N) or len(acceleration) not in (1, N):
@@ -193,14 +218,9 @@ class FusedKernel:
         statf = np.zeros(1)
         cap = min(N, SUSPECT_CAP)
         susp = np.empty(max(cap, 1), np.int64)
-        o = out
-        # views of N rows; zero-sized arrays stay zero-sized
-        v = {k: (a[:N] if a.shape[0] else a) for k, a in o.items()}
         t0 = time.perf_counter() if self.compile_seconds is None else None
         self.fn(level, values, velocity, acceleration, signs, self.pf, self.pc, carry, stat, statf,
-                susp, v["q"], v["qd"], v["qdd"], v["theta"], v["omega"], v["alpha"], v["E"],
-                v["zO"], v["zv"], v["za"], v["A"], v["det"], v["trv"], v["jp"], v["jf"],
-                v["nm"], v["sc"])
+                susp, *v)
         if t0 is not None:
             self.compile_seconds = time.perf_counter() - t0 + self._t_load
             COMPILE_LOG[self.module.__name__] = self.compile_seconds
