@@ -144,7 +144,13 @@ class FusedKernel:
         ps = self.lk.positions
         sch = getattr(ps, "schedule", None) if branch != "held" else None
         if sch is None or getattr(sch, "constant", True) or not len(values):
-            return np.array([ps.signs], float).reshape(1, self.n_branch)
+            # one row for all; kept while the solver's signs are these (read only by
+            # the kernel)
+            key = tuple(ps.signs)
+            held = self.__dict__.get("_held")
+            if held is None or held[0] != key:
+                held = self._held = (key, np.array([key], float).reshape(1, self.n_branch))
+            return held[1]
         combos, idx = sch.signs_for(values)
         if len(combos) == 1:
             return np.array([combos[0]], float).reshape(1, self.n_branch)
@@ -185,10 +191,12 @@ class FusedKernel:
         return out
 
     def run(self, values, velocity, acceleration, signs, out: dict, level: int = 3,
-            carry=None):
+            carry=None, fresh: bool = False):
         """Evaluate into ``out`` (see :meth:`alloc`; its first dimension may exceed
         ``len(values)``: the leading rows are written).  ``carry`` (``1 + 2 n_groups``)
-        continues the angle unwrapping of a previous block.  Returns ``(first
+        continues the angle unwrapping of a previous block.  ``fresh``: ``out`` is
+        :meth:`alloc` ``(len(values), level)``'s own, unchanged (its rows need no
+        check and no cut).  Returns ``(first
         infeasible index or -1, index of the worst loop residual, worst residual (m),
         suspect indices)``."""
         if level >= 3 and not self.with_forces:
@@ -198,8 +206,8 @@ class FusedKernel:
         need = _NEED[min(max(level, 0), 3)]
         # views of N rows (zero-sized arrays stay zero-sized; arrays of N rows are
         # passed as they are)
-        v = []
-        for k in _OUT_KEYS:
+        v = list(out.values()) if fresh else []
+        for k in () if fresh else _OUT_KEYS:
             a = out[k]
             r = len(a)
             if r != N:
@@ -244,8 +252,10 @@ class FusedKernel:
                 rate(d.acceleration if acceleration is None else acceleration))
 
     def _check(self, values, bad, worst_i, worst):
-        from . import positions as P
         lk = self.lk
+        if bad < 0 and (not lk.topo.n_loops or not len(values) or worst <= lk.positions.tol):
+            return  # the common case: nothing to raise
+        from . import positions as P
         if bad >= 0:
             raise P._infeasible(lk.topo, float(values[bad]))
         tol = lk.positions.tol
@@ -289,7 +299,7 @@ class FusedKernel:
         level = 3 if forces else 2
         out = self.alloc(len(values), level, full=True)
         bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
-                                        level)
+                                        level, fresh=True)
         self._check(values, bad, wi, worst)
         self._singular(values, susp, out["A"], on_singular)
         kin, frc = self._wrap(values, vel, acc, out, branch, forces)
@@ -345,7 +355,7 @@ class FusedKernel:
         out = self.alloc(N, 3)
         branch = getattr(kin, "_fused_branch", "continued")
         _, vel, acc = self._inputs(kin.value, _compact(kin.velocity), _compact(kin.acceleration))
-        self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3)
+        self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3, fresh=True)
         return self._forces(out)
 
     def _require_mass(self):
@@ -372,10 +382,11 @@ class FusedKernel:
         values, vel, acc = self._inputs(values, velocity, acceleration)
         if level >= 3:
             self._require_mass()
-        if out is None:
+        fresh = out is None
+        if fresh:
             out = self.alloc(len(values), level)
         bad, wi, worst, _ = self.run(values, vel, acc, self.signs_for(values, branch), out,
-                                     level)
+                                     level, fresh=fresh)
         self._check(values, bad, wi, worst)
         N = len(values)
         cut = {k: (a[:N] if a.shape[0] else None) for k, a in out.items()}
@@ -385,10 +396,12 @@ class FusedKernel:
         """Body poses only (level 0): ``exp(i theta)`` and origins, complex ``(N, B)``
         each, from which every point follows (angles are not computed)."""
         values = np.ascontiguousarray(np.atleast_1d(np.asarray(values, float)))
-        if out is None:
+        fresh = out is None
+        if fresh:
             out = self.alloc(len(values), 0, full=True)
         z = np.zeros(1)
-        bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0)
+        bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0,
+                                     fresh=fresh)
         self._check(values, bad, wi, worst)
         return out["E"][:len(values)], out["zO"][:len(values)]
 
