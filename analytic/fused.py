@@ -163,6 +163,15 @@ class FusedKernel:
         3: + forces.  ``full`` adds what :class:`Kinematics` holds besides ``q, q',
         q''`` (angles, poses, origin rates, Jacobian, transmission and joint points).
         """
+        plan = self.__dict__.setdefault("_plans", {}).get((level, full))
+        if plan is None:
+            plan = self._plans[(level, full)] = self._alloc_plan(level, full)
+        return {k: (np.empty((N, *tail), dt) if e is None else e) for k, tail, dt, e in plan}
+
+    def _alloc_plan(self, level: int, full: bool) -> tuple:
+        """``(key, row shape, dtype, None or the shared zero-sized array)`` per output,
+        in the kernel's order: arrays not wanted are zero-sized, one shared per key
+        (never written), so a call allocates only what it returns."""
         B, J, n = self.B, self.J, self.n
         shapes = (("q", level >= 1, (self.nq,), float), ("qd", level >= 2, (self.nq,), float),
                   ("qdd", level >= 2, (self.nq,), float),
@@ -176,19 +185,12 @@ class FusedKernel:
                   ("trv", full and level >= 2, (2 * self.T,), complex),
                   ("jp", full and level >= 2, (J,), complex), ("jf", level >= 3, (J, 2), float),
                   ("nm", level >= 3, (self.P, 2), float), ("sc", level >= 3, (5,), float))
-        # arrays not wanted are zero-sized: one shared per key (never written), so a
-        # call allocates only what it returns
+        assert tuple(k for k, *_ in shapes) == _OUT_KEYS  # run(fresh=True) relies on it
         empty = self.__dict__.setdefault("_empty", {})
-        out = {}
         for k, ok, tail, dt in shapes:
-            if ok:
-                out[k] = np.empty((N, *tail), dt)
-            else:
-                e = empty.get(k)
-                if e is None:
-                    e = empty[k] = np.empty((0, *tail), dt)
-                out[k] = e
-        return out
+            if not ok and k not in empty:
+                empty[k] = np.empty((0, *tail), dt)
+        return tuple((k, tail, dt, None if ok else empty[k]) for k, ok, tail, dt in shapes)
 
     def run(self, values, velocity, acceleration, signs, out: dict, level: int = 3,
             carry=None, fresh: bool = False):
@@ -389,7 +391,10 @@ class FusedKernel:
                                      level, fresh=fresh)
         self._check(values, bad, wi, worst)
         N = len(values)
-        cut = {k: (a[:N] if a.shape[0] else None) for k, a in out.items()}
+        if fresh:
+            cut = {k: (a if len(a) else None) for k, a in out.items()}
+        else:
+            cut = {k: (a[:N] if len(a) else None) for k, a in out.items()}
         return State(cut["q"], cut["qd"], cut["qdd"], cut["jf"], cut["nm"], cut["sc"])
 
     def poses(self, values, branch: str = "continued", out: dict | None = None):
