@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from analytic.errors import LinkageError
+from analytic.positions import size_of
 
 from .reference import MAX_CONDITION, analytic_reference, linkage_of
 
@@ -115,14 +116,10 @@ def analytic_at(run_, reference=None):
 ZERO_PEAK = 1e-9
 
 
-def mechanism_size(mech) -> float:
-    """Largest distance between two points of one body (m): the mechanism's size."""
-    s = 0.0
-    for b in mech.bodies:
-        P = np.array(list(b.points.values()), float)
-        if len(P) > 1:
-            s = max(s, float(np.max(np.linalg.norm(P[:, None] - P[None], axis=-1))))
-    return s if s > 0 else 1.0
+def _zero_floor(reference, scale: float) -> float:
+    """The peak floor for :func:`compare`: ``scale`` when the reference is identically
+    zero up to round-off (its peak at most :data:`ZERO_PEAK` of ``scale``), else 0."""
+    return scale if float(np.max(np.abs(reference))) <= ZERO_PEAK * scale else 0.0
 
 
 class NothingToCompare(LinkageError):
@@ -168,7 +165,8 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     # the mechanism's angular-acceleration scale: its largest body alpha, or, when every
     # body's alpha is identically zero (a parallelogram at constant input speed), the
     # input's own rate scale (w^2 + |a| of a crank; (v/L)^2 + |a|/L of a slider)
-    L = 1.0 if lk.driver_is_revolute else mechanism_size(mech)
+    size = size_of(lk.topo)  # m: the mechanism's largest point distance in one body
+    L = 1.0 if lk.driver_is_revolute else size
     rate_scale = float(np.max((kin.velocity[keep] / L) ** 2
                               + np.abs(kin.acceleration[keep]) / L))
     alpha_peak = float(np.max(np.abs(kin.alpha[keep][:, moving]))) if moving else 0.0
@@ -176,32 +174,29 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     for b in moving:
         # a body whose exact alpha is identically zero (a constant-speed crank, a piston)
         # has no peak of its own: judge it on the mechanism's angular-acceleration scale
-        own = float(np.max(np.abs(kin.alpha[keep, b])))
-        floor = alpha_scale if own <= ZERO_PEAK * alpha_scale else 0.0
         out.append(compare(f"{run_.body_names[b]}.alpha", kin.alpha[keep, b],
-                           run_.alpha[keep, b], at, tol, peak_floor=floor))
+                           run_.alpha[keep, b], at, tol,
+                           peak_floor=_zero_floor(kin.alpha[keep, b], alpha_scale)))
     # a slider whose exact acceleration is identically zero (a prismatic input at constant
     # speed) is judged on the mechanism's linear-acceleration scale, its rate scale times
     # its size, not on its own round-off peak
-    acc_scale = rate_scale * (mechanism_size(mech) if lk.driver_is_revolute else L)
+    acc_scale = rate_scale * size
     for p, name in enumerate(run_.prismatic_names):
         a_ref = kin.slider(name)[2][keep]
-        floor = acc_scale if float(np.max(np.abs(a_ref))) <= ZERO_PEAK * acc_scale else 0.0
         out.append(compare(f"{name}.a", a_ref, run_.slider_acc[keep, p], at, tol,
-                           peak_floor=floor))
+                           peak_floor=_zero_floor(a_ref, acc_scale)))
     if frc is not None:
         # an effort identically zero (no load, no gravity, no inertia torque: the
         # parallelogram) is judged on the joint forces' scale times the lever arm
         f_peak = max((float(np.max(np.linalg.norm(frc.joint_force[n][keep], axis=1)))
                       for n in run_.joint_names), default=0.0)
-        e_scale = f_peak * (mechanism_size(mech) if lk.driver_is_revolute else 1.0)
-        e_own = float(np.max(np.abs(frc.effort[keep])))
+        e_scale = f_peak * (size if lk.driver_is_revolute else 1.0)
         out.append(compare("drive.effort", frc.effort[keep], run_.drive_effort[keep], at, tol,
-                           peak_floor=e_scale if e_own <= ZERO_PEAK * e_scale else 0.0))
+                           peak_floor=_zero_floor(frc.effort[keep], e_scale)))
         for j, name in enumerate(run_.joint_names):
             out.append(compare(f"{name}.force", frc.joint_force[name][keep],
                                run_.joint_force[keep, j], at, tol))
-        out += _prismatic_reactions(run_, frc, keep, at, tol, f_peak, mechanism_size(mech))
+        out += _prismatic_reactions(run_, frc, keep, at, tol, f_peak, size)
         if run_.joint_force_engine is not None:
             for j, name in enumerate(run_.joint_names):
                 out.append(compare(f"{name}.force[engine]", frc.joint_force[name][keep],
@@ -224,9 +219,8 @@ def _prismatic_reactions(run_, frc, keep, at, tol: float, f_peak: float,
                 ("normal", frc.normal, run_.normal, f_peak),
                 ("moment", frc.moment, run_.moment, f_peak * size)):
             ref = ref_all[name][keep]
-            floor = scale if float(np.max(np.abs(ref))) <= ZERO_PEAK * scale else 0.0
             out.append(compare(f"{name}.{what}", ref, test_all[keep, p], at, tol,
-                               peak_floor=floor))
+                               peak_floor=_zero_floor(ref, scale)))
     return out
 
 
