@@ -26,7 +26,7 @@ import numpy as np
 
 from .errors import AssemblyError
 from .loops import LoopEquations
-from .mechanism import Revolute
+from .mechanism import Revolute, mechanism_size
 from .tolerances import (
     ASSEMBLY_STARTS,
     HINT_DISTANCE,
@@ -54,13 +54,10 @@ def cross(a, b):
 
 
 def size_of(topo: Topology) -> float:
-    """A length scale of the mechanism (m): the largest point distance in any body."""
-    s = 0.0
-    for pts in topo.body_points:
-        v = list(pts.values())
-        for a, b in itertools.combinations(v, 2):
-            s = max(s, float(np.hypot(*(a - b))))
-    return s or 1.0
+    """A length scale of the mechanism (m): the largest point distance in any body
+    (:func:`analytic.mechanism.mechanism_size`, which validation uses too), 1 m when the
+    description has no two points on one body."""
+    return mechanism_size(topo.mech.bodies) or 1.0
 
 
 def rrr_disc_factor(c1: complex, c2: complex) -> float:
