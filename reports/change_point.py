@@ -16,14 +16,11 @@ from dataclasses import replace
 import numpy as np
 
 from analytic import Linkage, Mechanism
+from sim_models.tree import wrap as _wrap  # (-pi, pi], the engine trees' own
 
 #: Loop gap (relative to the mechanism's size) that ends a change-point run: looser than
 #: the engine runs' 1e-3 so that soft (stock) constraints still show a branch.
 CHANGE_POINT_MAX_VIOLATION = 1e-2
-
-
-def _wrap(a):
-    return np.pi - np.mod(np.pi - np.asarray(a, float), 2 * np.pi)
 
 
 def _held(mech: Mechanism) -> Linkage:
