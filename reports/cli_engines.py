@@ -30,7 +30,7 @@ def cmd_models(args) -> int:
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import comparison_frame, near_event, step_note, verdict
+    from reports.compare import near_event, step_note, verdict
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
@@ -58,35 +58,50 @@ def cmd_compare(args) -> int:
             "comparisons": [asdict(c) for c in comps]} for r, comps, ok, near in out],
             indent=2))
     else:
-        import pandas as pd
-        with pd.option_context("display.width", 160, "display.max_columns", 20):
-            for r, comps, ok, near in out:
-                print(f"== {mech.name} / {r.engine} ({args.mode}) : "
-                      f"{'PASS' if ok else 'FAIL'}")
-                print(f"settings: {r.settings_text}")
-                if r.by_time:
-                    print(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
-                          "(the input is not a monotonic turn); 'at' is the input there")
-                if not r.ok:
-                    print(f"run failed: {r.reason}")
-                if near:
-                    print(f"near an event: {near}")
-                if not ok and r.ok and (sn := step_note(r, tree.linkage.driver_is_revolute)):
-                    print(f"step: {sn}")
-                df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
-                                                 "at", "tolerance", "passed"]]
-                print(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-                if any(c.quantity.endswith("[engine]") for c in comps):
-                    print("rows marked [engine] are the engine's own readings, reported but "
-                          "not judged: PyBullet's jointReactionForces are known wrong for "
-                          "links with a moving parent or children (README, Engines)")
-                for n in r.notes:
-                    print("note:", n)
-                print(f"wall time {r.wall_per_rev * 1e3:.1f} ms per revolution, "
-                      f"dt {r.timestep:.3g} s")
+        _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
     from reports.ci_formats import write_compare_outputs  # --junit, --summary
     write_compare_outputs(args, mech, out)
     return 0 if all_ok else 1
+
+
+def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
+    """``xval compare``'s table per engine; prose lines wrapped to the terminal's width
+    (settings strings run to ~190 characters)."""
+    import shutil
+    import textwrap
+
+    import pandas as pd
+
+    from reports.compare import comparison_frame, step_note
+    width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
+
+    def say(text: str) -> None:
+        print(textwrap.fill(text, width, subsequent_indent="  ", break_on_hyphens=False))
+
+    with pd.option_context("display.width", width, "display.max_columns", 20):
+        for r, comps, ok, near in out:
+            print(f"== {mech.name} / {r.engine} ({mode}) : {'PASS' if ok else 'FAIL'}")
+            say(f"settings: {r.settings_text}")
+            if r.by_time:
+                say(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
+                    "(the input is not a monotonic turn); 'at' is the input there")
+            if not r.ok:
+                say(f"run failed: {r.reason}")
+            if near:
+                say(f"near an event: {near}")
+            if not ok and r.ok and (sn := step_note(r, revolute)):
+                say(f"step: {sn}")
+            df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
+                                             "at", "tolerance", "passed"]]
+            print(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+            if any(c.quantity.endswith("[engine]") for c in comps):
+                say("rows marked [engine] are the engine's own readings, reported but not "
+                    "judged: PyBullet's jointReactionForces are known wrong for links with "
+                    "a moving parent or children (README, Engines)")
+            for n in r.notes:
+                say(f"note: {n}")
+            print(f"wall time {r.wall_per_rev * 1e3:.1f} ms per revolution, "
+                  f"dt {r.timestep:.3g} s")
 
 
 def cmd_report(args) -> int:
