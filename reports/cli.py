@@ -221,22 +221,40 @@ def cmd_sweep(args) -> int:
           + ("full cycle" if r.full_cycle else "the range asked for" if args.range
              else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))
+    say = _paragraph_printer()
     if args.csv:
-        print(f"table {units.header()}; the events and summary below in SI, angles in deg")
+        say(f"table {units.header()}; the events and summary below in SI, angles in deg")
     elif getattr(args, "units", None):
-        print("--units applies to the --csv table; the events and summary below are in SI, "
-              "angles in deg")
+        say("--units applies to the --csv table; the events and summary below are in SI, "
+            "angles in deg")
     for n in r.notes:
-        print("note:", n)
+        say(f"note: {n}")
     if len(r.events):
-        print(r.events.to_string(index=False))
+        # left-aligned, one event a line, its detail wrapped under it (pandas' right-aligned
+        # table ran to 130+ columns)
+        w = max(len(str(k)) for k in r.events["kind"])
+        ww = max(len(str(x)) for x in r.events["where"])
+        for e in r.events.itertuples(index=False):
+            say(f"{e.kind:<{w}} {e.where:<{ww}} {e.input:11.6f}  {e.detail}")
     for line in r.summary.lines():
-        print(line)
+        say(line)
     if r.summary.power_balance is not None:  # over the regular samples
         print(f"power balance error {r.summary.power_balance:.2g} (relative)")
     if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
+
+
+def _paragraph_printer():
+    """``say(text)``: print ``text`` wrapped to the terminal's width (60 to 120
+    columns), continuation lines indented."""
+    import shutil
+    import textwrap
+    width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
+
+    def say(text: str) -> None:
+        print(textwrap.fill(text, width, subsequent_indent="    ", break_on_hyphens=False))
+    return say
 
 
 def write_csv(frame, path: str, stdout) -> None:
