@@ -456,8 +456,13 @@ def feasible_ranges(topo: Topology, n: int = 3601, signs=None) -> list[tuple[flo
             i += 1
     if isinstance(topo.mech.driver_joint, Revolute) and len(out) > 1 and \
             out[0][0] == lo and out[-1][1] == hi:
-        # one interval across the span's seam (the span is one turn): join its halves
-        out = [(out[-1][0] - 2 * math.pi, out[0][1])] + out[1:-1]
+        # one interval across the span's seam (the span is one turn): join its halves,
+        # on the turn that holds the reference value (the span's centre) when one half
+        # does, so that the interval of the assembled branch contains it
+        v0 = topo.mech.driver.value
+        joined = ((out[-1][0], out[0][1] + 2 * math.pi) if v0 >= out[-1][0] else
+                  (out[-1][0] - 2 * math.pi, out[0][1]))
+        out = [joined] + out[1:-1]
         out.sort()
     return out
 

@@ -19,6 +19,7 @@ therefore share one compiled kernel.
 from __future__ import annotations
 
 import cmath
+import functools
 import math
 
 import numpy as np
@@ -121,7 +122,7 @@ class KernelSource:
         ground (E = 1, O = 0) the attachment itself."""
         if b == self.topo.ground:
             return self._at(j, b)
-        return f"(O{b} + E{b} * {self._at(j, b)})"
+        return f"(O{b} + cm(E{b}, {self._at(j, b)}))"
 
     def _unit(self, z: str, c: str) -> str:
         """``z / |z| * c`` as numpy computes it: ``|z|`` by :func:`cabs`, a complex divided
@@ -130,7 +131,7 @@ class KernelSource:
         rates amplify any difference by the Jacobian's condition number."""
         t = self.s.tmp("iz")
         self.s.emit(f"{t} = 1.0 / cabs({z}.real, {z}.imag)")
-        return f"complex({z}.real * {t}, {z}.imag * {t}) * {c}"
+        return f"cm(complex({z}.real * {t}, {z}.imag * {t}), {c})"
 
     def _place(self, b, th: str, e: str | None = None):
         e_ = e if e is not None else f"complex(math.cos(th{b}), math.sin(th{b}))"
@@ -164,7 +165,7 @@ class KernelSource:
         k = topo.other(j, x)
         sgn = 1.0 if topo.body_names[x] == joints[j].body_b else -1.0
         self._place(x, f"th{k} + {sgn!r} * v")
-        s.emit(f"O{x} = {self._pt(k, j)} - E{x} * {self._at(j, x)}")
+        s.emit(f"O{x} = {self._pt(k, j)} - cm(E{x}, {self._at(j, x)})")
 
     def _step_driven_prismatic(self, st):
         topo, jt, s = self.topo, self.mech.joints[st.joints[0]], self.s
@@ -172,14 +173,14 @@ class KernelSource:
         k = topo.other(j, x)
         ul = s.c(cmath.exp(1j * jt.direction))
         if topo.body_names[x] == jt.slider:
-            self._place(x, f"th{k} + {s.f(jt.angle)}", f"E{k} * {s.c(cmath.exp(1j * jt.angle))}")
-            s.emit(f"PS = {self._pt(k, j)} + v * (E{k} * {ul})")
-            s.emit(f"O{x} = PS - E{x} * {self._at(j, x)}")
+            self._place(x, f"th{k} + {s.f(jt.angle)}", f"cm(E{k}, {s.c(cmath.exp(1j * jt.angle))})")
+            s.emit(f"PS = {self._pt(k, j)} + v * cm(E{k}, {ul})")
+            s.emit(f"O{x} = PS - cm(E{x}, {self._at(j, x)})")
         else:
             self._place(x, f"th{k} - {s.f(jt.angle)}",
-                        f"E{k} * {s.c(cmath.exp(-1j * jt.angle))}")
-            s.emit(f"Q = {self._pt(k, j)} - v * (E{x} * {ul})")
-            s.emit(f"O{x} = Q - E{x} * {self._at(j, x)}")
+                        f"cm(E{k}, {s.c(cmath.exp(-1j * jt.angle))})")
+            s.emit(f"Q = {self._pt(k, j)} - v * cm(E{x}, {ul})")
+            s.emit(f"O{x} = Q - cm(E{x}, {self._at(j, x)})")
 
     def _step_RRR(self, st):
         topo, joints, s, at = self.topo, self.mech.joints, self.s, self._at
@@ -204,7 +205,7 @@ class KernelSource:
         s.emit(f"dsc = h2 * {s.f(rrr_disc_factor(c1, c2))} if D > 0 else -1.0")
         self._disc("dsc")
         s.emit(f"h = math.sqrt(max(h2, 0.0)) if dsc > {TOGGLE_SNAP!r} else 0.0")
-        s.emit(f"w = d * complex(a, {self._sign()} * h)")
+        s.emit(f"w = cm(d, complex(a, {self._sign()} * h))")
         s.emit("P2 = P1 + complex(w.real * iD, w.imag * iD)")
         s.emit(f"{t}a = P2 - P1")
         s.emit(f"{t}b = P3 - P2")
@@ -212,8 +213,8 @@ class KernelSource:
         s.emit(f"E{x2} = {self._unit(f'{t}b', n2)}")
         s.emit(f"th{x1} = math.atan2(E{x1}.imag, E{x1}.real) if level >= 1 else 0.0")
         s.emit(f"th{x2} = math.atan2(E{x2}.imag, E{x2}.real) if level >= 1 else 0.0")
-        s.emit(f"O{x1} = P1 - E{x1} * {at(j1, x1)}")
-        s.emit(f"O{x2} = P2 - E{x2} * {at(j2, x2)}")
+        s.emit(f"O{x1} = P1 - cm(E{x1}, {at(j1, x1)})")
+        s.emit(f"O{x2} = P2 - cm(E{x2}, {at(j2, x2)})")
         self.trans.append((joints[j2].name, f"-{t}a", f"{t}b"))
 
     def _step_RRP(self, st):
@@ -229,16 +230,17 @@ class KernelSource:
         t = s.tmp("tr")
         s.emit(f"P1 = {self._pt(k1, j1)}")
         if topo.body_names[x2] == jt.slider:
-            self._place(x2, f"th{k3} + {s.f(jt.angle)}", f"E{k3} * {s.c(cmath.exp(1j * jt.angle))}")
-            s.emit(f"u = E{k3} * {ul}")
+            self._place(x2, f"th{k3} + {s.f(jt.angle)}",
+                        f"cm(E{k3}, {s.c(cmath.exp(1j * jt.angle))})")
+            s.emit(f"u = cm(E{k3}, {ul})")
             s.emit("ud = u")
         else:
             self._place(x2, f"th{k3} - {s.f(jt.angle)}",
-                        f"E{k3} * {s.c(cmath.exp(-1j * jt.angle))}")
-            s.emit(f"u = E{x2} * {ul}")
+                        f"cm(E{k3}, {s.c(cmath.exp(-1j * jt.angle))})")
+            s.emit(f"u = cm(E{x2}, {ul})")
             s.emit("ud = -u")
         dc = s.c(cplx(topo.attach(j2, x2)) - cplx(topo.attach(j3, x2)))
-        s.emit(f"base = {self._pt(k3, j3)} + E{x2} * {dc}")
+        s.emit(f"base = {self._pt(k3, j3)} + cm(E{x2}, {dc})")
         s.emit("e = base - P1")
         s.emit("eu = e.real * ud.real + e.imag * ud.imag")
         s.emit(f"h2 = eu * eu - (e.real * e.real + e.imag * e.imag) + {L1s}")
@@ -249,8 +251,8 @@ class KernelSource:
         s.emit(f"{t}a = P2 - P1")
         s.emit(f"E{x1} = {self._unit(f'{t}a', n1)}")
         s.emit(f"th{x1} = math.atan2(E{x1}.imag, E{x1}.real) if level >= 1 else 0.0")
-        s.emit(f"O{x1} = P1 - E{x1} * {at(j1, x1)}")
-        s.emit(f"O{x2} = P2 - E{x2} * {at(j2, x2)}")
+        s.emit(f"O{x1} = P1 - cm(E{x1}, {at(j1, x1)})")
+        s.emit(f"O{x2} = P2 - cm(E{x2}, {at(j2, x2)})")
         s.emit(f"{t}b = 1j * u")
         self.trans.append((joints[j2].name, f"-{t}a", f"{t}b"))
 
@@ -280,9 +282,9 @@ class KernelSource:
                f"(0.0 if ratio > 0 else {math.pi!r})")
         s.emit(f"thg = psi - {s.f(jt.direction + math.pi / 2)} + {self._sign()} * ac")
         self._place(g, "thg")
-        self._place(s_, f"thg + {s.f(jt.angle)}", f"E{g} * {s.c(cmath.exp(1j * jt.angle))}")
-        s.emit(f"O{g} = PG - E{g} * {s.c(aG)}")
-        s.emit(f"O{s_} = PSr - E{s_} * {s.c(aS)}")
+        self._place(s_, f"thg + {s.f(jt.angle)}", f"cm(E{g}, {s.c(cmath.exp(1j * jt.angle))})")
+        s.emit(f"O{g} = PG - cm(E{g}, {s.c(aG)})")
+        s.emit(f"O{s_} = PSr - cm(E{s_}, {s.c(aS)})")
 
     def _step_PRP(self, st):
         topo, joints, s = self.topo, self.mech.joints, self.s
@@ -294,21 +296,21 @@ class KernelSource:
             ul = s.c(cmath.exp(1j * jt.direction))
             if topo.body_names[x] == jt.slider:
                 self._place(x, f"th{k} + {s.f(jt.angle)}",
-                            f"E{k} * {s.c(cmath.exp(1j * jt.angle))}")
-                s.emit(f"dir{n} = E{k} * {ul}")
+                            f"cm(E{k}, {s.c(cmath.exp(1j * jt.angle))})")
+                s.emit(f"dir{n} = cm(E{k}, {ul})")
             else:
                 self._place(x, f"th{k} - {s.f(jt.angle)}",
-                            f"E{k} * {s.c(cmath.exp(-1j * jt.angle))}")
-                s.emit(f"dir{n} = E{x} * {ul}")
+                            f"cm(E{k}, {s.c(cmath.exp(-1j * jt.angle))})")
+                s.emit(f"dir{n} = cm(E{x}, {ul})")
             dc = s.c(cplx(topo.attach(j2, x)) - cplx(topo.attach(j, x)))
-            s.emit(f"base{n} = {self._pt(k, j)} + E{x} * {dc}")
+            s.emit(f"base{n} = {self._pt(k, j)} + cm(E{x}, {dc})")
         s.emit("cr = dir0.real * dir1.imag - dir0.imag * dir1.real")
         self._disc("abs(cr) - 1e-12")
         s.emit("db = base1 - base0")
         s.emit("t1 = (db.real * dir1.imag - db.imag * dir1.real) / (cr if cr != 0 else 1.0)")
         s.emit("P2 = base0 + t1 * dir0")
-        s.emit(f"O{x1} = P2 - E{x1} * {self._at(j2, x1)}")
-        s.emit(f"O{x2} = P2 - E{x2} * {self._at(j2, x2)}")
+        s.emit(f"O{x1} = P2 - cm(E{x1}, {self._at(j2, x1)})")
+        s.emit(f"O{x2} = P2 - cm(E{x2}, {self._at(j2, x2)})")
 
     # -- unknowns: q_from_poses, unwrapped as over one batch --------------------
     def _unknowns(self):
@@ -331,8 +333,9 @@ class KernelSource:
             jt = joints[j]
             gb, sb = topo.body_names.index(jt.guide), topo.body_names.index(jt.slider)
             c = topo.n_groups + i
-            s.emit(f"dPQ = O{sb} + E{sb} * {self._at(j, sb)} - O{gb} - E{gb} * {self._at(j, gb)}")
-            s.emit(f"uu = E{gb} * {s.c(cmath.exp(1j * jt.direction))}")
+            s.emit(f"dPQ = O{sb} + cm(E{sb}, {self._at(j, sb)}) - O{gb} - cm(E{gb}, "
+                   f"{self._at(j, gb)})")
+            s.emit(f"uu = cm(E{gb}, {s.c(cmath.exp(1j * jt.direction))})")
             s.emit(f"q{c} = dPQ.real * uu.real + dPQ.imag * uu.imag")
 
     # -- loop equations: terms, residual, Jacobian ------------------------------
@@ -373,7 +376,7 @@ class KernelSource:
         for k in range(T):
             tb = eqs.term_body[k]
             s.emit(f"ez{k} = " + (s.c(eqs.term_rot[k]) if tb == topo.ground
-                                  else f"E{tb} * {s.c(eqs.term_rot[k])}"))
+                                  else f"cm(E{tb}, {s.c(eqs.term_rot[k])})"))
             if eqs.ns and t.slider[k] >= 0:
                 s.emit(f"m{k} = {s.f(eqs.r[k])} + {s.f(eqs.sign[k])} * q{self.ng + t.slider[k]}")
             else:
@@ -454,7 +457,7 @@ class KernelSource:
                 w = f"qd{t.group[kk]}"
                 if ns and t.slider[kk] >= 0:
                     md = f"({s.f(eqs.sign[kk])} * qd{self.ng + t.slider[kk]})"
-                    parts.append(f"(2j * {md} * {w} - m{kk} * {w} * {w}) * ez{kk}")
+                    parts.append(f"cm(2j * {md} * {w} - m{kk} * {w} * {w}, ez{kk})")
                 else:
                     parts.append(f"(-m{kk} * {w} * {w}) * ez{kk}")
             s.emit(f"gz = {' + '.join(parts) if parts else '0j'}")
@@ -485,22 +488,22 @@ class KernelSource:
         for c in topo.order[1:]:
             p, j = topo.parent[c]
             jt = joints[j]
-            s.emit(f"rp = E{p} * {self._at(j, p)}")
+            s.emit(f"rp = cm(E{p}, {self._at(j, p)})")
             s.emit(f"P = O{p} + rp")
             s.emit(f"vP = V{p} + 1j * w{p} * rp")
-            s.emit(f"aP = Ac{p} + (1j * al{p} - w{p} * w{p}) * rp")
+            s.emit(f"aP = Ac{p} + cm(1j * al{p} - w{p} * w{p}, rp)")
             if not isinstance(jt, Revolute):
                 i = topo.n_groups + topo.slider_index[j]
                 gb = topo.body_names.index(jt.guide)
                 u = s.c(complex(math.cos(jt.direction), math.sin(jt.direction)))
-                s.emit(f"u = E{gb} * {u}")
+                s.emit(f"u = cm(E{gb}, {u})")
                 s.emit(f"rel_v = qd{i} * u")
-                s.emit(f"rel_a = (qdd{i} + 2j * w{gb} * qd{i}) * u")
+                s.emit(f"rel_a = cm(qdd{i} + 2j * w{gb} * qd{i}, u)")
                 if c == topo.body_names.index(jt.slider):
-                    s.emit(f"PS = O{c} + E{c} * {self._at(j, c)}")
+                    s.emit(f"PS = O{c} + cm(E{c}, {self._at(j, c)})")
                     s.emit("r = PS - P")
                     s.emit(f"vP = vP + 1j * w{p} * r + rel_v")
-                    s.emit(f"aP = aP + (1j * al{p} - w{p} * w{p}) * r + rel_a")
+                    s.emit(f"aP = aP + cm(1j * al{p} - w{p} * w{p}, r) + rel_a")
                     s.emit("P = PS")
                 else:
                     s.emit("vP = vP - rel_v")
@@ -508,10 +511,10 @@ class KernelSource:
             s.emit(f"JP{j} = P")
             s.emit(f"rc = O{c} - P")
             s.emit(f"V{c} = vP + 1j * w{c} * rc")
-            s.emit(f"Ac{c} = aP + (1j * al{c} - w{c} * w{c}) * rc")
+            s.emit(f"Ac{c} = aP + cm(1j * al{c} - w{c} * w{c}, rc)")
         for j in topo.chords:
             bb = topo.body_names.index(joints[j].body_b)
-            s.emit(f"JP{j} = O{bb} + E{bb} * {self._at(j, bb)}")
+            s.emit(f"JP{j} = O{bb} + cm(E{bb}, {self._at(j, bb)})")
 
     def _store_poses(self):
         s, B = self.s, self.B
@@ -557,10 +560,10 @@ class KernelSource:
             if b == topo.ground:
                 continue
             m, I = s.f(body.mass), s.f(body.inertia)
-            s.emit(f"rr = E{b} * {s.c(cplx(body.com))}")
+            s.emit(f"rr = cm(E{b}, {s.c(cplx(body.com))})")
             s.emit(f"rG = O{b} + rr")
             s.emit(f"vG = V{b} + 1j * w{b} * rr")
-            s.emit(f"aG = Ac{b} + (1j * al{b} - w{b} * w{b}) * rr")
+            s.emit(f"aG = Ac{b} + cm(1j * al{b} - w{b} * w{b}, rr)")
             s.emit(f"f{b} = {m} * (aG - {g})")
             s.emit(f"hh = {I} * al{b}")
             s.emit(f"ke += ({m} * (aG.real * vG.real + aG.imag * vG.imag) + {I} * al{b} * w{b})")
@@ -571,7 +574,7 @@ class KernelSource:
                 F, tq = s.c(complex(*ld.force)), s.f(ld.torque)
                 if ld.point is not None:
                     c = s.c(cplx(topo.body_points[b][ld.point]))
-                    s.emit(f"rl = E{b} * {c}")
+                    s.emit(f"rl = cm(E{b}, {c})")
                     s.emit(f"rP = O{b} + rl")
                     s.emit(f"vP = V{b} + 1j * w{b} * rl")
                 else:
@@ -593,7 +596,7 @@ class KernelSource:
                 s.emit(f"Mc{2 * i + 1} = JP{j}.real")
             else:
                 nn = s.c(1j * cmath.exp(1j * jt.direction))
-                s.emit(f"Fc{2 * i} = E{names.index(jt.guide)} * {nn}")
+                s.emit(f"Fc{2 * i} = cm(E{names.index(jt.guide)}, {nn})")
                 s.emit(f"Fc{2 * i + 1} = 0j")
                 s.emit(f"Mc{2 * i} = JP{j}.real * Fc{2 * i}.imag - JP{j}.imag * Fc{2 * i}.real")
                 s.emit(f"Mc{2 * i + 1} = 1.0")
@@ -631,7 +634,7 @@ class KernelSource:
                 s.emit(f"R{t} = Smo{t} - ({P}.real * Sf{t}.imag - {P}.imag * Sf{t}.real)")
             else:
                 u = s.c(cmath.exp(1j * jt.direction))
-                s.emit(f"uj = E{names.index(jt.guide)} * {u}")
+                s.emit(f"uj = cm(E{names.index(jt.guide)}, {u})")
                 for kx in acting:
                     s.emit(f"F{t}_{kx} = {float(eps[t, kx])!r} * (uj.real * Fc{kx}.real "
                            f"+ uj.imag * Fc{kx}.imag)")
@@ -673,7 +676,7 @@ class KernelSource:
                 s.emit(f"jf[i, {j}, 1] = tb.imag")
             else:
                 nn = s.c(1j * cmath.exp(1j * jt.direction))
-                s.emit(f"nv = E{names.index(jt.guide)} * {nn}")
+                s.emit(f"nv = cm(E{names.index(jt.guide)}, {nn})")
                 s.emit("nn = nv.real * tb.real + nv.imag * tb.imag")
                 s.emit(f"nm[i, {pidx[j]}, 0] = nn")
                 s.emit("fz = nv * nn")
@@ -709,6 +712,8 @@ class KernelSource:
             "from numba import njit",
             "from analytic.kernels.smallmat import (cabs, det_small, lu_det, lu_factor,",
             "                                       lu_solve, solve_small)",
+            # complex products as numpy's array multiply computes them on this machine
+            f"from analytic.kernels.smallmat import {complex_multiply()} as cm",
             "",
             "",
             "@njit(cache=True, error_model='numpy', nogil=True)",
@@ -760,6 +765,14 @@ class KernelSource:
 
     def params(self) -> tuple[np.ndarray, np.ndarray]:
         return (np.array(self.s.pf or [0.0], float), np.array(self.s.pc or [0j], complex))
+
+
+@functools.cache
+def complex_multiply() -> str:
+    """The helper for a complex product (:func:`smallmat.numpy_complex_multiply`),
+    probed once per process."""
+    from .smallmat import numpy_complex_multiply
+    return numpy_complex_multiply()
 
 
 def _helpers_hash() -> str:

@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from analytic import AssemblyError, Linkage, SingularConfigurationError, case_names, load_case
 from analytic.fused import FusedKernel, kernel_for
@@ -22,15 +24,19 @@ from analytic.positions import size_of
 from analytic.stream import sweep_csv
 from analytic.sweep import input_values
 
-#: The two paths run the same operations in the same order except the summation order
-#: inside BLAS (loop sums, gamma) and libm's vs numpy's transcendental functions (one
-#: ulp); amplified by the Jacobian's condition number near the sweep's limit positions
-#: (up to ~600 here) that leaves ~1e-14 of peak.  The issue asks 1e-13.
+#: The two paths run the same operations in the same order: complex products as numpy's
+#: array multiply rounds them (``smallmat.cmul_fused`` on an FMA machine), ``|z|`` as
+#: numpy's SIMD absolute value, libm's cos, sin and atan2 on both sides.  Poses and rates
+#: then agree bit for bit on eight of the ten built-in cases, also at the samples next
+#: to hibbeler-16-30's limit position where the Jacobian's condition number (~600)
+#: amplifies a one-ulp difference in a pose to ~1e-13 of peak (it did, at 1.5e-13,
+#: before the complex products were matched).  What remains is the summation order of
+#: BLAS (loop sums) and LAPACK's LU for the six-bar's 4x4 system: 5e-15 of peak
+#: measured.  The issue asks 1e-13 of peak, with no allowance for conditioning.
 AGREEMENT = 1e-13
-#: Rates come from a linear solve with the loop Jacobian: where its condition number
-#: kappa is large (the samples next to a limit position, kappa ~600 for hibbeler-16-30)
-#: either path's rounding is ~kappa eps of peak, and a one-ulp difference in a pose
-#: becomes that much in the rates.  There the paths must agree to RATE_ROUNDING kappa eps.
+#: Random linkages (not the built-in cases) may sit closer to a limit than any sweep
+#: sample here: there a one-ulp difference in a sum becomes kappa eps of peak, and the
+#: paths must agree to RATE_ROUNDING kappa eps.
 RATE_ROUNDING = 4.0
 EPS = np.finfo(float).eps
 RATE_FAMILIES = {"velocity", "acceleration", "omega", "alpha", "qd", "qdd", "force",
@@ -72,9 +78,10 @@ def _families(lk, kin, frc):
     return fam
 
 
-def _compare(lk, kin, frc, kin0, frc0):
+def _compare(lk, kin, frc, kin0, frc0, conditioned: bool = False):
     """Each family's largest difference over what is allowed at that sample (<= 1 passes):
-    AGREEMENT of the family's peak, or for rates RATE_ROUNDING kappa eps where larger."""
+    AGREEMENT of the family's peak, or (``conditioned``) for rates RATE_ROUNDING kappa
+    eps where larger."""
     a, b = _families(lk, kin, frc), _families(lk, kin0, frc0)
     kappa = np.where(np.isfinite(kin0.condition), kin0.condition, 1e300)
     errs = {}
@@ -84,7 +91,7 @@ def _compare(lk, kin, frc, kin0, frc0):
             peak = max(peak, float(np.max(np.abs(b["force"]))) * size_of(lk.topo))
         d = np.abs(np.asarray(a[k]) - np.asarray(b[k])).reshape(len(kappa), -1).max(axis=1)
         allowed = np.full(len(kappa), AGREEMENT)
-        if k in RATE_FAMILIES:
+        if conditioned and k in RATE_FAMILIES:
             allowed = np.maximum(allowed, RATE_ROUNDING * EPS * kappa)
         errs[k] = float(np.max(d / (max(peak, 1e-300) * allowed)))
     return errs
@@ -126,6 +133,28 @@ def test_fused_equals_numpy_on_every_case(case):
     E, O = fk.poses(x)
     np.testing.assert_array_equal(E, kin.E)
     np.testing.assert_array_equal(O, kin.zO)
+
+
+@settings(max_examples=25, deadline=None)
+@given(crank=st.floats(0.05, 0.3), coupler=st.floats(0.2, 0.6), rocker=st.floats(0.1, 0.5))
+def test_fused_equals_numpy_on_random_four_bars(crank, coupler, rocker):
+    """Random four-bars (Grashof or not) over their feasible range, up to its limits: the
+    same numbers, to AGREEMENT of peak or, at samples next to a limit, RATE_ROUNDING
+    kappa eps (one structure: one compiled kernel for all examples)."""
+    from tests.conftest import four_bar
+    mech = four_bar(0.4, crank, coupler, rocker)
+    try:
+        lk = Linkage(mech)
+    except AssemblyError:
+        assume(False)
+    x = input_values(lk, POINTS)[0]
+    kin0, frc0 = _numpy_kinematics(lk, x)
+    kin, frc = FusedKernel(lk).solve(x, on_singular="flag", forces=lk.mech.has_mass)
+    np.testing.assert_array_equal(kin.E, kin0.E)  # poses: the same operations
+    np.testing.assert_array_equal(kin.zO, kin0.zO)
+    errs = _compare(lk, kin, frc, kin0, frc0, conditioned=True)
+    worst = max(errs, key=errs.get)
+    assert errs[worst] <= 1.0, (worst, errs[worst])
 
 
 def test_signs_per_configuration():
@@ -215,18 +244,13 @@ def test_streamed_sweep_is_the_sweep(case):
     for col in f0.columns:  # columns of one kind share a scale
         kind = col.rsplit(".", 1)[-1]
         kinds.setdefault(family.get(kind, kind), []).append(col)
-    kappa = f0["jacobian_condition"].to_numpy()
-    rates = {"vx", "ax", "omega", "alpha", "fx", "moment", "torque", "force", "power", "v", "a"}
     for kind, cols in kinds.items():
         ref = f0[cols].to_numpy()
         scale = np.max(np.abs(ref))
         if kind == "moment":  # a couple's scale: the largest joint force times the size
             scale = max(scale, np.max(np.abs(f0[kinds["fx"]].to_numpy())) * size_of(lk.topo))
-        allowed = np.full(len(kappa), AGREEMENT)
-        if kind in rates:
-            allowed = np.maximum(allowed, RATE_ROUNDING * EPS * kappa)
         d = np.abs(f1[cols].to_numpy() - ref).max(axis=1)
-        assert np.all(d <= allowed * scale), kind
+        assert np.all(d <= AGREEMENT * scale), kind
     pd.testing.assert_frame_equal(r1.events, r0.events)
     assert r1.summary.lines() == r0.summary.lines()
     if r0.forces is not None:

@@ -58,6 +58,29 @@ def test_limited_range_sweep_reports_its_range():
     assert res.frame["input"].max() == pytest.approx(limit, abs=1e-3)
 
 
+@pytest.mark.parametrize("theta_deg", [60.0, 300.0, 100.0, -60.0])
+def test_range_across_the_seam_holds_the_reference(theta_deg):
+    """A limited crank whose feasible range straddles the reference angle + 180 deg (the
+    search span's seam): the range is reported on the turn that holds the reference,
+    and the sweep runs over it.  Ground 0.4, crank 0.25, coupler 0.25, rocker 0.5: the
+    loop closes where |O4 A| >= rocker - coupler, i.e. 0.2225 - 0.2 cos(theta) >= 0.0625,
+    cos(theta) <= 0.8 (law of cosines): theta in [acos 0.8, 360 deg - acos 0.8].
+    (Found by the random four-bars of test_fused: at 60 deg the range came back one
+    turn below the reference and the sweep said the reference was not feasible.)"""
+    lk = Linkage(four_bar(0.4, 0.25, 0.25, 0.5, theta=math.radians(theta_deg), masses=None))
+    lim = math.degrees(math.acos(0.8))
+    (lo, hi), = lk.feasible_ranges()
+    v0 = lk.mech.driver.value
+    assert lo <= v0 <= hi
+    k = round((math.radians(180.0) - 0.5 * (lo + hi)) / (2 * math.pi))  # same turn as 180
+    np.testing.assert_allclose(np.degrees([lo, hi]) + 360.0 * k, [lim, 360.0 - lim],
+                               atol=1e-9)
+    res = lk.sweep(50)
+    assert not res.full_cycle
+    span = np.ptp(res.frame["input"].to_numpy())
+    assert span == pytest.approx(360.0 - 2 * lim, abs=1e-3)
+
+
 def test_change_point_is_flagged_singular_without_noise():
     """The parallelogram passes flat configurations at 0 and 180 deg: singular events
     there.  Continued through them it stays a parallelogram, whose coupler translates
