@@ -60,7 +60,8 @@ def numpy_complex_multiply() -> str:
     b = rng.normal(size=64) + 1j * rng.normal(size=64)
     got = a * b
     fused = np.array([complex(fma(x.real, y.real, -(x.imag * y.imag)),
-                              fma(x.real, y.imag, x.imag * y.real)) for x, y in zip(a, b, strict=True)])
+                              fma(x.real, y.imag, x.imag * y.real))
+                      for x, y in zip(a, b, strict=True)])
     return "cmul_fused" if np.array_equal(got, fused) else "cmul_plain"
 
 
