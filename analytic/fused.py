@@ -346,8 +346,31 @@ class FusedKernel:
 
     def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",
                    branch="continued"):
-        """As :meth:`analytic.kinematics.Linkage.kinematics`."""
-        return self.solve(values, velocity, acceleration, on_singular, branch)[0]
+        """As :meth:`analytic.kinematics.Linkage.kinematics`: a
+        :class:`analytic.kinematics.CompactKinematics` (``q, q', q''`` now, the rest on
+        first use), or where a sample is near a singular position the full result of
+        :meth:`solve` (its Jacobians screen the samples, and flag them for the numpy
+        path's singular treatment)."""
+        from .kinematics import CompactKinematics
+        values, vel, acc = self._inputs(values, velocity, acceleration)
+        out = self.alloc(len(values), 2)
+        bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
+                                        2, fresh=True)
+        self._check(values, bad, wi, worst)
+        if susp is None or len(susp):
+            return self.solve(values, vel, acc, on_singular, branch)[0]
+        N = len(values)
+        return CompactKinematics(self, self.lk, values, np.broadcast_to(vel, (N,)),
+                                 np.broadcast_to(acc, (N,)), out["q"], out["qd"], out["qdd"],
+                                 branch)
+
+    def deferred(self, kin) -> dict:
+        """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
+        full pass at its inputs."""
+        from .kinematics import DEFERRED
+        full, _ = self.solve(kin.value, _compact(kin.velocity), _compact(kin.acceleration),
+                             "flag", kin._fused_branch)
+        return {k: getattr(full, k) for k in DEFERRED}
 
     def forces(self, kin):
         """As :func:`analytic.kinetostatics.solve_forces`: one more pass of the kernel

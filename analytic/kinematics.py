@@ -155,6 +155,34 @@ class Kinematics:
         return self.point_c(b, self.linkage.mech.bodies[b].com)
 
 
+#: the :class:`Kinematics` arrays a :class:`CompactKinematics` computes on first use
+DEFERRED = ("theta", "omega", "alpha", "E", "zO", "zv", "za", "jacobian", "determinant",
+            "transmission_vectors", "joint_point")
+
+
+class CompactKinematics(Kinematics):
+    """:class:`Kinematics` from the fused kernel's compact pass: the inputs and ``q, q',
+    q''`` (8 bytes per unknown and configuration, 72 for a four-bar).  The other arrays
+    (:data:`DEFERRED`: angles, poses, origin rates, Jacobian, transmission vectors,
+    joint points; ~490 bytes per four-bar configuration) come from one more pass of the
+    kernel at the same inputs on first use, the same numbers bit for bit.  A caller
+    that needs only ``q, q', q''``, a slider's motion or the forces never holds them."""
+
+    def __init__(self, kernel, linkage, value, velocity, acceleration, q, qd, qdd, branch):
+        # not Kinematics.__init__: the deferred fields stay unset until asked for
+        self.__dict__.update(linkage=linkage, value=value, velocity=velocity,
+                             acceleration=acceleration, q=q, qd=qd, qdd=qdd, at_singular=None,
+                             _fused_kernel=kernel, _fused_branch=branch,
+                             _fused_singular=False)
+
+    def __getattr__(self, name):  # only for attributes not set: the deferred ones
+        if name in DEFERRED:
+            d = self.__dict__
+            d.update(d["_fused_kernel"].deferred(self))
+            return d[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+
 class Linkage:
     """A compiled mechanism: topology, loop equations and position solver.
 

@@ -26,6 +26,9 @@ Methods (configurations per second, min and median over the repeats):
 * ``numpy_kinematics_forces``: the same on the numpy path (``XVAL_FUSED=0``), up to
   360k points (at 3.6M it holds several GB).
 
+Each repeat times ``max(1, 36000 // n)`` calls in a row (the time per call is their
+mean), then the next method: small sizes are not one interruption away from a wrong min.
+
 Memory: tracemalloc's peak during one call, per configuration (numba-allocated arrays,
 as pylinkage's, are invisible to it), and the process's resident peak.
 
@@ -154,6 +157,13 @@ def repeats(n: int) -> int:
     return max(3, min(40, int(2e6 / n)))
 
 
+def calls_per_repeat(n: int) -> int:
+    """Calls timed together in one repeat: ~36,000 configurations' worth, so that a
+    repeat at 360 points lasts milliseconds (one call, tens of microseconds, is at the
+    mercy of a single interruption on a shared machine).  Every method gets the same."""
+    return max(1, 36_000 // n)
+
+
 def measure(n: int, with_pylinkage: bool) -> dict:
     fns = methods(n, with_pylinkage, numpy_path=n <= 360_000)
     for f in fns.values():  # warm-up (compiles or loads the kernels)
@@ -165,11 +175,13 @@ def measure(n: int, with_pylinkage: bool) -> dict:
         peak[k] = tracemalloc.get_traced_memory()[1] / n
         tracemalloc.stop()
     times = {k: [] for k in fns}
+    inner = calls_per_repeat(n)
     for _ in range(repeats(n)):
         for k, f in fns.items():
             t0 = time.perf_counter()
-            f()
-            times[k].append(time.perf_counter() - t0)
+            for _ in range(inner):
+                f()
+            times[k].append((time.perf_counter() - t0) / inner)
     out = {}
     for k, t in times.items():
         out[k] = {"rate_min_time": n / min(t), "rate_median": n / float(np.median(t)),

@@ -28,6 +28,9 @@ from ..mechanism import Revolute
 from ..positions import cplx, rrr_disc_factor
 from ..tolerances import SINGULAR_CONDITION, TOGGLE_SNAP
 
+#: inputs per chunk of the position stages (their scratch: ~50 bytes per body and
+#: input, in L1/L2; a larger chunk measured no faster)
+CHUNK = 128
 #: layout of the per-call status outputs (``stat`` int64, ``statf`` float64)
 STAT_INFEASIBLE, STAT_WORST, STAT_NSUSPECT = 0, 1, 2
 FORCE_SCALARS = ("effort", "power", "kinetic_rate", "load_power", "power_residual")
@@ -140,13 +143,63 @@ class KernelSource:
 
     # -- positions: ClosedForm.run ---------------------------------------------
     def _positions(self):
-        s, topo = self.s, self.topo
-        g = topo.ground
-        s.emit(f"th{g} = 0.0")
-        s.emit(f"E{g} = 1.0 + 0.0j")
-        s.emit(f"O{g} = 0.0j")
+        """The dyad plan as stage loops over a chunk of :data:`CHUNK` inputs, each step
+        (an RRR dyad: two) one loop that reads the poses placed before it from scratch
+        arrays and writes its own.  One loop per configuration would chain ~250 cycles
+        of dependent latency (cos, sin, three square roots, four divisions) that the
+        processor cannot overlap across configurations; short loops of independent
+        iterations it overlaps (the positions take ~0.55 of the time).  The operations
+        and their order are unchanged.  The main loop then reloads every pose."""
+        topo = self.topo
+        self.stage_lines: list[str] = []
+        self.placed: list[int] = []  # bodies placed by earlier stages (not the ground)
+        self.persist: dict[str, int] = {}  # complex temporaries kept in ``sX``, by column
         for st in topo.plan:
+            self._stage_open()
             getattr(self, "_step_" + st.kind)(st)
+            self._stage_close(list(st.bodies))
+
+    def _stage_open(self):
+        """Start a stage: its lines are collected apart from the main loop's."""
+        self._stage_start = len(self.s.lines)
+
+    def _stage_close(self, bodies: list[int], keep: tuple[str, ...] = ()):
+        """Close the stage opened last: wrap its lines in a loop over the chunk that
+        loads the poses placed so far and the kept temporaries, and stores the poses
+        of ``bodies``, the temporaries ``keep`` (for the next stage of the same step)
+        and the transmission vectors (for the main loop)."""
+        s, g = self.s, self.topo.ground
+        body = s.lines[self._stage_start:]
+        del s.lines[self._stage_start:]
+        loads = self._load_lines()  # what earlier stages stored
+        store = []
+        for b in bodies:
+            if b not in self.placed and b != g:
+                store += [f"sE[c, {b}] = E{b}", f"sO[c, {b}] = O{b}", f"sT[c, {b}] = th{b}"]
+        trans = tuple(v.lstrip("-") for _, *vs in self.trans for v in vs)
+        for name in keep + trans:
+            if name in keep or name not in self.persist:
+                self.persist.setdefault(name, len(self.persist))
+                store.append(f"sX[c, {self.persist[name]}] = {name}")
+        self.stage_lines += (["        for i in range(s0, s1):"]
+                             + ["            " + ln for ln in loads]
+                             + ["    " + ln for ln in body]
+                             + ["            " + ln for ln in store])
+        for b in bodies:
+            if b not in self.placed and b != g:
+                self.placed.append(b)
+
+    def _load_lines(self) -> list[str]:
+        """Lines that load the input value, the branch row, the ground, the poses placed
+        so far and the kept temporaries (a load a stage does not use is dead code:
+        LLVM drops it)."""
+        g = self.topo.ground
+        lines = ["c = i - s0", "v = values[i]", "srow = i if signs.shape[0] > 1 else 0",
+                 f"th{g} = 0.0", f"E{g} = 1.0 + 0.0j", f"O{g} = 0.0j"]
+        for b in self.placed:
+            lines += [f"E{b} = sE[c, {b}]", f"O{b} = sO[c, {b}]", f"th{b} = sT[c, {b}]"]
+        lines += [f"{name} = sX[c, {k}]" for name, k in self.persist.items()]
+        return lines
 
     def _disc(self, expr: str):
         s = self.s
@@ -207,6 +260,9 @@ class KernelSource:
         s.emit(f"h = math.sqrt(max(h2, 0.0)) if dsc > {TOGGLE_SNAP!r} else 0.0")
         s.emit(f"w = cm(d, complex(a, {self._sign()} * h))")
         s.emit("P2 = P1 + complex(w.real * iD, w.imag * iD)")
+        # a second stage: the intersection's chain and the links' directions
+        self._stage_close([], keep=("P1", "P2", "P3"))
+        self._stage_open()
         s.emit(f"{t}a = P2 - P1")
         s.emit(f"{t}b = P3 - P2")
         s.emit(f"E{x1} = {self._unit(f'{t}a', n1)}")
@@ -741,12 +797,20 @@ class KernelSource:
             head.append(f"    pf{k} = PF[{k}]")
         for k in range(len(s.pc)):
             head.append(f"    pc{k} = PC[{k}]")
+        B = self.B
         head += [
-            "    for i in range(N):",
-            "        v = values[i]",
-            "        wd = vel[i if vel.shape[0] > 1 else 0]",
-            "        ad = acc[i if acc.shape[0] > 1 else 0]",
-            "        srow = i if signs.shape[0] > 1 else 0",
+            # scratch of the position stages: poses, angles, kept temporaries
+            f"    sE = np.empty(({CHUNK}, {B}), np.complex128)",
+            f"    sO = np.empty(({CHUNK}, {B}), np.complex128)",
+            f"    sT = np.empty(({CHUNK}, {B}))",
+            f"    sX = np.empty(({CHUNK}, {max(len(self.persist), 1)}), np.complex128)",
+            f"    for s0 in range(0, N, {CHUNK}):",
+            f"        s1 = min(N, s0 + {CHUNK})",
+        ] + self.stage_lines + [
+            "        for i in range(s0, s1):",
+        ] + ["            " + ln for ln in self._load_lines()] + [
+            "            wd = vel[i if vel.shape[0] > 1 else 0]",
+            "            ad = acc[i if acc.shape[0] > 1 else 0]",
         ]
         tail = [
             "    carry[0] = 1.0 if has_prev else 0.0",
@@ -761,7 +825,7 @@ class KernelSource:
             "    statf[0] = worst",
             "",
         ]
-        return "\n".join(head + s.lines + tail)
+        return "\n".join(head + ["    " + ln for ln in s.lines] + tail)
 
     def params(self) -> tuple[np.ndarray, np.ndarray]:
         return (np.array(self.s.pf or [0.0], float), np.array(self.s.pc or [0j], complex))

@@ -256,3 +256,30 @@ def test_streamed_sweep_is_the_sweep(case):
     if r0.forces is not None:
         assert r1.forces.power_balance_error() == pytest.approx(
             r0.forces.power_balance_error(), abs=1e-12)
+
+
+@pytest.mark.parametrize("case", ["seed-four-bar", "six-bar", "quick-return"])
+def test_compact_kinematics_defers_the_same_numbers(case, monkeypatch):
+    """``Linkage.kinematics`` through the kernel holds ``q, q', q''`` only; the forces
+    pass does not need the rest; the deferred arrays, asked for, are the full pass's
+    bit for bit (and the numpy path's to AGREEMENT)."""
+    from analytic.kinematics import DEFERRED, CompactKinematics
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    lk = Linkage(load_case(case))
+    x = input_values(lk, POINTS)[0]
+    kin = lk.kinematics(x)
+    assert isinstance(kin, CompactKinematics)
+    frc = lk.forces(kin) if lk.mech.has_mass else None
+    assert not set(DEFERRED) & set(kin.__dict__)  # nothing deferred was computed
+    full, frc_full = FusedKernel(lk).solve(x, on_singular="flag", forces=lk.mech.has_mass)
+    for k in ("q", "qd", "qdd", "theta", "omega", "alpha", "E", "zO", "zv", "za", "jacobian",
+              "determinant"):
+        np.testing.assert_array_equal(getattr(kin, k), getattr(full, k), err_msg=k)
+    assert set(DEFERRED) <= set(kin.__dict__)
+    if frc is not None:
+        np.testing.assert_array_equal(frc.effort, frc_full.effort)
+    kin0, frc0 = _numpy_kinematics(lk, x)
+    errs = _compare(lk, kin, frc, kin0, frc0)
+    assert max(errs.values()) <= 1.0, errs
+    with pytest.raises(AttributeError):
+        kin.no_such_array  # noqa: B018 - the error, not a fill
