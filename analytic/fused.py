@@ -156,19 +156,21 @@ class FusedKernel:
             return np.array([combos[0]], float).reshape(1, self.n_branch)
         return np.asarray(combos, float)[idx].reshape(len(values), self.n_branch)
 
-    def alloc(self, N: int, level: int = 3, full: bool = False) -> dict:
+    def alloc(self, N: int, level: int = 3, full: bool = False, joints: bool = False) -> dict:
         """Output arrays for ``N`` configurations, zero-sized where not wanted.
 
         ``level`` 0: poses; 1: + angles and ``q``; 2: + rates and the tree walk;
         3: + forces.  ``full`` adds what :class:`Kinematics` holds besides ``q, q',
-        q''`` (angles, poses, origin rates, Jacobian, transmission and joint points).
+        q''`` (angles, poses, origin rates, Jacobian, transmission and joint points);
+        ``joints`` the joint points at any level.
         """
-        plan = self.__dict__.setdefault("_plans", {}).get((level, full))
+        key = (level, full, joints)
+        plan = self.__dict__.setdefault("_plans", {}).get(key)
         if plan is None:
-            plan = self._plans[(level, full)] = self._alloc_plan(level, full)
+            plan = self._plans[key] = self._alloc_plan(level, full, joints)
         return {k: (np.empty((N, *tail), dt) if e is None else e) for k, tail, dt, e in plan}
 
-    def _alloc_plan(self, level: int, full: bool) -> tuple:
+    def _alloc_plan(self, level: int, full: bool, joints: bool = False) -> tuple:
         """``(key, row shape, dtype, None or the shared zero-sized array)`` per output,
         in the kernel's order: arrays not wanted are zero-sized, one shared per key
         (never written), so a call allocates only what it returns."""
@@ -183,7 +185,8 @@ class FusedKernel:
                   ("A", full and level >= 2, (n, n), float),
                   ("det", full and level >= 2, (), float),
                   ("trv", full and level >= 2, (2 * self.T,), complex),
-                  ("jp", full and level >= 2, (J,), complex), ("jf", level >= 3, (J, 2), float),
+                  ("jp", (full and level >= 2) or joints, (J,), complex),
+                  ("jf", level >= 3, (J, 2), float),
                   ("nm", level >= 3, (self.P, 2), float), ("sc", level >= 3, (5,), float))
         assert tuple(k for k, *_ in shapes) == _OUT_KEYS  # run(fresh=True) relies on it
         empty = self.__dict__.setdefault("_empty", {})
@@ -432,6 +435,23 @@ class FusedKernel:
                                      fresh=fresh)
         self._check(values, bad, wi, worst)
         return out["E"][:len(values)], out["zO"][:len(values)]
+
+
+    def joint_positions(self, values, branch: str = "continued", out: dict | None = None
+                        ) -> np.ndarray:
+        """Every joint's world point (complex ``(N, J)``, x + iy, m; the point on the
+        tree walk's parent body, a prismatic joint's slider point), from the poses alone
+        (level 0): what a position solver that tracks joints returns.  The same numbers
+        as the ``joint_point`` of :meth:`solve`, bit for bit."""
+        values = np.ascontiguousarray(np.atleast_1d(np.asarray(values, float)))
+        fresh = out is None
+        if fresh:
+            out = self.alloc(len(values), 0, joints=True)
+        z = np.zeros(1)
+        bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0,
+                                     fresh=fresh)
+        self._check(values, bad, wi, worst)
+        return out["jp"][:len(values)]
 
 
 def _compact(x: np.ndarray) -> np.ndarray:

@@ -12,6 +12,8 @@ Methods (configurations per second, min and median over the repeats):
 * ``pylinkage_positions`` / ``pylinkage_kinematics``: pylinkage's numba solver
   (``step_fast`` / ``step_fast_with_kinematics``) on the same four-bar (optional: the
   ``bench`` extra);
+* ``fused_joint_positions``: the fused kernel's joint points (every joint's x + iy,
+  the output of pylinkage's ``step_fast``; checked equal to it to 1e-12 m first);
 * ``fused_positions``: the fused kernel's poses (every body's ``exp(i theta)`` and
   origin, from which every point follows: what pylinkage's joint coordinates hold);
   ``fused_angles``: the same plus the unwrapped angles ``q``;
@@ -133,6 +135,7 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
         fns["pylinkage_kinematics"] = lambda: pl.step_fast_with_kinematics(iterations=n)
     out2, out3 = fk4.alloc(n, 2), fk4.alloc(n, 3)
     fns.update({
+        "fused_joint_positions": lambda: fk4.joint_positions(x),
         "fused_positions": lambda: fk4.poses(x),
         "fused_angles": lambda: fk4.state(x, level=1),
         "fused_kinematics": lambda: fk4.state(x, level=2),
@@ -151,6 +154,18 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
                 os.environ["XVAL_FUSED"] = "always"
         fns["numpy_kinematics_forces"] = numpy_kf
     return fns
+
+
+def same_four_bar(n: int = 360) -> float:
+    """Largest distance (m) between pylinkage's joint positions and the kernel's on the
+    same four-bar at the same crank angles: the two solve the same problem."""
+    pl = pylinkage_four_bar(n)
+    got = np.asarray(pl.step_fast(iterations=n))  # step k: crank at 2 pi (k + 1) / n
+    theirs = got[..., 0] + 1j * got[..., 1]
+    fk = FusedKernel(Linkage(load_case("seed-four-bar")))
+    ours = fk.joint_positions(2 * math.pi * np.arange(1, n + 1) / n)
+    # pylinkage's joints: O2, O4, A, B; ours in the description's order O2, A, B, O4
+    return float(np.max(np.abs(theirs - ours[:, [0, 3, 1, 2]])))
 
 
 def repeats(n: int) -> int:
@@ -205,6 +220,8 @@ def ratios(res: dict) -> dict:
                 n, "fused_kinematics", "pylinkage_kinematics")
             row["Linkage kinematics+forces / pylinkage step_fast_with_kinematics"] = r(
                 n, "linkage_kinematics_forces", "pylinkage_kinematics")
+            row["positions (joint points) / pylinkage step_fast"] = r(
+                n, "fused_joint_positions", "pylinkage_positions")
             row["positions (poses) / pylinkage step_fast"] = r(
                 n, "fused_positions", "pylinkage_positions")
             row["angles / pylinkage step_fast"] = r(n, "fused_angles", "pylinkage_positions")
@@ -263,7 +280,8 @@ LABELS = {
     "hand_kinematics": "hand closed form, four-bar kinematics (numpy, no forces)",
     "pylinkage_positions": "pylinkage `step_fast`, four-bar positions",
     "pylinkage_kinematics": "pylinkage `step_fast_with_kinematics`",
-    "fused_positions": "fused kernel, four-bar positions (poses)",
+    "fused_joint_positions": "fused kernel, four-bar positions (every joint's x, y)",
+    "fused_positions": "fused kernel, four-bar positions (every body's pose)",
     "fused_angles": "fused kernel, four-bar positions with angles",
     "fused_kinematics": "fused kernel, four-bar kinematics",
     "fused_kinematics_forces": "fused kernel, four-bar kinematics + forces",
@@ -361,6 +379,11 @@ def main(argv=None):
         print("pylinkage not installed (pip install -e '.[bench]'): its rows are skipped")
     info = {"machine": machine(), "load_before": load(),
             "uptime": subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()}
+    if with_pl:
+        info["pylinkage_vs_kernel_max_m"] = d = same_four_bar()
+        if not d <= 1e-12:
+            raise SystemExit(f"pylinkage and the kernel disagree by {d:.3g} m: not the same "
+                             "four-bar, nothing to compare")
     print(json.dumps(info, indent=1))
     t0 = time.perf_counter()
     FusedKernel(Linkage(load_case("seed-four-bar"))).state(np.zeros(4), level=3)

@@ -584,6 +584,21 @@ class KernelSource:
         for b in range(B):
             s.emit(f"Eo[i, {b}] = E{b}", 3)
             s.emit(f"zO[i, {b}] = O{b}", 3)
+        # joint points without the rates (level 0 or 1, FusedKernel.joint_positions):
+        # each as the tree walk forms it (the parent's point; a prismatic joint's slider
+        # point), so the numbers are those of level 2's jp bit for bit
+        s.emit("if level < 2 and jp.shape[0] > 0:")
+        topo, joints = self.topo, self.mech.joints
+        for c in topo.order[1:]:
+            p, j = topo.parent[c]
+            jt = joints[j]
+            if not isinstance(jt, Revolute) and c == topo.body_names.index(jt.slider):
+                s.emit(f"jp[i, {j}] = O{c} + cm(E{c}, {self._at(j, c)})", 3)
+            else:
+                s.emit(f"jp[i, {j}] = O{p} + cm(E{p}, {self._at(j, p)})", 3)
+        for j in topo.chords:
+            bb = topo.body_names.index(joints[j].body_b)
+            s.emit(f"jp[i, {j}] = O{bb} + cm(E{bb}, {self._at(j, bb)})", 3)
 
     def _store_rates(self):
         s, B, nq, n = self.s, self.B, self.nq, self.n

@@ -133,6 +133,9 @@ def test_fused_equals_numpy_on_every_case(case):
     E, O = fk.poses(x)
     np.testing.assert_array_equal(E, kin.E)
     np.testing.assert_array_equal(O, kin.zO)
+    P = fk.joint_positions(x)
+    for j, pj in kin.joint_point.items():
+        np.testing.assert_array_equal(P[:, j], pj)
 
 
 @settings(max_examples=25, deadline=None)
