@@ -93,8 +93,7 @@ _OUT_KEYS = ("q", "qd", "qdd", "theta", "omega", "alpha", "E", "zO", "zv", "za",
              "trv", "jp", "jf", "nm", "sc")
 #: outputs the kernel writes at each level whatever their size (the others it writes
 #: only when they have rows)
-_NEED = (frozenset(), frozenset({"q"}), frozenset({"q", "qd", "qdd"}),
-         frozenset({"q", "qd", "qdd", "jf", "nm", "sc"}))
+_NEED = (frozenset(), frozenset(), frozenset(), frozenset({"jf", "nm", "sc"}))
 
 
 @dataclass
@@ -156,27 +155,30 @@ class FusedKernel:
             return np.array([combos[0]], float).reshape(1, self.n_branch)
         return np.asarray(combos, float)[idx].reshape(len(values), self.n_branch)
 
-    def alloc(self, N: int, level: int = 3, full: bool = False, joints: bool = False) -> dict:
+    def alloc(self, N: int, level: int = 3, full: bool = False, joints: bool = False,
+              state: bool = True) -> dict:
         """Output arrays for ``N`` configurations, zero-sized where not wanted.
 
         ``level`` 0: poses; 1: + angles and ``q``; 2: + rates and the tree walk;
         3: + forces.  ``full`` adds what :class:`Kinematics` holds besides ``q, q',
         q''`` (angles, poses, origin rates, Jacobian, transmission and joint points);
-        ``joints`` the joint points at any level.
+        ``joints`` the joint points at any level; ``state=False`` leaves out ``q, q',
+        q''`` (a forces pass at a known state).
         """
-        key = (level, full, joints)
+        key = (level, full, joints, state)
         plan = self.__dict__.setdefault("_plans", {}).get(key)
         if plan is None:
-            plan = self._plans[key] = self._alloc_plan(level, full, joints)
+            plan = self._plans[key] = self._alloc_plan(*key)
         return {k: (np.empty((N, *tail), dt) if e is None else e) for k, tail, dt, e in plan}
 
-    def _alloc_plan(self, level: int, full: bool, joints: bool = False) -> tuple:
+    def _alloc_plan(self, level: int, full: bool, joints: bool, state: bool) -> tuple:
         """``(key, row shape, dtype, None or the shared zero-sized array)`` per output,
         in the kernel's order: arrays not wanted are zero-sized, one shared per key
         (never written), so a call allocates only what it returns."""
         B, J, n = self.B, self.J, self.n
-        shapes = (("q", level >= 1, (self.nq,), float), ("qd", level >= 2, (self.nq,), float),
-                  ("qdd", level >= 2, (self.nq,), float),
+        shapes = (("q", level >= 1 and state, (self.nq,), float),
+                  ("qd", level >= 2 and state, (self.nq,), float),
+                  ("qdd", level >= 2 and state, (self.nq,), float),
                   ("theta", full and level >= 1, (B,), float),
                   ("omega", full and level >= 2, (B,), float),
                   ("alpha", full and level >= 2, (B,), float), ("E", full, (B,), complex),
@@ -380,7 +382,7 @@ class FusedKernel:
         at ``kin``'s inputs, writing only the forces."""
         self._require_mass()
         N = kin.n
-        out = self.alloc(N, 3)
+        out = self.alloc(N, 3, state=False)  # the state is kin's: the forces only
         branch = getattr(kin, "_fused_branch", "continued")
         _, vel, acc = self._inputs(kin.value, _compact(kin.velocity), _compact(kin.acceleration))
         self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3, fresh=True)

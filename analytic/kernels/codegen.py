@@ -575,8 +575,9 @@ class KernelSource:
     def _store_poses(self):
         s, B = self.s, self.B
         s.emit("if level >= 1:")
+        s.emit("if q.shape[0] > 0:", 3)  # the forces pass of a known state writes none
         for c in range(self.nq):
-            s.emit(f"q[i, {c}] = q{c}", 3)
+            s.emit(f"q[i, {c}] = q{c}", 4)
         s.emit("if theta.shape[0] > 0:", 3)
         for b in range(B):
             s.emit(f"theta[i, {b}] = th{b}", 4)
@@ -602,9 +603,10 @@ class KernelSource:
 
     def _store_rates(self):
         s, B, nq, n = self.s, self.B, self.nq, self.n
+        s.emit("if qd.shape[0] > 0:")
         for c in range(nq):
-            s.emit(f"qd[i, {c}] = qd{c}")
-            s.emit(f"qdd[i, {c}] = qdd{c}")
+            s.emit(f"qd[i, {c}] = qd{c}", 3)
+            s.emit(f"qdd[i, {c}] = qdd{c}", 3)
         s.emit("if omega.shape[0] > 0:")
         for b in range(B):
             for arr, var in (("omega", "w"), ("alpha", "al"), ("zv", "V"), ("za", "Ac")):
