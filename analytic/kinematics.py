@@ -137,6 +137,12 @@ class Kinematics:
         return (self.zO[:, b] + r, self.zv[:, b] + 1j * w * r,
                 self.za[:, b] + (1j * self.alpha[:, b] - w * w) * r)
 
+    def series(self, pick) -> np.ndarray:
+        """``pick(self)``: a per-sample quantity computed from these kinematics (a
+        streamed sweep's :class:`analytic.stream.LazyKinematics` computes it block by
+        block, holding only the result)."""
+        return np.asarray(pick(self))
+
     def slider(self, joint: str):
         """Displacement s (m), velocity s' and acceleration s'' ``(N,)`` of a prismatic joint."""
         topo = self.linkage.topo

@@ -67,6 +67,12 @@ class _Lazy:
             res[a:a + len(part)] = part
         return res if res is not None else np.zeros(0)
 
+    def series(self, pick) -> np.ndarray:
+        """``pick(kinematics)`` of every block, into one array (as
+        :meth:`analytic.kinematics.Kinematics.series`): a per-sample quantity built from
+        several arrays holds only its result, not the arrays."""
+        return self._collect(lambda k, f: pick(k), False)
+
     def _cached(self, key, pick, forces=False):
         if key not in self._cache:
             self._cache[key] = self._collect(pick, forces)

@@ -249,18 +249,24 @@ def _power_scale(kin, frc, regular) -> float:
     of each body's m |v| |a| + I |omega alpha| summed, or of the drive and load powers when
     larger.  (A linkage whose kinetic energy is constant, such as a parallelogram at
     constant speed, has a net rate of zero: relative to that, rounding looks large.)"""
-    mech = kin.linkage.mech
-    terms = np.zeros(int(np.sum(regular)))
-    for b, body in enumerate(mech.bodies):
-        if b == kin.linkage.topo.ground or not body.mass:
-            continue
-        _, v, a = kin.com_c(b)
-        terms += body.mass * (np.abs(v) * np.abs(a))[regular]
-        terms += (body.inertia or 0.0) * np.abs(kin.omega[:, b] * kin.alpha[:, b])[regular]
+    terms = kin.series(_power_terms)[regular]  # a streamed sweep's: block by block
     peak = max(float(np.max(terms)) if terms.size else 0.0,
                float(np.max(np.abs(frc.power[regular]))),
                float(np.max(np.abs(frc.load_power[regular]))))
     return peak if peak > 0 else 1e-300
+
+
+def _power_terms(kin) -> np.ndarray:
+    """Per sample, each moving body's m |v| |a| + I |omega alpha| summed (W)."""
+    mech = kin.linkage.mech
+    terms = np.zeros(kin.n)
+    for b, body in enumerate(mech.bodies):
+        if b == kin.linkage.topo.ground or not body.mass:
+            continue
+        _, v, a = kin.com_c(b)
+        terms += body.mass * (np.abs(v) * np.abs(a))
+        terms += (body.inertia or 0.0) * np.abs(kin.omega[:, b] * kin.alpha[:, b])
+    return terms
 
 
 def _is_revolute(jt) -> bool:
