@@ -428,16 +428,8 @@ class FusedKernel:
     def poses(self, values, branch: str = "continued", out: dict | None = None):
         """Body poses only (level 0): ``exp(i theta)`` and origins, complex ``(N, B)``
         each, from which every point follows (angles are not computed)."""
-        values = np.ascontiguousarray(np.atleast_1d(np.asarray(values, float)))
-        fresh = out is None
-        if fresh:
-            out = self.alloc(len(values), 0, full=True)
-        z = np.zeros(1)
-        bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0,
-                                     fresh=fresh)
-        self._check(values, bad, wi, worst)
+        values, out = self._positions_only(values, branch, out, full=True)
         return out["E"][:len(values)], out["zO"][:len(values)]
-
 
     def joint_positions(self, values, branch: str = "continued", out: dict | None = None
                         ) -> np.ndarray:
@@ -445,15 +437,21 @@ class FusedKernel:
         tree walk's parent body, a prismatic joint's slider point), from the poses alone
         (level 0): what a position solver that tracks joints returns.  The same numbers
         as the ``joint_point`` of :meth:`solve`, bit for bit."""
+        values, out = self._positions_only(values, branch, out, joints=True)
+        return out["jp"][:len(values)]
+
+    def _positions_only(self, values, branch, out, **want):
+        """One level-0 pass into ``out`` (fresh from :meth:`alloc` with ``want`` when
+        ``None``), checked; returns the values as an array and the outputs."""
         values = np.ascontiguousarray(np.atleast_1d(np.asarray(values, float)))
         fresh = out is None
         if fresh:
-            out = self.alloc(len(values), 0, joints=True)
+            out = self.alloc(len(values), 0, **want)
         z = np.zeros(1)
         bad, wi, worst, _ = self.run(values, z, z, self.signs_for(values, branch), out, 0,
                                      fresh=fresh)
         self._check(values, bad, wi, worst)
-        return out["jp"][:len(values)]
+        return values, out
 
 
 def _compact(x: np.ndarray) -> np.ndarray:
