@@ -84,9 +84,10 @@ def from_compare(case: str, results, revolute: bool) -> list[CiCase]:
             kind = "tolerance"
         if worst is not None and not ok:
             where = f" at {_at(worst.at, unit)}" if math.isfinite(worst.at) else ""
-            msg = (msg + "; " if msg else "") + \
-                f"{worst.quantity}: error {worst.normalised:.3g} of peak{where} exceeds " \
-                f"the tolerance {worst.tolerance:g}"
+            msg = (msg + "; " if msg else "") + (
+                f"{worst.quantity}: error {worst.normalised:.3g} of peak{where} exceeds "
+                f"the tolerance {worst.tolerance:g}" if worst.measured else
+                f"{worst.quantity}: not measured from {_at(worst.at, unit)} on")
             if near:
                 msg += f" ({near})"
         lines = [str(c) for c in comps] + [f"settings: {r.engine} {r.settings_text}"]

@@ -6,8 +6,8 @@ Kept apart from :mod:`reports.cli` so that ``xval solve`` never imports an engin
 from __future__ import annotations
 
 import json
+import math
 import sys
-from dataclasses import asdict
 
 from . import cli_options as opt
 
@@ -47,7 +47,7 @@ def cmd_compare(args) -> int:
         all_ok &= ok
         out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
     if args.json:
-        print(json.dumps([{
+        print(json.dumps(_json_safe([{
             "case": mech.name, "engine": r.engine, "mode": args.mode,
             "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
             "sampled_by": "time" if r.by_time else "input",
@@ -55,13 +55,33 @@ def cmd_compare(args) -> int:
             "near_event": near, "wall_seconds_per_revolution": r.wall_per_rev,
             "timestep": r.timestep, "notes": list(r.notes),
             "step_note": None if ok else step_note(r, tree.linkage.driver_is_revolute),
-            "comparisons": [asdict(c) for c in comps]} for r, comps, ok, near in out],
-            indent=2))
+            "comparisons": [c.as_json() for c in comps]} for r, comps, ok, near in out]),
+            indent=2, allow_nan=False))
     else:
         _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
     from reports.ci_formats import write_compare_outputs  # --junit, --summary
     write_compare_outputs(args, mech, out)
     return 0 if all_ok else 1
+
+
+def _json_safe(obj):
+    """``obj`` with every non-finite float as ``None``: JSON (RFC 8259) has no NaN or
+    infinity, and ``json.dumps`` would write ``Infinity``, which strict parsers reject."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    return obj
+
+
+def _cell(v) -> str:
+    """A number of the compare table: 3 figures, or "not measured" for the infinity a
+    failed run's unreached samples stand for."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return "not measured"
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
 
 
 def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
@@ -93,7 +113,12 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 say(f"step: {sn}")
             df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
                                              "at", "tolerance", "passed"]]
-            print(df.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+            print(df.map(_cell).to_string(index=False))
+            if any(not c.measured for c in comps):
+                first = min(c.at for c in comps if not c.measured)
+                say(f"not measured: the engine has no values from the sample at {first:.6g} "
+                    f"{'deg' if revolute else 'm'} on (the run stopped there); the verdict is "
+                    "a failure")
             if any(c.quantity.endswith("[engine]") for c in comps):
                 say("rows marked [engine] are the engine's own readings, reported but not "
                     "judged: PyBullet's jointReactionForces are known wrong for links with "

@@ -52,8 +52,26 @@ class Comparison:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    @property
+    def measured(self) -> bool:
+        """False when the test values were not finite at some sample (a failed run's
+        samples after it stopped): ``max_abs`` and ``normalised`` are then ``inf``, a
+        failure, not a measured error, and ``at`` is the first such sample."""
+        return math.isfinite(self.max_abs)
+
+    def as_json(self) -> dict:
+        """:meth:`as_dict` for JSON (RFC 8259 has no infinity): ``max_abs`` and
+        ``normalised`` are ``null`` where not measured, and ``measured`` says so."""
+        d = {k: (v if not isinstance(v, float) or math.isfinite(v) else None)
+             for k, v in asdict(self).items()}
+        d["measured"] = self.measured
+        return d
+
     def __str__(self) -> str:
         verdict = "pass" if self.passed else "FAIL"
+        if not self.measured:
+            return (f"{self.quantity}: not measured from {self.at:.6g} on (no finite engine "
+                    f"value there: the run stopped) {verdict}")
         return (f"{self.quantity}: max error {self.max_abs:.3g} at {self.at:.6g} "
                 f"({self.normalised:.3g} of peak {self.peak:.4g}; tolerance "
                 f"{self.tolerance:.1g}) {verdict}")

@@ -36,6 +36,36 @@ def test_nan_is_a_failure_at_its_angle():
     tst[3] = np.nan
     c = compare("q", np.ones(5), tst, x, 1.0)
     assert not c.passed and c.at == 3.0 and c.normalised == float("inf")
+    assert not c.measured  # a failure, not a measured error
+    import json
+    d = json.loads(json.dumps(c.as_json(), allow_nan=False))
+    assert d["max_abs"] is None and d["normalised"] is None and d["measured"] is False
+    assert d["at"] == 3.0 and d["passed"] is False
+
+
+def test_a_failed_run_is_strict_json_and_says_not_measured(tmp_path, capsys):
+    """A run that stops (PyBullet on a 4 nm four-bar: a loop violation) fails with every
+    quantity not measured: no ``Infinity`` in the JSON (RFC 8259 has none; strict
+    parsers reject it) and no ``inf`` presented as an error in the table."""
+    pytest.importorskip("pybullet")
+    import json
+
+    from reports.cli import main
+    from tests.reports.test_bad_inputs import NANOMETRE
+    f = tmp_path / "nano.toml"
+    f.write_text(NANOMETRE)
+    code = main(["compare", str(f), "--engine", "pybullet", "--samples", "12", "--json"])
+    out, _ = capsys.readouterr()
+
+    def reject(c):
+        raise AssertionError(f"non-JSON constant {c}")
+    rec = json.loads(out, parse_constant=reject)[0]
+    assert code == 1 and rec["run_ok"] is False and rec["verdict"] == "fail"
+    gone = [c for c in rec["comparisons"] if not c["measured"]]
+    assert gone and all(c["max_abs"] is None and not c["passed"] for c in gone)
+    code = main(["compare", str(f), "--engine", "pybullet", "--samples", "12"])
+    out, _ = capsys.readouterr()
+    assert code == 1 and "not measured" in out and " inf " not in out
 
 
 def test_shape_mismatch_is_an_error():
