@@ -6,11 +6,9 @@ Expected values: the SI output of the same command converted here by the definit
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import re
-from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
@@ -20,16 +18,11 @@ import pytest
 from analytic import load_case
 from reports.cli import main
 
+from .cli_run import run
+
 CASES = Path(__file__).resolve().parents[2] / "analytic" / "cases"
 #: The conversion is one multiplication: agreement to a few ulps.
 REL = 1e-13
-
-
-def run(*argv) -> tuple[int, str]:
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(list(argv))
-    return code, buf.getvalue()
 
 
 def solve_json(*argv) -> dict:

@@ -22,6 +22,8 @@ import sympy as sp
 from analytic import case_names
 from reports.cli import main
 
+from .cli_run import run
+
 # A printed value carries 6 significant figures and the substituted numbers 9: the
 # expression must reproduce the printed value to half a unit of its last digit, plus
 # the rounding of the 9-figure inputs (1e-7 relative covers a condition number of 100).
@@ -121,22 +123,16 @@ def four_bar_s4():
 
 @pytest.fixture(scope="module")
 def s1_md():
-    import io
-    from contextlib import redirect_stdout
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        assert main(["explain", "seed-slider-crank", "--angle", "30"]) == 0
-    return buf.getvalue()
+    code, out = run("explain", "seed-slider-crank", "--angle", "30")
+    assert code == 0
+    return out
 
 
 @pytest.fixture(scope="module")
 def s4_md():
-    import io
-    from contextlib import redirect_stdout
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        assert main(["explain", "seed-four-bar", "--angle", "60"]) == 0
-    return buf.getvalue()
+    code, out = run("explain", "seed-four-bar", "--angle", "60")
+    assert code == 0
+    return out
 
 
 def test_s1_tables_match_the_closed_form(s1_md):

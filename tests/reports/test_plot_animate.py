@@ -9,9 +9,7 @@ Expected positions come from the slider-crank's and the four-bar's geometry by h
 from __future__ import annotations
 
 import dataclasses
-import io
 import math
-from contextlib import redirect_stdout
 
 import numpy as np
 import pytest
@@ -21,6 +19,8 @@ from analytic import Linkage, load_case
 from reports import animate, plot_cmd
 from reports.cli import main
 
+from .cli_run import run
+
 #: Positions drawn from the analytic solution agree with a closed form to round-off.
 POSE_TOL = 1e-9
 #: MuJoCo's poses at the recommended settings agree with the analytic ones to ~1e-8 of
@@ -28,13 +28,6 @@ POSE_TOL = 1e-9
 ENGINE_POSE_TOL = 1e-5
 #: The finite difference of the plotted angle over 1 deg steps: error ~ h^2/6 * omega'''.
 FD_REL = 2e-3
-
-
-def run(*argv) -> tuple[int, str]:
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(list(argv))
-    return code, buf.getvalue()
 
 
 def slider_crank_pose(theta: float) -> dict[str, np.ndarray]:
