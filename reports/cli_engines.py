@@ -6,7 +6,6 @@ Kept apart from :mod:`reports.cli` so that ``xval solve`` never imports an engin
 from __future__ import annotations
 
 import json
-import math
 import sys
 
 from . import cli_options as opt
@@ -30,7 +29,7 @@ def cmd_models(args) -> int:
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import near_event, step_note, verdict
+    from reports.compare import json_safe, near_event, step_note, verdict
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
@@ -47,7 +46,7 @@ def cmd_compare(args) -> int:
         all_ok &= ok
         out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
     if args.json:
-        print(json.dumps(_json_safe([{
+        print(json.dumps(json_safe([{
             "case": mech.name, "engine": r.engine, "mode": args.mode,
             "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
             "sampled_by": "time" if r.by_time else "input",
@@ -64,24 +63,17 @@ def cmd_compare(args) -> int:
     return 0 if all_ok else 1
 
 
-def _json_safe(obj):
-    """``obj`` with every non-finite float as ``None``: JSON (RFC 8259) has no NaN or
-    infinity, and ``json.dumps`` would write ``Infinity``, which strict parsers reject."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    return obj
-
-
-def _cell(v) -> str:
-    """A number of the compare table: 3 figures, or "not measured" for the infinity a
-    failed run's unreached samples stand for."""
-    if isinstance(v, float) and not math.isfinite(v):
-        return "not measured"
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
+def _table(comps) -> list[list[str]]:
+    """The compare table's cells: numbers to 3 figures; a quantity the run did not reach
+    (a failed run's samples after it stopped) is "not measured", not the infinity that
+    stands for it."""
+    rows = []
+    for c in comps:
+        err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
+            ["not measured"] * 2
+        rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], f"{c.at:.3g}",
+                     f"{c.tolerance:.3g}", str(c.passed)])
+    return rows
 
 
 def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
@@ -92,7 +84,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
 
     import pandas as pd
 
-    from reports.compare import comparison_frame, step_note
+    from reports.compare import step_note
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
 
     def say(text: str) -> None:
@@ -111,9 +103,10 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 say(f"near an event: {near}")
             if not ok and r.ok and (sn := step_note(r, revolute)):
                 say(f"step: {sn}")
-            df = comparison_frame(r, comps)[["quantity", "max_abs", "peak", "normalised",
-                                             "at", "tolerance", "passed"]]
-            print(df.map(_cell).to_string(index=False))
+            df = pd.DataFrame(_table(comps), columns=["quantity", "max_abs", "peak",
+                                                      "normalised", "at", "tolerance",
+                                                      "passed"])
+            print(df.to_string(index=False))
             if any(not c.measured for c in comps):
                 first = min(c.at for c in comps if not c.measured)
                 say(f"not measured: the engine has no values from the sample at {first:.6g} "

@@ -62,8 +62,7 @@ class Comparison:
     def as_json(self) -> dict:
         """:meth:`as_dict` for JSON (RFC 8259 has no infinity): ``max_abs`` and
         ``normalised`` are ``null`` where not measured, and ``measured`` says so."""
-        d = {k: (v if not isinstance(v, float) or math.isfinite(v) else None)
-             for k, v in asdict(self).items()}
+        d = json_safe(asdict(self))
         d["measured"] = self.measured
         return d
 
@@ -75,6 +74,19 @@ class Comparison:
         return (f"{self.quantity}: max error {self.max_abs:.3g} at {self.at:.6g} "
                 f"({self.normalised:.3g} of peak {self.peak:.4g}; tolerance "
                 f"{self.tolerance:.1g}) {verdict}")
+
+
+def json_safe(obj):
+    """``obj`` (dicts, lists, numbers, strings) with every non-finite float as ``None``:
+    JSON (RFC 8259) has no NaN or infinity, and ``json.dumps`` would write ``Infinity``,
+    which strict parsers reject."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    return obj
 
 
 def compare(quantity: str, reference, test, at, tolerance: float,
