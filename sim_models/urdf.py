@@ -97,9 +97,13 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
             ine = ET.SubElement(lk, "inertial")
             ET.SubElement(ine, "origin", xyz=xyz((c[0], c[1], 0.0)), rpy="0 0 0")
             ET.SubElement(ine, "mass", value=_f(st.mass[b]))
-            inertia = float(st.inertia[b])
-            ET.SubElement(ine, "inertia", ixx=_f(inertia / 2), ixy="0", ixz="0",
-                          iyy=_f(inertia / 2), iyz="0", izz=_f(inertia))
+            # a lamina: ixx + iyy = izz exactly.  izz is written as twice the rounded
+            # ixx (exact in binary): rounded on its own it could exceed ixx + iyy, and
+            # PyBullet then does not use the file's inertia (measured: joint forces off
+            # by 20% of peak on the seed four-bar with izz rounded separately)
+            half = _f(float(st.inertia[b]) / 2)
+            ET.SubElement(ine, "inertia", ixx=half, ixy="0", ixz="0", iyy=half, iyz="0",
+                          izz=repr(2.0 * float(half)))
         pts = [np.asarray(p, float) - o for p in mech.bodies[b].points.values()]
         for p, q in zip(pts[:-1], pts[1:], strict=True):
             L = float(np.hypot(*(q - p)))

@@ -121,3 +121,26 @@ def test_urdf_file_loads_with_its_closures(case):
             assert p.getCollisionShapeData(body, j, physicsClientId=cid) == ()
     finally:
         p.disconnect(cid)
+
+
+@pytest.mark.parametrize("case", case_names())
+def test_pybullet_keeps_every_links_inertia(case):
+    """PyBullet replaces an inertia tensor that breaks the triangle inequality
+    (izz > ixx + iyy, even by one rounding) with zero, printing only a warning.  Every
+    link of every committed URDF must load with the inertia it was written with: the
+    lamina's izz = ixx + iyy, from the description (I about the centre of mass)."""
+    p = pytest.importorskip("pybullet")
+    mech = load_case(case)
+    inertia = {b.name: b.inertia for b in mech.bodies if b.inertia}
+    cid = p.connect(p.DIRECT)
+    try:
+        body = p.loadURDF(str(MODELS_DIR / f"{case}.urdf"), useFixedBase=True,
+                          flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        for j in range(p.getNumJoints(body, physicsClientId=cid)):
+            name = p.getJointInfo(body, j, physicsClientId=cid)[12].decode()
+            ixx, iyy, izz = p.getDynamicsInfo(body, j, physicsClientId=cid)[2]
+            assert izz > 0 and ixx + iyy >= izz, (name, ixx, iyy, izz)
+            if name in inertia:
+                assert izz == pytest.approx(inertia[name], rel=1e-11), name
+    finally:
+        p.disconnect(cid)
