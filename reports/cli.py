@@ -178,10 +178,14 @@ def _print_tables(res: dict, units=None) -> None:
 
 
 def cmd_cases(args) -> int:
-    for n in case_names():
-        m = load_case(n)
-        first = m.description.strip().splitlines()[0] if m.description else ""
-        print(f"{n:24s} {first}")
+    from analytic.cases import hard_case_names
+    for title, names in (("built-in cases", case_names()),
+                         ("hard cases (numerical stability studies)", hard_case_names())):
+        print(f"{title}:")
+        for n in names:
+            m = load_case(n)
+            first = m.description.strip().splitlines()[0] if m.description else ""
+            print(f"  {n:24s} {first}")
     return 0
 
 

@@ -143,3 +143,14 @@ def test_solve_tables_print_a_nano_linkage_at_its_scale(capsys):
     x, y = kin.point("coupler", "B")[0][0]  # position of the solver, m
     assert coupler_b[0] == pytest.approx(x, rel=1e-5) and x != 0
     assert coupler_b[1] == pytest.approx(y, rel=1e-5) and y != 0
+
+
+@pytest.mark.parametrize("case", ["near-toggle-four-bar", "parallelogram-four-bar"])
+def test_every_name_the_report_prints_resolves(capsys, case):
+    """The report's hard cases are cases like the others: `xval cases` lists them and
+    `xval solve` takes their names (it said "no built-in case" before)."""
+    code, out, _ = run(capsys, "cases")
+    assert code == 0 and case in out
+    code, out, err = run(capsys, "solve", case, "--json")
+    assert code == 0, err
+    assert json.loads(out)["case"] == case
