@@ -149,7 +149,7 @@ def _print_tables(res: dict, units=None) -> None:
         t.add_column(c, justify="right")
     for n, d in res["points"].items():
         p, v, a = d["position"], d["velocity"], d["acceleration"]
-        t.add_row(n, text(p[0]), text(p[1]), text(v[0]), text(v[1]),
+        t.add_row(n, text(p[0], ".9g"), text(p[1], ".9g"), text(v[0]), text(v[1]),
                   text(math.hypot(*v)), text(a[0]), text(a[1]), text(math.hypot(*a)))
     con.print(t)
     if res["sliders"]:
@@ -157,7 +157,7 @@ def _print_tables(res: dict, units=None) -> None:
         for c in ("joint", f"s ({lu})", f"s' ({vu})", f"s'' ({au})"):
             t.add_column(c, justify="right")
         for n, d in res["sliders"].items():
-            t.add_row(n, text(d["s"]), text(d["v"]), text(d["a"]))
+            t.add_row(n, text(d["s"], ".9g"), text(d["v"]), text(d["a"]))
         con.print(t)
     if res["drive"] is not None:
         t = Table(title="Joint forces (by body_a on body_b, world axes)")
