@@ -21,13 +21,12 @@ from . import cli_options as opt
 # ============================================================================ record
 def cmd_record(args) -> int:
     from analytic.cases import case_names
-    from sim_models.registry import get_engine, split_overrides
+    from sim_models.registry import settings_from_options
     engines = _engines(args.engine)
     models = []
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
-    per = split_overrides(args.set or (), engines)
-    settings = {e: get_engine(e).settings(per.get(e)) for e in engines}
+    settings = settings_from_options(engines, args.set or ())
     req = bl.request_dict(args.revolutions, args.samples)
     base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance)

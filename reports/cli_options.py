@@ -51,16 +51,19 @@ SWEEP_MEMORY_BUDGET = 4 * 2 ** 30
 #: (analytic/stream.py), so only time bounds it.
 MAX_STREAMED_SWEEP_POINTS = 1_000_000_000
 
-#: Engine samples per revolution: 0.1 deg apart at the ceiling.  The engine's step
-#: is shortened so that every sample falls on a step, so more samples make a run
-#: longer without showing anything between them that 3600 do not.
-MAX_SAMPLES = 3600
-#: Engine revolutions: the last one is compared; beyond 1000 a run measures only
-#: drift, which the report's long-run study covers.
-MAX_REVOLUTIONS = 1000
-#: Engine time step, s: below 1e-6 a revolution at the built-in cases' speeds takes
-#: ~1e5-1e6 steps per engine; above 0.1 s a crank at 15 rad/s turns 86 deg per step.
-MIN_TIMESTEP, MAX_TIMESTEP = 1e-6, 0.1
+#: Engine run ranges (samples, revolutions, time step) are defined once, in
+#: :mod:`sim_models.ranges`, and checked by the settings and the run request themselves;
+#: read lazily (module ``__getattr__``) so that ``xval solve`` imports no engine code.
+_SIM_RANGES = ("MAX_SAMPLES", "MAX_REVOLUTIONS", "MIN_TIMESTEP", "MAX_TIMESTEP")
+
+
+def __getattr__(name: str):
+    if name in _SIM_RANGES:
+        from sim_models import ranges
+        return getattr(ranges, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: Report worker processes: each holds both engines (a few hundred MB).
 MAX_WORKERS = 64
 
@@ -109,12 +112,28 @@ rate = finite_float(MAX_RATE, "rad/s or m/s")
 accel = finite_float(MAX_ACCEL, "rad/s^2 or m/s^2")
 sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_POINTS} only "
                          "with --csv, written block by block")
-samples = int_range(2, MAX_SAMPLES, "0.1 deg apart at most; every sample falls on an "
-                                    "engine step")
-revolutions = int_range(1, MAX_REVOLUTIONS, "the last revolution is compared")
-timestep = finite_float(MAX_TIMESTEP, "s", lo=MIN_TIMESTEP,
-                        why="the step must be positive; the bounds keep a run between "
-                            "minutes and a few steps per revolution")
+
+
+def sim_range(name: str, whole: bool = False):
+    """An argparse type checked against ``sim_models.ranges.<name>`` (the range the
+    settings and run requests check too; imported when the option is given)."""
+    def parse(text: str):
+        from sim_models import ranges
+        try:
+            v = int(text) if whole else float(text)
+        except ValueError:
+            kind = "an integer" if whole else "a number"
+            raise argparse.ArgumentTypeError(f"{text!r} is not {kind}") from None
+        problem = getattr(ranges, name).problem(v)
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return v
+    return parse
+
+
+samples = sim_range("SAMPLES", whole=True)
+revolutions = sim_range("REVOLUTIONS", whole=True)
+timestep = sim_range("TIMESTEP")
 workers = int_range(1, MAX_WORKERS, "each worker is a process holding both engines")
 
 
