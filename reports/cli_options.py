@@ -137,6 +137,19 @@ timestep = sim_range("TIMESTEP")
 workers = int_range(1, MAX_WORKERS, "each worker is a process holding both engines")
 
 
+def drift_factor(text: str) -> float:
+    """An argparse type: a baseline drift factor, a finite number above 1 (an error may
+    grow by this factor over its baseline; 1 or less fails an unchanged run)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 1):
+        raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
+                                         "finite number above 1")
+    return v
+
+
 def check_sweep_points(points: int, n_elements: int, streamed: bool = False) -> None:
     """Raise :class:`UsageError` when a sweep of ``points`` over a mechanism with
     ``n_elements`` bodies and joints would exceed :data:`SWEEP_MEMORY_BUDGET` (a
