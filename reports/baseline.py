@@ -370,8 +370,8 @@ def _settings_in_range(engine: str, settings: dict, where: str) -> None:
     types = cls.field_types()
     unknown = sorted(set(fields) - set(types))
     if unknown:
-        raise BaselineError(f"{where}: settings field {unknown[0]!r} is not a setting of "
-                            f"{engine} (settings: {', '.join(types)})")
+        raise BaselineError(f"{where}: settings field {unknown[0]!r}: {engine} has no "
+                            f"setting {unknown[0]!r} (settings: {', '.join(types)})")
     missing = [k for k in types if k not in fields]
     if missing:
         raise BaselineError(f"{where}: settings field {missing[0]!r} is missing (it would "

@@ -187,7 +187,7 @@ EDITS = {
                                r"settings field iterations=100\.5: must be a whole number"),
     "settings-unknown-field": (lambda d: _edit_run(d, lambda r: r["settings"]["fields"]
                                                    .update(warp=9)),
-                               r"settings field 'warp' is not a setting of mujoco"),
+                               r"settings field 'warp': mujoco has no setting 'warp'"),
     "settings-wrong-class": (lambda d: _edit_run(d, lambda r: r["settings"].update(
         **{"class": "PybulletSettings"})), r"settings class 'PybulletSettings' is not "
                                            r"mujoco's \(MujocoSettings\)"),
