@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 from analytic.errors import LinkageError
-from analytic.mechanism import MAX_ACCEL, MAX_ANGLE, MAX_LENGTH, MAX_RATE
+from analytic.mechanism import MAX_ACCEL, MAX_ANGLE, MAX_LENGTH, MAX_RATE, RANGE_ROUND_OFF
 
 
 class UsageError(LinkageError):
@@ -96,11 +96,12 @@ def finite_float(limit: float, unit: str, lo: float | None = None, why: str = ""
         if not math.isfinite(v):
             raise argparse.ArgumentTypeError(f"{text} is not a finite number")
         si = v * scale
-        if (abs(si) <= limit) if lo is None else (lo <= si <= limit):
+        top = limit * (1 + RANGE_ROUND_OFF)  # the printed bound itself is accepted
+        if (abs(si) <= top) if lo is None else (lo <= si <= top):
             return v
         rng = (f"|x| <= {limit / scale:g} {unit}" if lo is None
                else f"{lo / scale:g} to {limit / scale:g} {unit}")
-        raise argparse.ArgumentTypeError(f"{v:g} is out of range: the accepted range is {rng}"
+        raise argparse.ArgumentTypeError(f"{v:.12g} is out of range: the accepted range is {rng}"
                                          + (f" ({why})" if why else ""))
     return parse
 
@@ -148,6 +149,16 @@ def drift_factor(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
                                          "finite number above 1")
     return v
+
+
+def check_input_range(values, revolute: bool) -> None:
+    """``--range FROM TO``: each value within the input's range, as ``--angle`` (deg) or
+    ``--value`` (m) checks it; raises :class:`UsageError` naming the option."""
+    for v in values:
+        try:
+            (angle_deg if revolute else length_m)(repr(float(v)))
+        except argparse.ArgumentTypeError as e:
+            raise UsageError(f"argument --range: {e}") from None
 
 
 def check_sweep_points(points: int, n_elements: int, streamed: bool = False) -> None:

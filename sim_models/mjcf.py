@@ -45,7 +45,7 @@ import numpy as np
 from analytic import Mechanism
 
 from . import ranges
-from .engine_base import EngineSettings
+from .engine_base import EngineRefusal, EngineSettings
 from .tree import SimModelError, SimTree
 
 #: Oldest MuJoCo accepted: before 3.7.0 connect/weld constraints lacked the
@@ -335,10 +335,24 @@ def compile_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     return compile_spec(build_mjcf(mech, settings, tree), settings)
 
 
-def compile_spec(spec, settings: MujocoSettings | None = None):
+def compile_refusal(e: ValueError, mech: Mechanism) -> EngineRefusal:
+    """MuJoCo's compiler refused the model of ``mech``: one line, with its size."""
+    reason = str(e).replace("Error:", "").split("\n")[0].strip()
+    size = max((math.dist(p, q) for b in mech.bodies for p in b.points.values()
+                for q in b.points.values()), default=0.0)
+    # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
+    return EngineRefusal(f"mechanism {mech.name!r} (size {size:.3g} m): MuJoCo cannot "
+                         f"compile its model ({reason}); its compiler rejects the "
+                         "geometry of links shorter than about 1e-6 m")
+
+
+def compile_spec(spec, settings: MujocoSettings | None = None, mech: Mechanism | None = None):
     """Compile an ``MjSpec``; return ``(model, warnings)`` with MuJoCo's warning texts.
 
-    With ``settings``, its ``invweight_scale`` is applied to the compiled model.
+    With ``settings``, its ``invweight_scale`` is applied to the compiled model.  With
+    ``mech``, a model MuJoCo's compiler rejects is an :class:`EngineRefusal` naming the
+    mechanism and its size (:func:`compile_refusal`), the one line ``compare`` and
+    ``models`` both print.
     """
     mujoco = require_mujoco()
     msgs: list[str] = []
@@ -347,7 +361,12 @@ def compile_spec(spec, settings: MujocoSettings | None = None):
     try:
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always")
-            model = spec.compile()
+            try:
+                model = spec.compile()
+            except ValueError as e:
+                if mech is None:
+                    raise
+                raise compile_refusal(e, mech) from None
         msgs.extend(str(x.message) for x in w)
     finally:
         mujoco.set_mju_user_warning(old)

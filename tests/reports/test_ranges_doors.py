@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from reports.cli import main
 from sim_models.registry import get_engine
 
 from ..sim_models.test_settings_ranges import ENGINES, IMPOSSIBLE
@@ -249,3 +250,50 @@ def test_xval_factor_is_checked_where_pytest_parses_it(tmp_path):
                "number above 1" in p.stderr, p.stderr
     p = _pytest(tmp_path, "--xval-factor", "3")
     assert p.returncode == 0, p.stdout + p.stderr
+
+
+# ============================================================== input ranges, models
+@pytest.mark.parametrize("argv, message", [
+    (["sweep", "seed-four-bar", "--points", "36", "--range", "0", "1e300"],
+     r"argument --range: 1e\+300 is out of range: the accepted range is \|x\| <= 360000 deg"),
+    (["sweep", "seed-four-bar", "--points", "36", "--range", "0", "360000.001"],
+     r"argument --range: 360000\.001 is out of range"),
+    (["sweep", "hibbeler-16-30", "--points", "10", "--range", "0", "2e4"],
+     r"argument --range: 20000 is out of range: the accepted range is \|x\| <= 10000 m"),
+    (["solve", "seed-four-bar", "--angle", "360000.001"],
+     r"argument --angle: 360000\.001 is out of range: the accepted range is \|x\| <= 360000"),
+], ids=["range-1e300", "range-just-above", "range-prismatic", "angle-just-above"])
+def test_input_ranges_are_capped_like_angle(capsys, tmp_path, argv, message):
+    argv = argv + (["--csv", str(tmp_path / "o.csv")] if argv[0] == "sweep" else [])
+    assert_one_line_error(capsys, argv, message)
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_the_printed_bound_itself_is_accepted(capsys, tmp_path):
+    """'|x| <= 360000 deg' accepts 360000 deg (1 ulp above 2000 pi rad once converted),
+    on the command line and in a file."""
+    from analytic.cases import case_path
+    assert main(["solve", "seed-four-bar", "--angle", "-360000"]) == 0
+    assert main(["sweep", "seed-four-bar", "--points", "4", "--range", "-360000",
+                 "360000", "--csv", str(tmp_path / "o.csv")]) == 0
+    text = re.sub(r"(?m)^value = .*$", "value = 360000.0", case_path("seed-four-bar")
+                  .read_text(), count=1)
+    assert "value = 360000.0" in text
+    (tmp_path / "f.toml").write_text(text)
+    assert main(["solve", str(tmp_path / "f.toml")]) == 0
+    capsys.readouterr()
+
+
+def test_models_refuses_what_compare_refuses(capsys, tmp_path):
+    """nano-four-bar.toml: models ended in MuJoCo's ValueError traceback where compare
+    refused in one line; both now give the same line."""
+    bug = str(BUGS / "nano-four-bar.toml")
+    errs = []
+    for argv in (["models", bug, "--out", str(tmp_path / "D")],
+                 ["compare", bug, "--engine", "mujoco"]):
+        assert main(argv) == 2
+        errs.append(capsys.readouterr().err)
+    assert errs[0] == errs[1] and errs[0].count("\n") == 1, errs
+    assert re.match(r"xval: error: mechanism 'fb' \(size 4e-10 m\): MuJoCo cannot compile its "
+                    r"model", errs[0])
+    assert not any((tmp_path / "D").iterdir())
