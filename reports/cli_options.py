@@ -83,6 +83,11 @@ def int_range(lo: int, hi: int, why: str = ""):
     return parse
 
 
+def _shown(v: float) -> str:
+    """``v`` short (``1e+09``) unless that hides digits the user typed (``360000.001``)."""
+    return f"{v:g}" if float(f"{v:g}") == v else f"{v:.12g}"
+
+
 def finite_float(limit: float, unit: str, lo: float | None = None, why: str = "",
                  scale: float = 1.0):
     """An argparse type: a finite float with ``|x| <= limit`` (or ``lo <= x <= limit``).
@@ -101,7 +106,7 @@ def finite_float(limit: float, unit: str, lo: float | None = None, why: str = ""
             return v
         rng = (f"|x| <= {limit / scale:g} {unit}" if lo is None
                else f"{lo / scale:g} to {limit / scale:g} {unit}")
-        raise argparse.ArgumentTypeError(f"{v:.12g} is out of range: the accepted range is {rng}"
+        raise argparse.ArgumentTypeError(f"{_shown(v)} is out of range: the accepted range is {rng}"
                                          + (f" ({why})" if why else ""))
     return parse
 

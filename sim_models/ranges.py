@@ -67,7 +67,8 @@ class Range:
         hi_ok = self.hi is None or (v < self.hi if self.hi_open else v <= self.hi)
         if lo_ok and hi_ok:
             return None
-        shown = f"{int(v)}" if self.whole else f"{v:.12g}"
+        shown = f"{int(v)}" if self.whole else \
+            (f"{v:g}" if float(f"{v:g}") == v else f"{v:.12g}")  # no typed digit hidden
         return f"{shown} is out of range: the accepted range is {self.text()}{self._why()}"
 
     def _why(self) -> str:
