@@ -164,6 +164,11 @@ def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, ob
     ``--set`` item for the same setting are refused (no silent precedence)."""
     from .engine_base import SettingsError
     per, origin = _split(pairs, engines)
+    for flag, (key, value) in (options or {}).items():
+        if value is not None and not any(key in get_engine(e).settings_class.field_types()
+                                         for e in engines):
+            raise SettingsError(f"argument {flag}: no engine run here has a setting {key!r} "
+                                f"(engines: {', '.join(engines)})")
     out = {}
     for e in engines:
         eng = get_engine(e)

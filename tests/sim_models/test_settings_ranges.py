@@ -187,5 +187,8 @@ def test_set_conflicts_and_precedence():
         {"mujoco": {"timestep": "1e-4"}}
     with pytest.raises(SettingsError, match=r"^--set mujoco\.iterations=-5: -5 is out"):
         settings_from_options(engines, ["mujoco.iterations=-5"])
+    with pytest.raises(SettingsError, match=r"^argument --integrator: no engine run here has "
+                                            r"a setting 'integrator' \(engines: pybullet\)"):
+        settings_from_options(["pybullet"], [], {"--integrator": ("integrator", "RK4")})
     with pytest.raises(SettingsError, match=r"^argument --timestep: 10 is out of range"):
         settings_from_options(engines, [], {"--timestep": ("timestep", 10.0)})
