@@ -209,6 +209,7 @@ def cmd_sweep(args) -> int:
     kw = {"velocity": args.omega}
     if args.range is not None:
         rev = isinstance(mech.driver_joint, Revolute)
+        opt.check_input_range(args.range, rev)  # capped like --angle / --value
         if not (np.all(np.isfinite(args.range)) and args.range[1] > args.range[0]):
             raise LinkageError(f"option --range: {args.range[0]} {args.range[1]} must be two "
                                "finite numbers, the second larger")
