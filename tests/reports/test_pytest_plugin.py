@@ -174,13 +174,16 @@ def test_user_baseline_drift_fails_with_re_record_hint(user_project, xval, tmp_p
     text = str(e.value)
     assert f"FAIL  my-four-bar / mujoco: {q['quantity']}: error " in text
     assert "exceeds its tolerance" in text
-    assert "record the baseline again" in text and "linkages/four_bar.toml" in text
+    assert text.splitlines()[0].startswith(f"my-four-bar / mujoco: {q['quantity']}: error ")
+    assert "record again: pytest --xval-update, or" in text
+    assert "linkages/four_bar.toml" in text
 
 
 # ============================================================== in this session
 def test_plugin_registered_through_the_entry_point(pytestconfig):
+    import xval_pytest_plugin
     plugin = pytestconfig.pluginmanager.get_plugin("xval")
-    assert plugin is pytest_plugin, "pip install -e '.[test]' registers the pytest11 entry"
+    assert plugin is xval_pytest_plugin, "pip install -e '.[test]' registers the pytest11 entry"
 
 
 def test_assertions_share_one_cached_run(xval):
@@ -222,13 +225,39 @@ def test_a_refusal_is_cached_and_raised(xval):
 
 
 def test_plugin_imports_nothing_heavy():
-    """Every pytest run in the environment loads the plugin: it must not import numpy or
-    an engine until a fixture is used."""
+    """Every pytest run in the environment loads the plugin (the entry point's module): it
+    must not import numpy, an engine, or any package of the tool until a fixture is used."""
     code = textwrap.dedent("""
-        import sys, reports.pytest_plugin
-        heavy = {"numpy", "mujoco", "pybullet", "exudyn", "analytic", "sim_models"}
+        import sys, xval_pytest_plugin
+        heavy = {"numpy", "mujoco", "pybullet", "exudyn", "analytic", "sim_models", "reports"}
         print(sorted(heavy & set(sys.modules)))
     """)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+# ============================================================== a user's own `reports`
+def test_a_users_own_reports_package_leaves_pytest_working(tmp_path):
+    """A user project with a ``reports`` package of its own (found first: the rootdir is
+    on sys.path through ``python -m pytest`` and its conftest): its unrelated tests run
+    and pass with the plugin installed; a test that uses the xval fixture fails with one
+    line naming the colliding package, not an import error or a traceback."""
+    (tmp_path / "reports").mkdir()
+    (tmp_path / "reports" / "__init__.py").write_text("TOTAL = 42\n")
+    (tmp_path / "conftest.py").write_text("")
+    (tmp_path / "tests").mkdir()
+    (tmp_path / "tests" / "test_theirs.py").write_text(
+        "import reports\n\n\ndef test_their_reports():\n    assert reports.TOTAL == 42\n")
+    (tmp_path / "tests" / "test_engine.py").write_text(
+        "def test_uses_xval(xval):\n    xval.assert_agrees('seed-four-bar')\n")
+    p = _pytest(tmp_path, "-q", "-rE")
+    out = p.stdout + p.stderr
+    assert p.returncode == 1, out
+    assert re.search(r"1 passed, 1 error", out), out
+    [line] = [ln for ln in out.splitlines() if "package name collision" in ln]
+    assert "'reports' is imported from" in line and str(tmp_path / "reports") in line, line
+    assert "Traceback" not in out and "ModuleNotFoundError" not in out, out
+    # the unrelated test alone: a clean pass, nothing of the tool imported
+    p = _pytest(tmp_path, "-q", "tests/test_theirs.py")
+    assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout + p.stderr
