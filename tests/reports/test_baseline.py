@@ -213,6 +213,45 @@ def test_a_model_file_is_stored_relative_and_a_change_is_detected(tmp_path):
     assert not chk.passed and "is gone" in chk.problems[0]
 
 
+def test_model_identity_is_the_parsed_mechanism_not_the_bytes(tmp_path):
+    """A comment line or CRLF line endings are no change (the parsed mechanism is the
+    same, though the bytes differ: the old byte hash failed here); a changed mass is,
+    and the problem names the body, the field and both values."""
+    model = tmp_path / "four.toml"
+    text = Path(case_path("seed-four-bar")).read_text()
+    model.write_text(text)
+    out = tmp_path / "b.json"
+    bl.save(bl.record([str(model)], ["mujoco"], out, request=bl.request_dict(samples=12),
+                      runner=cached_runner))
+    recorded = json.loads(out.read_text())["runs"][0]["model"]
+    assert recorded["content"]["bodies.coupler.mass"] == 0.6
+    for same in ("# a comment the user added\n" + text, text.replace("\n", "\r\n")):
+        model.write_bytes(same.encode())
+        assert bl.file_sha256(model) != bl.file_sha256(case_path("seed-four-bar"))
+        (chk,) = bl.check(bl.load(out), runner=cached_runner)
+        assert chk.passed, chk.problems
+    model.write_text(text.replace("mass = 0.6", "mass = 0.61", 1))
+    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    assert not chk.passed
+    assert "changed since the baseline (parsed mechanism): bodies.coupler.mass 0.6 -> " \
+           "0.61" in chk.problems[0], chk.problems
+
+
+def test_model_identity_names_removed_and_added_items():
+    from dataclasses import replace
+
+    from analytic import load_case
+    from reports import model_identity as mid
+    mech = load_case("seed-four-bar")
+    before = mid.content(mech)
+    after = mid.content(replace(mech, gravity=(0.0, -9.81)))
+    assert mid.changes(before, after).startswith("gravity [0.0, 0.0] -> [0.0, -9.81]")
+    assert mid.digest(mech) == mid.digest(load_case("seed-four-bar"))
+    assert mid.digest(mech) != mid.digest(replace(mech, gravity=(0.0, -9.81)))
+    gone = {k: v for k, v in before.items() if not k.startswith("bodies.rocker.")}
+    assert "bodies.rocker.mass removed (was " in mid.changes(before, gone, limit=10)
+
+
 def test_changed_versions_are_named(mujoco_baseline, tmp_path, capsys):
     def edit(doc):
         for r in doc["runs"]:
