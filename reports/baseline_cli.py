@@ -47,7 +47,11 @@ def cmd_record(args) -> int:
         return 1
     counts = None
     if not args.replace and os.path.exists(args.out):  # merge: nothing recorded is lost
-        old = bl.load(args.out)
+        try:
+            old = bl.load(args.out)
+        except bl.BaselineError as e:  # never overwrite what cannot be read back
+            raise bl.BaselineError(f"{e}; not overwritten (--replace writes a new "
+                                   "file)") from None
         base, counts = bl.merge(old, base)
     path = bl.save(base)
     print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})"

@@ -252,6 +252,30 @@ def test_model_identity_names_removed_and_added_items():
     assert "bodies.rocker.mass removed (was " in mid.changes(before, gone, limit=10)
 
 
+def test_recording_a_subset_merges_and_replace_replaces(tmp_path, capsys):
+    """Issue 22: recording one case into a file of two kept the other run (it was
+    silently replaced by the one); counts are printed; --replace writes only the new."""
+    out = tmp_path / "b.json"
+    common = ["--engine", "mujoco", "--samples", "12", "--out", str(out)]
+
+    def runs():
+        return sorted(r["case"] for r in json.loads(out.read_text())["runs"])
+    assert main(["baseline", "record", "seed-four-bar", "quick-return", *common]) == 0
+    assert runs() == ["quick-return", "seed-four-bar"]
+    before = _run(json.loads(out.read_text()), "quick-return")
+    assert main(["baseline", "record", "seed-four-bar", *common]) == 0
+    assert "wrote 2 runs" in capsys.readouterr().out.split("\n")[-2]
+    assert runs() == ["quick-return", "seed-four-bar"]
+    assert _run(json.loads(out.read_text()), "quick-return") == before  # kept as it was
+    assert main(["baseline", "record", "seed-four-bar", "six-bar", *common]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.endswith("1 updated, 1 kept, 1 added (--replace writes only the runs "
+                         "recorded now)"), last
+    assert main(["baseline", "record", "six-bar", "--replace", *common]) == 0
+    assert capsys.readouterr().out.strip().endswith("(replaced)")
+    assert runs() == ["six-bar"]
+
+
 def test_changed_versions_are_named(mujoco_baseline, tmp_path, capsys):
     def edit(doc):
         for r in doc["runs"]:
