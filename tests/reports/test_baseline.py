@@ -136,6 +136,35 @@ def test_an_error_divided_by_100_fails_naming_quantity_and_factor(mujoco_baselin
     assert "**FAIL**" in md and f"`{picked['quantity']}`" in md and "100x" in md
 
 
+def test_a_large_improvement_says_the_baseline_is_loose(mujoco_baseline, tmp_path, capsys):
+    """A recorded error 100x the current one (the baseline no longer guards it): a
+    warning line and status 0 by default; status 1 with --fail-loose."""
+    picked = {}
+
+    def edit(doc):
+        q = _worst(_run(doc, "quick-return"))
+        assert q["error"] > bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR and q["error"] * 100 < 1e-3
+        picked.update(q)
+        q["error"] *= 100
+    edited = _edited(mujoco_baseline, tmp_path / "loose.json", edit)
+    args = ["baseline", "check", str(edited), "--case", "quick-return"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    [warn] = [ln for ln in out.splitlines() if ln.startswith("warning: ")]
+    assert warn.startswith(f"warning: quick-return / mujoco: {picked['quantity']}: improved ")
+    assert "(0.01x), more than the factor 10: the baseline is loose; re-record" in warn, warn
+    assert main([*args, "--fail-loose"]) == 1
+    out = capsys.readouterr().out
+    assert f"FAIL  quick-return / mujoco: {picked['quantity']}: improved " in out
+    # an improvement within the factor, or one below the floor, is not loose
+    rec = bl.QuantityRecord("x.alpha", 9e-7, 0.0, "deg", 1e-3, 0.0, 1.0)
+    assert bl.judge(rec, 1e-9, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    rec = bl.QuantityRecord("x.alpha", 2e-5, 0.0, "deg", 1e-3, 0.0, 1.0)
+    assert bl.judge(rec, 3e-6, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR).status == "improved"
+    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR, fail_loose=True).failed
+
+
 def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
     """An error below the floor divided by 100 is not drift (1e-8 -> 1e-10 is round-off
     territory: the limit is factor x floor); the same error set to 0 is not either."""
