@@ -254,10 +254,13 @@ class Xval:
         or the one run ``key``); ``settings``: overrides of the recorded settings."""
         from reports import baseline as bl
         base = bl.load(self.path(baseline))
+        model = self.resolve(case) if case is not None else None
 
         def keep(rec):
-            return (key is None or rec.key == tuple(key)) and \
-                (case is None or case in (rec.case, rec.model.name)) and \
+            same = case is None or case in (rec.case, rec.model.name) or (
+                isinstance(model, Path) and rec.model.kind == "file"
+                and rec.model.path(base.base_dir).resolve() == model.resolve())
+            return (key is None or rec.key == tuple(key)) and same and \
                 (engine is None or rec.engine == engine)
         checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep,
                           fail_loose=self.fail_loose,
@@ -286,6 +289,8 @@ class Xval:
                                                factor=factor, settings=settings, key=key)
         except bl.BaselineError as e:  # an unusable file: one line, no traceback
             pytest.fail(f"xval: error: {e}", pytrace=False)
+        except KeyError as e:  # no such run recorded: as a missing file, for that run
+            return self._missing(path, case, engine, settings, e.args[0])
         changed = [c for c in checks if not c.passed or c.loose()]
         if self.update and changed:
             self._rewrite(base, changed, settings)
@@ -298,20 +303,23 @@ class Xval:
             return checks
         raise AssertionError(failure_text(base, checks, factor or self.factor, self.root))
 
-    def _missing(self, path: Path, case, engine, settings):
+    def _missing(self, path: Path, case, engine, settings, what: str = ""):
+        """A baseline file, or the run of ``case`` in ``engine``, not recorded yet:
+        fail with the command that records it, or record it (``--xval-update``)."""
         __tracebackhide__ = True
         rel = os.path.relpath(path, self.root)
+        what = what or f"no baseline file {rel} (under {self.root})"
         if case is None or engine is None:
-            pytest.fail(f"xval: error: no baseline file {rel} (under {self.root}); create it "
-                        f"with: xval baseline record CASES_OR_FILES --engine ENGINE --out "
-                        f"{rel}", pytrace=False)
+            pytest.fail(f"xval: error: {what}; create it with: xval baseline record "
+                        f"CASES_OR_FILES --engine ENGINE --out {rel}", pytrace=False)
         model = self.resolve(case)
         model_arg = os.path.relpath(model, self.root) if isinstance(model, Path) else model
         cmd = f"xval baseline record {model_arg} --engine {engine} --out {rel}"
         if not self.update:
-            pytest.fail(f"xval: error: no baseline file {rel} (under {self.root}); create "
-                        f"it with pytest --xval-update, or: {cmd}", pytrace=False)
-        self._record(path, str(model), engine, settings, None, None, "created")
+            pytest.fail(f"xval: error: {what}; create it with pytest --xval-update, or: "
+                        f"{cmd}", pytrace=False)
+        self._record(path, str(model), engine, settings, None, None,
+                     "added" if path.exists() else "created")
         return []
 
     def _record(self, path: Path, model: str, engine: str, settings, request, tolerance,

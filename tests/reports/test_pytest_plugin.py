@@ -261,3 +261,106 @@ def test_a_users_own_reports_package_leaves_pytest_working(tmp_path):
     # the unrelated test alone: a clean pass, nothing of the tool imported
     p = _pytest(tmp_path, "-q", "tests/test_theirs.py")
     assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout + p.stderr
+
+
+# ============================================================== pytest conventions
+@pytest.fixture(scope="module")
+def drift_project(tmp_path_factory):
+    """A user project whose baseline holds the four-bar in three engines; Exudyn's
+    O4.force (4.1e-6 of peak measured, above the floor) recorded 10.6x smaller than it
+    is, so re-running reads as a 10.6x drift in that one quantity."""
+    root = tmp_path_factory.mktemp("drift-project")
+    (root / "linkages").mkdir()
+    (root / "tests").mkdir()
+    (root / "linkages" / "four_bar.toml").write_text(USER_TOML)
+    (root / "tests" / "test_drift.py").write_text(
+        "def test_no_drift(xval_baseline):\n    xval_baseline()\n\n\n"
+        "def test_plain():\n    assert True\n")
+    (root / "pytest.ini").write_text("[pytest]\nxval_baseline = tests/baseline.json\n")
+    out = root / "tests" / "baseline.json"
+    bl.save(bl.record([str(root / "linkages" / "four_bar.toml")],
+                      ["mujoco", "pybullet", "exudyn"], out, runner=cached_runner))
+    import json
+    doc = json.loads(out.read_text())
+    run = next(r for r in doc["runs"] if r["engine"] == "exudyn")
+    q = next(q for q in run["quantities"] if q["quantity"] == "O4.force")
+    assert q["error"] > 10.6 * bl.DRIFT_FLOOR  # still above the floor once divided
+    q["error"] = q["error"] / 10.6
+    out.write_text(json.dumps(doc, indent=2))
+    return root
+
+
+def test_a_drift_in_one_quantity_is_one_red_test(drift_project, tmp_path):
+    """Must show (issue 22): the 10.6x drift is one red test ``my-four-bar/exudyn`` whose
+    first failure line (and JUnit message) names the quantity, the growth, the factor
+    and where; the other engines' tests stay green; run from ``tests/`` (paths are
+    rootdir-relative)."""
+    junit = tmp_path / "p.xml"
+    p = _pytest(drift_project / "tests", "-q", f"--junitxml={junit}")
+    out = p.stdout
+    print(out)
+    assert p.returncode == 1, out + p.stderr
+    assert re.search(r"1 failed, 3 passed", out), out
+    assert "FAILED test_drift.py::test_no_drift[my-four-bar/exudyn]" in out, out
+    first = re.search(r"E +AssertionError: (.*)", out).group(1)
+    assert re.match(r"my-four-bar / exudyn: O4\.force: drifted \S+ -> \S+ of peak at "
+                    r"[\d.]+ deg \(10\.6x\), more than the factor 10$", first), first
+    import xml.etree.ElementTree as ET
+    cases = {c.get("name"): c for c in ET.parse(junit).getroot().iter("testcase")}
+    assert set(cases) >= {f"test_no_drift[my-four-bar/{e}]"
+                          for e in ("mujoco", "pybullet", "exudyn")}
+    msg = cases["test_no_drift[my-four-bar/exudyn]"].find("failure").get("message")
+    assert msg.startswith("AssertionError: my-four-bar / exudyn: O4.force: drifted "), msg
+    assert cases["test_no_drift[my-four-bar/mujoco]"].find("failure") is None
+
+
+def test_skip_and_select_engine_tests(drift_project):
+    p = _pytest(drift_project, "-q", "--xval-skip-engines")
+    assert p.returncode == 0 and "1 passed, 3 skipped" in p.stdout, p.stdout
+    p = _pytest(drift_project, "-q", "-m", "not xval_engine")
+    assert p.returncode == 0 and "1 passed, 3 deselected" in p.stdout, p.stdout
+
+
+def test_unusable_and_missing_baselines_are_one_line(drift_project, tmp_path):
+    import shutil
+    root = tmp_path / "p"
+    shutil.copytree(drift_project, root)
+    (root / "tests" / "baseline.json").write_text("{not json")
+    p = _pytest(root, "-q", "-k", "no_drift")
+    assert p.returncode == 1 and "1 failed" in p.stdout, p.stdout
+    [line] = [ln for ln in p.stdout.splitlines() if "xval: error:" in ln and "not JSON" in ln]
+    assert "Traceback" not in p.stdout and "baseline.py" not in p.stdout, p.stdout
+    (root / "tests" / "baseline.json").unlink()
+    p = _pytest(root, "-q", "-k", "no_drift")
+    assert p.returncode == 1, p.stdout
+    assert "no baseline file tests/baseline.json" in p.stdout
+    assert "create it with: xval baseline record" in p.stdout
+
+
+def test_xval_update_rewrites_what_changed_and_creates_a_missing_file(drift_project,
+                                                                      tmp_path):
+    import json
+    import shutil
+    root = tmp_path / "p"
+    shutil.copytree(drift_project, root)
+    p = _pytest(root, "-q", "--xval-update")
+    assert p.returncode == 0 and "4 passed" in p.stdout, p.stdout
+    assert "xval --xval-update: my-four-bar / exudyn in tests/baseline.json: rewrote " \
+           "(O4.force: drifted" in p.stdout, p.stdout
+    doc = json.loads((root / "tests" / "baseline.json").read_text())
+    assert len(doc["runs"]) == 3  # the others kept
+    p = _pytest(root, "-q")
+    assert p.returncode == 0 and "4 passed" in p.stdout, p.stdout
+    # a missing file named with its run: failing without the flag, created with it
+    (root / "tests" / "test_new.py").write_text(
+        "def test_new(xval):\n    xval.assert_baseline('tests/new.json', "
+        "case='linkages/four_bar.toml', engine='mujoco')\n")
+    p = _pytest(root, "-q", "tests/test_new.py")
+    assert p.returncode == 1 and "no baseline file tests/new.json" in p.stdout
+    assert "create it with pytest --xval-update, or: xval baseline record " \
+           "linkages/four_bar.toml --engine mujoco --out tests/new.json" in p.stdout, p.stdout
+    p = _pytest(root, "-q", "tests/test_new.py", "--xval-update")
+    assert p.returncode == 0 and "xval --xval-update: my-four-bar / mujoco in " \
+        "tests/new.json: created" in p.stdout, p.stdout
+    p = _pytest(root, "-q", "tests/test_new.py")
+    assert p.returncode == 0, p.stdout
