@@ -165,6 +165,24 @@ def test_a_large_improvement_says_the_baseline_is_loose(mujoco_baseline, tmp_pat
     assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR, fail_loose=True).failed
 
 
+def test_check_under_other_settings_names_them(mujoco_baseline, tmp_path, capsys):
+    """``--set`` runs the recorded runs with another setting; the output says which, and
+    the run's settings line shows it; an unknown key is one line, status 2."""
+    junit = tmp_path / "s.xml"
+    code = main(["baseline", "check", str(mujoco_baseline), "--case", "seed-four-bar",
+                 "--set", "mujoco.timestep=0.0002", "--junit", str(junit)])
+    out = capsys.readouterr().out
+    assert code in (0, 1), out
+    assert "settings changed for this check (--set): mujoco.timestep=0.0002" in \
+        out.splitlines()[2], out
+    props = {p.get("name"): p.get("value") for p in ET.parse(junit).getroot().iter("property")}
+    assert props["set.mujoco.timestep"] == "0.0002"
+    assert "timestep=0.0002" in ET.parse(junit).getroot().find(".//system-out").text
+    assert main(["baseline", "check", str(mujoco_baseline), "--set", "no_such=1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("xval: error: ") and "no_such" in err and "\n" not in err
+
+
 def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
     """An error below the floor divided by 100 is not drift (1e-8 -> 1e-10 is round-off
     territory: the limit is factor x floor); the same error set to 0 is not either."""

@@ -364,3 +364,12 @@ def test_xval_update_rewrites_what_changed_and_creates_a_missing_file(drift_proj
         "tests/new.json: created" in p.stdout, p.stdout
     p = _pytest(root, "-q", "tests/test_new.py")
     assert p.returncode == 0, p.stdout
+
+
+def test_baseline_under_other_settings(user_project, xval):
+    """``settings=`` overrides the recorded settings of every run whose engine has the
+    key, and the check's settings text says what was changed."""
+    _, (chk,) = xval.check_baseline(user_project / "tests" / "baseline.json",
+                                    settings={"timestep": 0.0002})
+    assert "timestep=0.0002" in chk.settings_text
+    assert chk.settings_text.endswith("(changed for this check: timestep=0.0002)")
