@@ -398,11 +398,44 @@ def test_missing_file_and_bad_options(tmp_path, capsys):
 
 
 # ============================================================== JUnit from xval compare
+#: The rules of the schema the Jenkins xunit plugin validates JUnit files against:
+#: ``junit-10.xsd`` in jenkinsci/xunit-plugin, src/main/resources/org/jenkinsci/plugins/
+#: xunit/types/model/xsd/ (MIT; read at commit 031e285e).  Restated here as checks, not
+#: copied: which attributes and children each element may have, the required ones, and
+#: its time pattern.  Notably ``testcase`` may not carry ``file`` or ``properties``.
+JENKINS_TESTCASE_ATTRS = {"name", "time", "classname", "group"}
+JENKINS_TESTCASE_CHILDREN = {"skipped", "error", "failure", "rerunFailure", "rerunError",
+                             "flakyFailure", "flakyError", "system-out", "system-err"}
+JENKINS_SUITE_ATTRS = {"name", "tests", "failures", "errors", "group", "time", "skipped",
+                       "timestamp", "hostname", "id", "package", "file", "log", "url"}
+JENKINS_SUITES_ATTRS = {"name", "time", "tests", "failures", "errors"}
+JENKINS_TIME = r"(([0-9]{0,3},)*[0-9]{3}|[0-9]{0,3})*(\.[0-9]*)?"
+
+
+def _jenkins_xunit_rules(root: ET.Element) -> None:
+    import re
+    assert root.tag == "testsuites" and set(root.attrib) <= JENKINS_SUITES_ATTRS
+    for el in (root, *root.iter("testsuite")):
+        assert re.fullmatch(JENKINS_TIME, el.get("time", "")), el.get("time")
+    for ts in root.iter("testsuite"):
+        assert set(ts.attrib) <= JENKINS_SUITE_ATTRS, ts.attrib
+        assert {"name", "tests", "failures", "errors"} <= set(ts.attrib)
+        assert {c.tag for c in ts} <= {"testsuite", "properties", "testcase", "system-out",
+                                       "system-err"}
+        for p in ts.iter("property"):
+            assert set(p.attrib) == {"name", "value"}
+    for tc in root.iter("testcase"):
+        assert set(tc.attrib) <= JENKINS_TESTCASE_ATTRS and "name" in tc.attrib, tc.attrib
+        assert {c.tag for c in tc} <= JENKINS_TESTCASE_CHILDREN, [c.tag for c in tc]
+
+
 def _validate_junit(path: Path, tests: int, failures: int, errors: int = 0) -> None:
-    """Valid against the JUnit schema, with the expected counts on both levels."""
+    """Valid against the JUnit schema and the Jenkins xunit plugin's rules, with the
+    expected counts on both levels."""
     xmlschema = pytest.importorskip("xmlschema")
     xmlschema.XMLSchema(str(XSD)).validate(str(path))
     root = ET.parse(path).getroot()
+    _jenkins_xunit_rules(root)
     suite = root.find("testsuite")
     for el in (root, suite):
         assert (int(el.get("tests")), int(el.get("failures")), int(el.get("errors"))) == \
@@ -424,7 +457,9 @@ def test_compare_junit_and_summary(tmp_path, capsys):
     assert code == 1
     _validate_junit(junit, tests=1, failures=1)
     case = ET.parse(junit).getroot().find(".//testcase")
-    assert case.get("classname") == "xval.mujoco" and case.get("name") == "quick-return"
+    assert case.get("classname") == "xval.compare.mujoco" and case.get("name") == "quick-return"
+    props = {p.get("name"): p.get("value") for p in ET.parse(junit).getroot().iter("property")}
+    assert props["engine.mujoco"].startswith("mujoco ") and props["linkage-xval"]
     msg = case.find("failure").get("message")
     q, err = msg.split(": error ")[0], float(msg.split(": error ")[1].split()[0])
     assert err > 1e-3 and "of peak at" in msg and "exceeds the tolerance 0.001" in msg
@@ -432,6 +467,43 @@ def test_compare_junit_and_summary(tmp_path, capsys):
     md = summary.read_text()
     assert "| quick-return | mujoco | **FAIL** |" in md and f"`{q}`" in md
     assert not math.isnan(err)
+
+
+def test_junit_for_ci_pages(tmp_path, capsys):
+    """A model file is the suite's ``file`` attribute (relative, as given); versions are
+    properties; a passing case carries its current worst error in ``system-out``;
+    ``compare`` and ``baseline check`` results never share a (classname, name)."""
+    model = tmp_path / "linkages" / "four.toml"
+    model.parent.mkdir()
+    shutil.copy(case_path("seed-four-bar"), model)
+    base = tmp_path / "b.json"
+    bl.save(bl.record([str(model)], ["mujoco"], base, request=bl.request_dict(samples=12),
+                      runner=cached_runner))
+    import os
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert main(["compare", "linkages/four.toml", "--engine", "mujoco", "--samples",
+                     "12", "--junit", "c.xml"]) == 0
+        assert main(["baseline", "check", "b.json", "--junit", "b.xml"]) == 0
+    finally:
+        os.chdir(cwd)
+    capsys.readouterr()
+    names = []
+    for f in ("c.xml", "b.xml"):
+        _validate_junit(tmp_path / f, tests=1, failures=0)
+        root = ET.parse(tmp_path / f).getroot()
+        assert root.find("testsuite").get("file") == "linkages/four.toml"
+        props = {p.get("name"): p.get("value") for p in root.iter("property")}
+        from importlib.metadata import version
+        assert props["engine.mujoco"] == f"mujoco {version('mujoco')}"
+        assert props["linkage-xval"] == version("linkage-xval")
+        tc = root.find(".//testcase")
+        out = tc.find("system-out").text
+        assert out.startswith("worst: ") and " of peak at " in out and "tolerance 0.001" in out
+        names.append((tc.get("classname"), tc.get("name")))
+    assert names == [("xval.compare.mujoco", "seed-four-bar"),
+                     ("xval.baseline.mujoco", "seed-four-bar")], names
 
 
 def test_record_command_names_settings_that_differ_from_the_defaults(mujoco_baseline):
