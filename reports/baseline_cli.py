@@ -89,7 +89,10 @@ def cmd_check(args) -> int:
             f"{e}.{k}={v}" for e, kv in overrides.items() for k, v in kv.items()))
     print("\n".join(lines))
     if not all(c.passed for c in checks):
-        print(f"if the change is intended, record the baseline again: {bl.record_command(base)}")
+        sets = "".join(f" --set {e}.{k}={v}" for e, kv in overrides.items()
+                       for k, v in kv.items())  # record what was checked
+        print("if the change is intended, record the baseline again: "
+              f"{bl.record_command(base)}{sets}")
     ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
                              ci_formats.from_baseline(checks, base.base_dir), intro=lines[:2],
                              properties=_override_props(overrides), command="baseline")
