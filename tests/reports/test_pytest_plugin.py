@@ -314,11 +314,22 @@ def test_a_drift_in_one_quantity_is_one_red_test(drift_project, tmp_path):
     assert cases["test_no_drift[my-four-bar/mujoco]"].find("failure") is None
 
 
-def test_skip_and_select_engine_tests(drift_project):
-    p = _pytest(drift_project, "-q", "--xval-skip-engines")
-    assert p.returncode == 0 and "1 passed, 3 skipped" in p.stdout, p.stdout
-    p = _pytest(drift_project, "-q", "-m", "not xval_engine")
-    assert p.returncode == 0 and "1 passed, 3 deselected" in p.stdout, p.stdout
+def test_skip_and_select_engine_tests(drift_project, tmp_path):
+    """``--xval-skip-engines`` skips, ``-m "not xval_engine"`` deselects every test that
+    uses an xval fixture; ``baseline_params`` takes a rootdir-relative path, so its
+    collection works from ``tests/`` too (it was relative to the current folder)."""
+    import shutil
+    root = tmp_path / "p"
+    shutil.copytree(drift_project, root)
+    (root / "tests" / "test_params.py").write_text(
+        "import pytest\nfrom xval_pytest_plugin import baseline_params\n\n\n"
+        "@pytest.mark.parametrize('case, engine', baseline_params('tests/baseline.json'))\n"
+        "def test_run(xval, case, engine):\n"
+        "    xval.assert_baseline('tests/baseline.json', case=case, engine=engine)\n")
+    p = _pytest(root / "tests", "-q", "--xval-skip-engines")
+    assert p.returncode == 0 and "1 passed, 6 skipped" in p.stdout, p.stdout + p.stderr
+    p = _pytest(root, "-q", "-m", "not xval_engine")
+    assert p.returncode == 0 and "1 passed, 6 deselected" in p.stdout, p.stdout
 
 
 def test_unusable_and_missing_baselines_are_one_line(drift_project, tmp_path):
