@@ -384,3 +384,25 @@ def test_baseline_under_other_settings(user_project, xval):
                                     settings={"timestep": 0.0002})
     assert "timestep=0.0002" in chk.settings_text
     assert chk.settings_text.endswith("(changed for this check: timestep=0.0002)")
+
+
+def test_a_loose_baseline_warns_and_fails_with_the_flag(user_project, xval, tmp_path):
+    """A recorded error 1000x the current one (above the floor once multiplied): a
+    pytest warning naming it; with ``--xval-fail-loose`` (``fail_loose``) a failure."""
+    import json
+
+    from reports.pytest_plugin import Xval, XvalLooseWarning
+    doc = json.loads((user_project / "tests" / "baseline.json").read_text())
+    q = max(doc["runs"][0]["quantities"], key=lambda q: q["error"])
+    q["error"] *= 1000
+    assert q["error"] > bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR
+    doc["runs"][0]["model"]["file"] = str(user_project / "linkages" / "four_bar.toml")
+    p = tmp_path / "loose.json"
+    p.write_text(json.dumps(doc))
+    with pytest.warns(XvalLooseWarning, match=rf"{q['quantity']}: improved .* the baseline "
+                                              "is loose; re-record"):
+        xval.assert_baseline(p)
+    strict = Xval(xval.root, xval.factor, fail_loose=True)
+    with pytest.raises(AssertionError, match=rf"^my-four-bar / mujoco: {q['quantity']}: "
+                                             "improved "):
+        strict.assert_baseline(p)
