@@ -3,8 +3,9 @@
 A baseline file records, per (case, engine, quantity), the worst error relative to the
 quantity's peak over the cycle, where in the cycle it occurs, the tolerance, and what is
 needed to re-run the run exactly: the mechanism's source (a built-in case name, or a
-TOML file path relative to the baseline file, each with a SHA-256 of its content so a
-changed model is detected), the run request and the engine's settings object in full.
+TOML file path relative to the baseline file), with the parsed mechanism flattened to its
+SI values and their SHA-256 (:mod:`reports.model_identity`: a comment or CRLF is no
+change, a real one is named), the run request and the engine's settings object in full.
 It also records the versions the run was made with (engine, linkage-xval, Python,
 numpy, platform).  :func:`check` re-runs every recorded run and judges each quantity
 (:func:`judge`): above its tolerance, grown by more than ``factor`` over its baseline
@@ -19,8 +20,9 @@ keys sorted, two-space indent, one line per quantity, so that a diff shows what 
         {
           "case": "seed-four-bar",                 # the mechanism's name (a label)
           "engine": "mujoco",                      # a registry name
-          "model": {"builtin": "seed-four-bar", "sha256": "..."}
-                 | {"file": "linkages/four_bar.toml", "sha256": "..."},
+          "model": {"builtin": "seed-four-bar", "sha256": "...", "content": {...}}
+                 | {"file": "linkages/four_bar.toml", "sha256": "...",
+                    "content": {"bodies.coupler.mass": 0.6, ...}},   # one line
           "quantities": [
             {"at": 165.0, "at_unit": "deg", "error": 1.48e-08, "max_abs": ..., "peak": ...,
              "quantity": "B.force", "tolerance": 0.001},
