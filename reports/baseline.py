@@ -3,8 +3,9 @@
 A baseline file records, per (case, engine, quantity), the worst error relative to the
 quantity's peak over the cycle, where in the cycle it occurs, the tolerance, and what is
 needed to re-run the run exactly: the mechanism's source (a built-in case name, or a
-TOML file path relative to the baseline file, each with a SHA-256 of its content so a
-changed model is detected), the run request and the engine's settings object in full.
+TOML file path relative to the baseline file), with the parsed mechanism flattened to its
+SI values and their SHA-256 (:mod:`reports.model_identity`: a comment or CRLF is no
+change, a real one is named), the run request and the engine's settings object in full.
 It also records the versions the run was made with (engine, linkage-xval, Python,
 numpy, platform).  :func:`check` re-runs every recorded run and judges each quantity
 (:func:`judge`): above its tolerance, grown by more than ``factor`` over its baseline
@@ -19,8 +20,9 @@ keys sorted, two-space indent, one line per quantity, so that a diff shows what 
         {
           "case": "seed-four-bar",                 # the mechanism's name (a label)
           "engine": "mujoco",                      # a registry name
-          "model": {"builtin": "seed-four-bar", "sha256": "..."}
-                 | {"file": "linkages/four_bar.toml", "sha256": "..."},
+          "model": {"builtin": "seed-four-bar", "sha256": "...", "content": {...}}
+                 | {"file": "linkages/four_bar.toml", "sha256": "...",
+                    "content": {"bodies.coupler.mass": 0.6, ...}},   # one line
           "quantities": [
             {"at": 165.0, "at_unit": "deg", "error": 1.48e-08, "max_abs": ..., "peak": ...,
              "quantity": "B.force", "tolerance": 0.001},
@@ -91,14 +93,20 @@ class BaselineError(LinkageError):
 class ModelSource:
     """Where a run's mechanism comes from: ``kind`` "builtin" (``name`` a case name) or
     "file" (``name`` a path relative to the baseline file's folder, POSIX separators);
-    ``sha256`` of the description's bytes when recorded."""
+    ``sha256`` of the parsed mechanism's canonical content when recorded
+    (:func:`reports.model_identity.digest`; files recorded before that hold the SHA-256
+    of the file's bytes, still accepted); ``content`` the mechanism flattened
+    (:func:`reports.model_identity.content`), so a change can be named (None in older
+    files)."""
 
     kind: str
     name: str
     sha256: str
+    content: dict | None = field(default=None, compare=False)
 
     def as_json(self) -> dict:
-        return {self.kind: self.name, "sha256": self.sha256}
+        out = {self.kind: self.name, "sha256": self.sha256}
+        return out if self.content is None else {**out, "content": self.content}
 
     def path(self, base_dir: Path) -> Path:
         """The description file this source names now."""
@@ -212,7 +220,7 @@ def dumps(baseline: Baseline) -> str:
 def _dump(obj, level: int, key: str | None) -> str:
     pad, inner = "  " * level, "  " * (level + 1)
     if isinstance(obj, dict):
-        if key == "quantity-line":
+        if key in ("quantity-line", "content"):  # one line each
             return json.dumps(obj, sort_keys=True)
         if not obj:
             return "{}"
@@ -306,8 +314,11 @@ def _parse_run(r, where: str) -> RunRecord:
     kinds = [k for k in ("builtin", "file") if k in model]
     if len(kinds) != 1:
         raise BaselineError(f"{where}: model needs exactly one of 'builtin' or 'file'")
+    content = model.get("content")
+    if content is not None and not isinstance(content, dict):
+        raise BaselineError(f"{where}: model: 'content' must be an object")
     src = ModelSource(kinds[0], _get(model, kinds[0], str, f"{where}: model"),
-                      _get(model, "sha256", str, f"{where}: model"))
+                      _get(model, "sha256", str, f"{where}: model"), content)
     request = _get(r, "request", dict, where)
     for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
                    ("max_speed_error", float), ("chords", str), ("mode", str)):
@@ -509,13 +520,15 @@ def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
     paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
     from analytic import load_case
-    from analytic.cases import case_names, case_path
+    from analytic.cases import case_names
+    from reports import model_identity as mid
     if model in case_names():
-        return ModelSource("builtin", model, file_sha256(case_path(model))), load_case(model)
+        mech = load_case(model)
+        return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech
     p = Path(model).resolve()
     mech = load_case(str(p))
     rel = Path(os.path.relpath(p, base_dir)).as_posix()
-    return ModelSource("file", rel, file_sha256(p)), mech
+    return ModelSource("file", rel, mid.digest(mech), mid.content(mech)), mech
 
 
 def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike,
@@ -550,6 +563,21 @@ def _record_run(mech, src, engine, settings, req, r, comps, tol) -> RunRecord:
                               float(c.max_abs), float(c.peak)) for c in comps)
     return RunRecord(mech.name, engine, src, dict(req), settings_json(engine, settings),
                      versions(engine), qs)
+
+
+def merge(old: Baseline, new: Baseline) -> tuple[Baseline, dict[str, int]]:
+    """``new``'s runs recorded into ``old``: a run of the same (model, engine) is
+    replaced, the others kept, new ones added.  Returns the merged baseline (``new``'s
+    path and time) and the counts ``{"updated", "kept", "added"}``."""
+    fresh = {r.key: r for r in new.runs}
+    runs, counts = [], {"updated": 0, "kept": 0, "added": 0}
+    for r in old.runs:
+        hit = fresh.pop(r.key, None)
+        runs.append(hit or r)
+        counts["updated" if hit else "kept"] += 1
+    runs += fresh.values()
+    counts["added"] = len(fresh)
+    return Baseline(tuple(runs), new.path, new.recorded), counts
 
 
 def record_problems(baseline: Baseline) -> list[str]:
@@ -618,8 +646,9 @@ def _revolute(mech) -> bool:
 @dataclass(frozen=True)
 class QuantityCheck:
     """One quantity against its baseline.  ``status``: "ok", "over-tolerance", "drift",
-    "not-finite", "missing" (recorded, no longer compared) or "new" (not recorded;
-    reported, not judged)."""
+    "not-finite", "missing" (recorded, no longer compared), "new" (not recorded;
+    reported, not judged), "improved" (the error shrank by more than the factor: the
+    baseline is loose, a warning) or "loose" (the same, failed: ``fail_loose``)."""
 
     quantity: str
     status: str
@@ -632,7 +661,7 @@ class QuantityCheck:
 
     @property
     def failed(self) -> bool:
-        return self.status not in ("ok", "new")
+        return self.status not in ("ok", "new", "improved")
 
     @property
     def ratio(self) -> float:
@@ -653,6 +682,9 @@ class QuantityCheck:
         if self.status == "not-finite":
             return f"{self.quantity}: error is not finite{at} (the run diverged or failed)"
         grew = f"{self.base:.3g} -> {self.error:.3g} of peak{at} ({_times(self.ratio)})"
+        if self.status in ("improved", "loose"):
+            return f"{self.quantity}: improved {grew}, more than the factor " \
+                   f"{self.factor:g}: the baseline is loose; re-record"
         if self.status == "over-tolerance":
             return f"{self.quantity}: error {self.error:.3g} of peak{at} exceeds its " \
                    f"tolerance {self.tolerance:g} (baseline {self.base:.3g}, {_times(self.ratio)})"
@@ -671,14 +703,19 @@ def _times(r: float) -> str:
     return f"{r:.3g}x" if r < 1e4 else f"{r:.2g}x"
 
 
-def judge(q: QuantityRecord, error: float, at: float, factor: float) -> QuantityCheck:
-    """The verdict of one quantity now (``error`` relative to peak) against its record."""
+def judge(q: QuantityRecord, error: float, at: float, factor: float,
+          fail_loose: bool = False) -> QuantityCheck:
+    """The verdict of one quantity now (``error`` relative to peak) against its record.
+    An error that shrank by more than ``factor`` (both floored at :data:`DRIFT_FLOOR`)
+    leaves the baseline loose: it would let the error grow back unnoticed."""
     if not math.isfinite(error):
         status = "not-finite"
     elif error > q.tolerance:
         status = "over-tolerance"
     elif error > factor * max(q.error, DRIFT_FLOOR):
         status = "drift"
+    elif q.error > factor * max(error, DRIFT_FLOOR):
+        status = "loose" if fail_loose else "improved"
     else:
         status = "ok"
     return QuantityCheck(q.quantity, status, error, q.error, at, q.at_unit, q.tolerance,
@@ -715,6 +752,10 @@ class RunCheck:
         done = [q for q in self.quantities if math.isfinite(q.error)]
         return max(done, key=lambda q: q.error, default=None)
 
+    def loose(self) -> list[QuantityCheck]:
+        """Quantities whose error shrank by more than the factor (warnings)."""
+        return [q for q in self.quantities if q.status == "improved"]
+
     def versions_changed(self) -> dict[str, tuple[str, str]]:
         return {k: (str(v), str(self.versions_now.get(k, "unknown")))
                 for k, v in self.record.versions.items()
@@ -729,28 +770,35 @@ def _severity(q: QuantityCheck) -> tuple:
 
 
 def check(baseline: Baseline, factor: float = DEFAULT_FACTOR, runner: Runner | None = None,
-          select: Callable[[RunRecord], bool] | None = None) -> list[RunCheck]:
+          select: Callable[[RunRecord], bool] | None = None, fail_loose: bool = False,
+          overrides: dict | None = None) -> list[RunCheck]:
     """Re-run every recorded run (those ``select`` keeps) and judge it (see the module
-    docstring).  Raises :class:`BaselineError` only for a file that cannot be applied
-    (e.g. settings the engine no longer accepts); everything about the runs themselves
-    is in the returned :class:`RunCheck`."""
+    docstring).  ``fail_loose``: an error that shrank by more than ``factor`` fails
+    (default: a warning); ``overrides``: engine name -> {setting: value} applied over
+    the recorded settings (``--set``; named in each run's settings text).  Raises
+    :class:`BaselineError` only for a file that cannot be applied (e.g. settings the
+    engine no longer accepts); everything about the runs themselves is in the returned
+    :class:`RunCheck`."""
     if not (factor > 1 and math.isfinite(factor)):
         raise BaselineError(f"the drift factor must be a finite number above 1, got "
                             f"{factor!r}")
     runner = runner or run_and_compare
-    return [check_run(rec, baseline, factor, runner) for rec in baseline.runs
-            if select is None or select(rec)]
+    return [check_run(rec, baseline, factor, runner, fail_loose, (overrides or {}).get(
+        rec.engine)) for rec in baseline.runs if select is None or select(rec)]
 
 
-def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner) -> RunCheck:
-    """One record: rebuild its mechanism and settings, run, judge."""
+def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
+              fail_loose: bool = False, overrides: dict | None = None) -> RunCheck:
+    """One record: rebuild its mechanism and settings (with ``overrides``), run, judge."""
     import time
     out = RunCheck(rec)
     mech = _mechanism_now(rec, baseline, out)
-    settings = _settings_now(rec, baseline, out)
+    settings = _settings_now(rec, baseline, out, overrides)
     if mech is None or settings is None:
         return out
-    out.settings_text = settings_line(rec.engine, settings)
+    out.settings_text = settings_line(rec.engine, settings) + (
+        " (changed for this check: " + " ".join(f"{k}={v}" for k, v in overrides.items())
+        + ")" if overrides else "")
     out.versions_now = versions(rec.engine)
     t0 = time.perf_counter()
     try:
@@ -769,7 +817,8 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner)
             out.quantities.append(QuantityCheck(q.quantity, "missing", math.nan, q.error,
                                                 math.nan, q.at_unit, q.tolerance, factor))
         else:
-            out.quantities.append(judge(q, float(c.normalised), float(c.at), factor))
+            out.quantities.append(judge(q, float(c.normalised), float(c.at), factor,
+                                        fail_loose))
     recorded = {q.quantity for q in rec.quantities}
     unit = "deg" if _revolute(mech) else "m"
     for c in comps:
@@ -788,19 +837,30 @@ def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
     if src.kind == "builtin" and src.name not in case_names():
         out.problems.append(f"the built-in case {src.name!r} no longer exists")
         return None
+    from reports import model_identity as mid
     p = src.path(baseline.base_dir)
     if not p.is_file():
         out.problems.append(f"the model {src.describe()} is gone (looked for {p})")
         return None
-    sha = file_sha256(p)
-    if sha != src.sha256:
+    try:
+        mech = load_case(src.name if src.kind == "builtin" else str(p))
+    except LinkageError as e:
+        out.problems.append(f"the model {src.describe()} changed since the baseline and "
+                            f"no longer loads: {e}")
+        return None
+    # identity by content: the parsed mechanism, not the bytes (a comment or CRLF is no
+    # change); a file recorded before content identity holds the bytes' SHA-256
+    if mid.digest(mech) != src.sha256 and file_sha256(p) != src.sha256:
+        what = mid.changes(src.content, mid.content(mech)) if src.content is not None \
+            else f"sha256 {src.sha256[:12]}... (recorded from the file's bytes)"
         out.problems.append(f"the model {src.describe()} changed since the baseline "
-                            f"(sha256 {src.sha256[:12]}... -> {sha[:12]}...); re-record "
-                            "the baseline if the change is intended")
-    return load_case(src.name if src.kind == "builtin" else str(p))
+                            f"(parsed mechanism): {what}; re-record the baseline if the "
+                            "change is intended")
+    return mech
 
 
-def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
+def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
+                  overrides: dict | None = None):
     from sim_models.registry import get_engine
     from sim_models.tree import SimModelError
     try:
@@ -809,6 +869,8 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
         out.problems.append(f"engine {rec.engine!r} is not available: {e}")
         return None
     s = settings_from_json(rec, str(baseline.path))
+    if overrides:  # --set over the recorded settings (SettingsError: status 2 upstream)
+        s = eng.settings_class.from_overrides({**s.as_dict(), **overrides}, eng.name)
     missing = sorted(set(s.as_dict()) - set(rec.settings["fields"]))
     if missing:
         out.notes.append(f"settings not in the baseline, run at {eng.name}'s defaults: "
@@ -819,6 +881,6 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
            "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
-           "judged", "load", "record", "record_command", "record_problems", "request_dict",
+           "judged", "load", "merge", "record", "record_command", "record_problems", "request_dict",
            "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
            "source_of", "versions"]

@@ -151,7 +151,7 @@ def drift_factor(text: str) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not (math.isfinite(v) and v > 1):
-        raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
+        raise argparse.ArgumentTypeError(f"{text} is out of range: the drift factor must be a "
                                          "finite number above 1")
     return v
 

@@ -227,7 +227,7 @@ def test_the_unedited_base_of_the_edits_loads(tmp_path):
 # ============================================================== drift factor options
 def test_factor_option_of_baseline_check(capsys, no_run):
     assert_one_line_error(capsys, ["baseline", "check", str(BUILTIN), "--factor", "0.5"],
-                          r"argument --factor: 0\.5 is out of range: the factor must be a "
+                          r"argument --factor: 0\.5 is out of range: the drift factor must be a "
                           r"finite number above 1")
 
 
@@ -246,8 +246,8 @@ def test_xval_factor_is_checked_where_pytest_parses_it(tmp_path):
     for bad in ("0", "0.5", "nan"):
         p = _pytest(tmp_path, "--xval-factor", bad)
         assert p.returncode == 4, p.stdout + p.stderr
-        assert f"argument --xval-factor: {bad} is out of range: the factor must be a finite " \
-               "number above 1" in p.stderr, p.stderr
+        assert f"argument --xval-factor: {bad} is out of range: the drift factor must be a " \
+               "finite number above 1" in p.stderr, p.stderr
     p = _pytest(tmp_path, "--xval-factor", "3")
     assert p.returncode == 0, p.stdout + p.stderr
 
