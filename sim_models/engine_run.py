@@ -3,12 +3,11 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic import Mechanism, Revolute
+from analytic import Mechanism
 
 from .engine_settings import EngineSettings
 from .sampling import Plan
@@ -210,9 +209,10 @@ def scatter_index(rows) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fmt_value(tree: SimTree, v: float) -> str:
-    if isinstance(tree.mech.driver_joint, Revolute):
-        return f"{math.degrees(v):.4g} deg"
-    return f"{v:.6g} m"
+    """A driver value (rad or m) in the one display convention of an input
+    (:mod:`analytic.input_display`: a full turn wrapped to [0, 360) deg)."""
+    from analytic.input_display import convention_of, input_text
+    return input_text(v, convention_of(tree.linkage))
 
 
 # ============================================================================ result
