@@ -197,8 +197,8 @@ def _range_marks(r0, linkage, lu):
         feasible = (lo, hi)
     marks = []
     for kind, v in ev:
-        if rev and full:  # onto the plotted turn
-            v = covered[0] + (v - covered[0]) % 360.0
+        if rev and full:  # onto the plotted axis: a full turn wrapped to [0, 360) deg
+            v = v % 360.0
         marks.append((kind, float(v)))
     return marks, feasible, covered
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analytic.input_display import convention_of, display_input
+
 #: Points of the dense analytic line per plotted span (the samples are added to them).
 LINE_POINTS = 361
 
@@ -94,12 +96,16 @@ def analytic_reference(run_, reference=None):
 
 
 def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
-    """The plotted axis of a run's samples and its label with units."""
+    """The plotted axis of a run's samples and its label with units: time (s) for a
+    run sampled by time, else the input in the one display convention of
+    :mod:`analytic.input_display` (a full turn in degrees wrapped to [0, 360), as the
+    verdict's ``at``)."""
     if run_.by_time:
         return np.asarray(run_.times, float), "time (s)"
+    u = display_input(run_.values, convention_of(linkage))
     if linkage.driver_is_revolute:
-        return np.degrees(run_.values), "input angle (deg)"
-    return np.asarray(run_.values, float), "input (m)"
+        return u, "input angle (deg)"
+    return u, "input (m)"
 
 
 def reference_of(run_, reference=None) -> Reference:
@@ -128,11 +134,14 @@ def _line_inputs(runs, linkage, points: int):
     if r0.by_time:
         u = t
     else:
-        full = linkage.driver_is_revolute and np.ptp(r0.values) > math.pi
-        if full:  # the sampled turn's values: one turn from the first sample value
+        conv = convention_of(linkage)
+        if conv.full_turn:  # the sampled turn's values: one turn from the first sample
             v0 = float(np.min(r0.values))
             value = v0 + np.mod(value - v0, 2 * math.pi)
-        u = np.degrees(value) if linkage.driver_is_revolute else value
+        # the axis: the input as every table and title shows it (a full turn wrapped to
+        # [0, 360) deg); a turn that does not start at 0 is drawn in two stretches
+        # (line_breaks), each sample on the stretch of its own time
+        u = display_input(value, conv)
     # the samples themselves, exactly as the reference has them
     us, tt, vals, vels, accs = [u], [t], [value], [vel], [acc]
     for r in runs:
