@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analytic.input_display import convention_of, input_text
+
 from .reference import (
     analytic_line,
     axis_of,
@@ -254,8 +256,12 @@ def error_figure(label: str, runs: dict, comparisons: dict, linkage, tolerance: 
             twin = (f"transmission angle at {name} (deg)", np.asarray(tr)[keep][order])
         else:
             twin = ("loop Jacobian condition number (-)", kin.condition[keep][order])
+        conv = convention_of(linkage)
         panels[e] = {"x": x, "families": {f: fam[f] for f in FAMILIES if f in fam},
-                     "worst": (worst_q, float(wv[k]), float(ref.u[k])), "twin": twin}
+                     "worst": (worst_q, float(wv[k]), float(ref.u[k])), "twin": twin,
+                     # where, as the verdict table and JUnit say it (the one convention)
+                     "worst_input": input_text(float(r.values[k]), conv),
+                     "by_time": bool(r.by_time)}
     if not panels:
         return None
     return ErrorFigure("error", f"{label}: |engine - analytic| / peak, every judged quantity",

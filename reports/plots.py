@@ -20,12 +20,24 @@ ENGINE_STYLE = {"analytic": dict(color="black", lw=1.6),
                 "exudyn": dict(color="tab:green", lw=1.0, ls="-.")}
 
 
+#: Resolution of every PNG figure: sharp when a reader zooms (a figure half the page
+#: wide, ~620 px of 1240, is drawn from ~1100 px).
+DPI = 150
+#: Text sizes (pt at the figure's own size; a 7.4 in figure shown half a 1240 px page
+#: wide is drawn at ~83 px/in, so 9 pt is ~10 px on screen): legends, notes and labels
+#: at least 9 pt, titles 10 pt.
+LEGEND_PT = 9.0
+NOTE_PT = 9.0
+LABEL_PT = 9.0
+TITLE_PT = 10.0
+
+
 def _png(fig, tight: bool = True) -> bytes:
-    """PNG bytes at 90 dpi (zlib level 1: a report of ~80 figures otherwise spends its
-    time compressing).  ``tight=False``: the caller laid the figure out itself
+    """PNG bytes at :data:`DPI` (zlib level 1: a report of ~80 figures otherwise spends
+    its time compressing).  ``tight=False``: the caller laid the figure out itself
     (``subplots_adjust``), saving the extra draw a tight bounding box costs."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90, bbox_inches="tight" if tight else None,
+    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight" if tight else None,
                 pil_kwargs={"compress_level": 1})
     plt.close(fig)
     return buf.getvalue()
@@ -86,10 +98,10 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(title or mech.name, fontsize=10)
+    ax.set_title(title or mech.name, fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
-              title="colour key", title_fontsize=7)
+    ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
+              title="colour key", title_fontsize=LEGEND_PT)
     return _png(fig)
 
 
@@ -124,7 +136,7 @@ def cycle_plot(x, series: dict[str, dict[str, np.ndarray]], ylabel: str, title: 
     ax.set_ylabel(ylabel)
     ax.set_title(title + " (lines: analytic; markers: engines)", fontsize=10)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=LEGEND_PT, ncol=2)
     return _png(fig)
 
 
@@ -138,12 +150,12 @@ def error_plot(x, errors: dict[str, np.ndarray], twin: tuple[str, np.ndarray] | 
     ax.set_xlabel(xlabel)
     ax.set_ylabel("|error| / peak (-)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.2))
+    ax.legend(fontsize=LEGEND_PT, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.2))
     if twin is not None:
         ax2 = ax.twinx()
         ax2.plot(x, twin[1], color="grey", lw=0.8, alpha=0.7)
         ax2.set_ylabel(twin[0], color="grey")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     return _png(fig)
 
 
@@ -170,9 +182,9 @@ def pareto_plot(rows, title: str, analytic_time: float | None = None) -> bytes:
                     rotation=90, va="top")
     ax.set_xlabel("wall-clock seconds per simulated revolution")
     ax.set_ylabel("max normalised error (accelerations, forces)")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=LEGEND_PT)
     return _png(fig)
 
 
@@ -184,8 +196,8 @@ def timeseries_plot(t, series: dict[str, np.ndarray], title: str, ylabel: str) -
     ax.set_xlabel("time (s)")
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    ax.set_title(title, fontsize=TITLE_PT)
     return _png(fig)
 
 
@@ -291,14 +303,14 @@ def draw_curve_axes(ax, fig_data) -> None:
         ax.set_ylim(lo, hi)
         notes.append(f"axis clipped: {n} values beyond it (range {mn:.3g} to {mx:.3g})")
     if notes:
-        ax.text(0.01, 0.02, "; ".join(notes), transform=ax.transAxes, fontsize=6.5,
+        ax.text(0.01, 0.02, "; ".join(notes), transform=ax.transAxes, fontsize=NOTE_PT,
                 va="bottom", ha="left", bbox=dict(fc="white", ec="0.7", alpha=0.85, lw=0.5))
     ax.set_xlabel(d.xlabel)
     ax.set_ylabel(d.ylabel)
-    ax.set_title(d.title, fontsize=9.5)
+    ax.set_title(d.title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
-              title="lines: analytic\nmarkers: engines", title_fontsize=6.5)
+    ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
+              title="lines: analytic\nmarkers: engines", title_fontsize=LEGEND_PT)
 
 
 _FAMILY_COLOURS = {"body alpha": "tab:blue", "slider s''": "tab:green",
@@ -329,10 +341,27 @@ def error_panels(fig_data) -> bytes:
         if ax is not axes[-1, 0]:
             ax.set_xlabel("")
     h, lab = axes[0, 0].get_legend_handles_labels()
-    fig.legend(h, lab, fontsize=7, loc="lower center", ncol=len(lab),
+    fig.legend(h, lab, fontsize=LEGEND_PT, loc="lower center", ncol=len(lab),
                bbox_to_anchor=(0.5, 0.0))
-    fig.suptitle(d.title, fontsize=9.5)
+    fig.suptitle(d.title, fontsize=TITLE_PT)
     return _png(fig, tight=False)
+
+
+def worst_at(d, p: dict) -> str:
+    """Where an error panel's worst error is, as text: the input in the one convention
+    of :mod:`analytic.input_display` (what the verdict table and JUnit print), in the
+    units of the panel's axis (``--units rad``: radians); a panel against time adds
+    the time."""
+    import re
+
+    from analytic.input_display import format_input
+    at = p["worst"][2]
+    unit = re.search(r"\(([^()]*)\)\s*$", d.xlabel)
+    if p.get("by_time"):
+        return f"input {p.get('worst_input', '')} (t = {at:.6g} s)"
+    if unit is None:
+        return p.get("worst_input", "")
+    return format_input(at, unit.group(1))
 
 
 def draw_error_axes(ax, d, engine: str, p: dict) -> None:
@@ -342,8 +371,8 @@ def draw_error_axes(ax, d, engine: str, p: dict) -> None:
                     marker=".", ms=3, color=_FAMILY_COLOURS.get(fam), label=fam)
     ax.axhline(d.tolerance, color="red", lw=0.9, ls="--",
                label=f"tolerance {d.tolerance:g}")
-    q, v, at = p["worst"]
-    ax.set_title(f"{engine}: worst {q} {v:.2g} at {at:.4g}", fontsize=8.5)
+    ax.set_title(f"{engine}: worst {p['worst'][0]} {p['worst'][1]:.2g} at {worst_at(d, p)}",
+                 fontsize=TITLE_PT)
     ax.set_xlabel(d.xlabel)
     ax.grid(alpha=0.3, which="both")
     if p.get("twin") is not None:
