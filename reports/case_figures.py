@@ -268,6 +268,30 @@ def error_figure(label: str, runs: dict, comparisons: dict, linkage, tolerance: 
                        xl, panels, tolerance)
 
 
+def motion_text(linkage, times, units=None) -> str:
+    """One line saying how the input moves over the plotted samples, in the units of
+    the figures' axes (``units``: a :class:`reports.display_units.DisplayUnits`,
+    default deg and rad/s): the prescribed rate actually reached between the first and
+    last sample time ``times`` (s; NaN: unreached), and the description's law.  An
+    accelerating crank's plotted turn runs at 5.8 to 7.7 rad/s, not its reference 3."""
+    from .display_units import DisplayUnits
+    u = units or DisplayUnits()
+    d = linkage.mech.driver
+    kv, kw, ka = u.input_kinds(linkage.driver_is_revolute)
+    fv, fw = u.factor(kv), u.factor(kw)
+    uv, uw, ua = u.unit(kv), u.unit(kw), u.unit(ka)
+    law = (f"{d.value * fv:.4g} {uv}, {d.velocity * fw:.4g} {uw}"
+           + (f", {d.acceleration * u.factor(ka):.4g} {ua} at t = 0" if d.acceleration
+              else " (constant rate)"))
+    t = np.asarray(times, float)
+    t = t[np.isfinite(t)]
+    if not t.size or not d.acceleration:
+        return f"input {d.joint}: {law}"  # the rate reached is the reference rate
+    w0, w1 = (d.velocity + d.acceleration * np.array([t.min(), t.max()])) * fw
+    return (f"input {d.joint}: {w0:.4g} to {w1:.4g} {uw} over the plotted samples "
+            f"(t = {t.min():.4g} to {t.max():.4g} s); prescribed {law}")
+
+
 def render(fig) -> bytes:
     """PNG bytes of a :class:`CurveFigure` or :class:`ErrorFigure`."""
     from . import plots
@@ -309,4 +333,5 @@ def render_case(label: str, runs: dict, comparisons: dict, mech, tolerance: floa
 
 
 __all__ = ["Curve", "CurveFigure", "ErrorFigure", "FAMILIES", "case_figure_data",
+           "motion_text",
            "curve_figures", "error_figure", "linkage_figure", "render", "render_case"]

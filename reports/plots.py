@@ -238,9 +238,8 @@ def curve_plot(fig_data) -> bytes:
     judge), limit/singular positions, the part of the input range no engine reached
     shaded, and the axis clipped (and said so) when a spike would flatten the rest."""
     fig, ax = plt.subplots(figsize=(7.4, 3.3))
-    fig.subplots_adjust(left=0.1, right=0.8, bottom=0.15, top=0.9)  # legend at the right
     draw_curve_axes(ax, fig_data)
-    return _png(fig, tight=False)
+    return _png(fig)  # a tight box: the legend at the right and the notes fit
 
 
 def draw_curve_axes(ax, fig_data) -> None:
@@ -285,6 +284,13 @@ def draw_curve_axes(ax, fig_data) -> None:
         if d.covered[1] - d.covered[0] < 0.999 * (hi - lo):
             notes.append(f"engines covered {d.covered[0]:.4g} to {d.covered[1]:.4g} of "
                          f"{lo:.4g} to {hi:.4g} (grey: not reached)")
+    brk = [int(i) for i in getattr(d, "breaks", ()) if 0 < int(i) < len(d.curves[0].x)] \
+        if d.curves else []
+    if brk and not d.xlabel.startswith("time"):
+        x0 = np.asarray(d.curves[0].x, float)
+        gaps = ", ".join(f"{x0[i - 1]:.4g} to {x0[i]:.4g}" for i in brk[:3])
+        notes.append(f"line broken at {gaps}: the sampled motion starts and ends there "
+                     "(at different rates)")
     ax.ticklabel_format(axis="y", useOffset=False)
     clip = None
     if allv:
@@ -302,15 +308,19 @@ def draw_curve_axes(ax, fig_data) -> None:
         lo, hi, n, (mn, mx) = clip
         ax.set_ylim(lo, hi)
         notes.append(f"axis clipped: {n} values beyond it (range {mn:.3g} to {mx:.3g})")
-    if notes:
-        ax.text(0.01, 0.02, "; ".join(notes), transform=ax.transAxes, fontsize=NOTE_PT,
-                va="bottom", ha="left", bbox=dict(fc="white", ec="0.7", alpha=0.85, lw=0.5))
     ax.set_xlabel(d.xlabel)
     ax.set_ylabel(d.ylabel)
+    # notes under the title, never over the data
     ax.set_title(d.title, fontsize=TITLE_PT)
+    if notes:
+        import textwrap
+        ax.set_title("\n".join(textwrap.wrap("; ".join(notes), 95)), fontsize=NOTE_PT,
+                     loc="left", color="0.3")
+        ax.set_title(d.title + "\n\n", fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
-              title="lines: analytic\nmarkers: engines", title_fontsize=LEGEND_PT)
+              title="lines: analytic" + ("\nmarkers: engines" if engines else ""),
+              title_fontsize=LEGEND_PT)
 
 
 _FAMILY_COLOURS = {"body alpha": "tab:blue", "slider s''": "tab:green",
