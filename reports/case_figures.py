@@ -23,6 +23,7 @@ from analytic.input_display import convention_of, input_text
 from .reference import (
     analytic_line,
     axis_of,
+    engine_slider_positions,
     family_of,
     line_breaks,
     reference_of,
@@ -84,7 +85,7 @@ def _index_in(line_u: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
-                  line=analytic_line, plan=None, extra=()) -> list[CurveFigure]:
+                  line=analytic_line, plan=None, extra=(), tree=None) -> list[CurveFigure]:
     """The body angle, omega, alpha, slider s'', drive effort and joint-force figures
     of the (case) ``label`` from its engine runs (``{engine: EngineRun}``, one plan).
     ``reference(run, linkage)`` gives each run's samples' reference (the verdict's) and
@@ -93,7 +94,8 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     with a run's ``times, values, driver_velocity, driver_acceleration, by_time,
     has_forces``: :func:`reports.plot_cmd.plan_samples_of`) places the analytic lines
     (``xval plot`` without engines).  ``extra``: figures drawn on request only,
-    ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions)."""
+    ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions; the engines' own, from their tree coordinates,
+    as markers when ``tree``, the compiled :class:`sim_models.tree.SimTree`, is given)."""
     runs = {e: r for e, r in runs.items() if r is not None}
     basis = list(runs.values()) or ([plan] if plan is not None else [])
     if not basis:
@@ -147,10 +149,13 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
         out.append(fig("slider", "slider accelerations", "s'' (m/s^2)", curves))
     if lfrc is not None:
         out += [fig(*spec) for spec in _force_figures(linkage, lu, lfrc, runs, refs)]
-    if "slider_s" in extra and linkage.topo.prismatic:  # drawn only (engines: no markers)
-        curves = [Curve(linkage.topo.joint_names[j], lu,
-                        lkin.slider(linkage.topo.joint_names[j])[0], {})
-                  for j in linkage.topo.prismatic]
+    if "slider_s" in extra and linkage.topo.prismatic:  # not judged: drawn only
+        pos = {e: engine_slider_positions(r, tree) for e, r in runs.items()}
+        curves = []
+        for j in linkage.topo.prismatic:
+            jn = linkage.topo.joint_names[j]
+            mk = {e: (refs[e].u, pos[e][jn], refs[e].judged) for e in runs if jn in pos[e]}
+            curves.append(Curve(jn, lu, lkin.slider(jn)[0], mk))
         out.append(fig("slider_s", "slider positions", "s (m)", curves))
     if "transmission" in extra and lkin.transmission:
         curves = [Curve(f"at {k}", lu, np.asarray(v, float), {})

@@ -99,7 +99,7 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     names = [n for w in what for n in WHAT[w]]
     extra = tuple(n for n in ("transmission", "slider_s") if n in names)
     plan = None if runs else cycle_plan(lk, tree)
-    figs = curve_figures(mech.name, runs, lk, plan=plan, extra=extra)
+    figs = curve_figures(mech.name, runs, lk, plan=plan, extra=extra, tree=tree)
     by = {f.name: f for f in figs}
     chosen = [by[n] for n in names if n in by]
     for w in what:

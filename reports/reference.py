@@ -185,6 +185,39 @@ def line_breaks(runs, linkage, points: int = LINE_POINTS) -> np.ndarray:
     return np.flatnonzero(np.abs(np.diff(t)) > 3 * step) + 1 if step > 0 else np.zeros(0, int)
 
 
+def engine_slider_positions(run_, tree) -> dict[str, np.ndarray]:
+    """Each prismatic joint's displacement ``s`` (m, (N,)) in the engine at the run's
+    samples, from its tree coordinates (:meth:`sim_models.tree.SimTree.propagate`): the
+    slider point's distance along the line from the guide's origin point, as
+    :meth:`analytic.Kinematics.slider` measures it.  Empty when the run kept no tree
+    coordinates; NaN where the engine has no sample."""
+    from analytic.mechanism import Prismatic
+    if getattr(run_, "q", None) is None or tree is None:
+        return {}
+    q = np.asarray(run_.q, float)
+    ok = np.all(np.isfinite(q), axis=1)
+    th, _, _, org = tree.propagate(np.nan_to_num(q), np.zeros_like(q), np.zeros_like(q))[:4]
+    mech = tree.mech
+    names = [b.name for b in mech.bodies]
+
+    def world(b: int, local) -> np.ndarray:
+        c, s = np.cos(th[:, b]), np.sin(th[:, b])
+        x, y = float(local[0]), float(local[1])
+        return org[:, b] + np.stack([c * x - s * y, s * x + c * y], axis=1)
+
+    out = {}
+    for jt in mech.joints:
+        if not isinstance(jt, Prismatic):
+            continue
+        g, s_ = names.index(jt.guide), names.index(jt.slider)
+        o = world(g, mech.bodies[g].points[jt.origin])
+        p = world(s_, mech.bodies[s_].points[jt.point])
+        ang = th[:, g] + jt.direction
+        s = (p[:, 0] - o[:, 0]) * np.cos(ang) + (p[:, 1] - o[:, 1]) * np.sin(ang)
+        out[jt.name] = np.where(ok, s, np.nan)
+    return out
+
+
 def family_of(quantity: str) -> str:
     """The family a judged quantity belongs to (the error plots draw one line each)."""
     if quantity.endswith(".alpha"):
@@ -236,5 +269,5 @@ def wrap_deg(d):
 
 
 __all__ = ["LINE_POINTS", "Reference", "analytic_line", "analytic_reference", "axis_of",
-           "line_breaks",
+           "line_breaks", "engine_slider_positions",
            "family_of", "reference_of", "sample_errors", "wrap_deg"]

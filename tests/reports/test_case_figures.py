@@ -130,8 +130,11 @@ def refs_of(tree, runs):
 @pytest.mark.parametrize("case", case_names())
 def test_plots_agree_with_verdict(case):
     tree, runs, comps = runs_of(case)
-    figs = curve_figures(case, runs, tree.linkage)
+    figs = curve_figures(case, runs, tree.linkage, extra=("slider_s",), tree=tree)
     assert {f.name for f in figs} >= {"angle", "omega", "alpha"}
+    for f in figs:  # the engines' slider positions are drawn where the run has them
+        if f.name == "slider_s":
+            assert all(set(c.markers) == set(runs) for c in f.curves), f.title
     bad = [m for f in figs for m in plotted_excess(f, comps, refs_of(tree, runs))]
     assert not bad, "\n".join(bad)
 
