@@ -43,21 +43,65 @@ def _png(fig, tight: bool = True) -> bytes:
     return buf.getvalue()
 
 
+#: Offsets (points) tried, in order, to move a label off the labels drawn before it.
+_NUDGES = [(0, 0)] + [(dx * r, dy * r) for r in (8, 16, 26, 38)
+                      for dx, dy in ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (-1, 1),
+                                     (1, -1), (-1, -1))]
+
+
+def declutter(ax, texts, hide: bool = True) -> int:
+    """Move each annotation of ``texts`` (``ax.annotate`` with ``textcoords="offset
+    points"``) to the first offset of :data:`_NUDGES` where its box overlaps no label
+    placed before it and stays inside the figure; a label with no free place is hidden
+    (``hide``) or left where it was.  Returns how many were hidden."""
+    fig = ax.figure
+    r = fig.canvas.get_renderer()
+    placed, hidden = [], 0
+    fb = fig.bbox
+    for t in texts:
+        x0, y0 = t.xyann
+        for dx, dy in _NUDGES:
+            t.xyann = (x0 + dx, y0 + dy)
+            bb = t.get_window_extent(r).expanded(1.05, 1.15)
+            inside = bb.x0 >= fb.x0 and bb.x1 <= fb.x1 and bb.y0 >= fb.y0 and bb.y1 <= fb.y1
+            if inside and not any(bb.overlaps(o) for o in placed):
+                placed.append(bb)
+                break
+        else:
+            t.xyann = (x0, y0)
+            if hide:
+                t.set_visible(False)
+                hidden += 1
+            else:
+                placed.append(t.get_window_extent(r))
+    return hidden
+
+
+#: Line styles of the successive inputs of a linkage drawing, widest first: poses that
+#: coincide (a quick-return's rocker at 90 and 270 deg) stay visible under later ones.
+_POSE_STYLES = ("-", "--", "-.", ":")
+
+
 def draw_linkage(linkage, values, title: str = "") -> bytes:
     """The linkage drawn at a few input values (each body's outline through its joint
-    points, ground pivots as triangles, slider lines dashed), one colour per input value
-    with a key; bodies and joints named at the first value."""
+    points, ground pivots as triangles at the ground's revolute joints, slider lines
+    dashed), one colour and line style per input value with a key, later values drawn
+    thinner over earlier ones; bodies and joints named at the first value, each name
+    moved off the names before it (:func:`declutter`)."""
+    from analytic.input_display import convention_of, input_text
     from analytic.mechanism import Prismatic
     mech = linkage.mech
     kin = linkage.kinematics(values, on_singular="flag")
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
     cmap = plt.get_cmap("viridis")
-    rev = linkage.driver_is_revolute
+    conv = convention_of(linkage)
+    labels = []
     for i in range(kin.n):
         col = cmap(i / max(kin.n - 1, 1))
-        v = kin.value[i]
-        key = f"input {np.degrees(v) % 360:.0f} deg" if rev else f"input {v:.4g} m"
-        ax.plot([], [], color=col, lw=2, label=key)
+        ls = _POSE_STYLES[i % len(_POSE_STYLES)]
+        lw = 3.2 - 2.0 * i / max(kin.n - 1, 1)
+        ax.plot([], [], color=col, lw=2, ls=ls,
+                label=f"input {input_text(float(kin.value[i]), conv)}")
         for body in mech.moving_bodies:
             pts = [kin.point(body.name, jt.point_a if jt.body_a == body.name else jt.point_b)[0][i]
                    for jt in mech.joints if body.name in jt.bodies]
@@ -68,13 +112,15 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
                 c = pts.mean(axis=0)
                 order = np.argsort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
                 poly = pts[order]
-                ax.fill(poly[:, 0], poly[:, 1], color=col, alpha=0.15, lw=0)
+                ax.fill(poly[:, 0], poly[:, 1], color=col, alpha=0.12, lw=0)
                 ax.plot(np.r_[poly[:, 0], poly[:1, 0]], np.r_[poly[:, 1], poly[:1, 1]],
-                        color=col, lw=1.2)
-                if i == 0:
-                    ax.annotate(body.name, c, fontsize=7.5, fontweight="bold", ha="center",
-                                va="center", color="0.15",
-                                bbox=dict(fc="white", ec="none", alpha=0.6, pad=0.5))
+                        color=col, lw=lw, ls=ls)
+            if i == 0:
+                labels.append(ax.annotate(
+                    body.name, pts.mean(axis=0), xytext=(0, 0), textcoords="offset points",
+                    fontsize=LABEL_PT, fontweight="bold", ha="center", va="center",
+                    color="0.15", bbox=dict(fc="white", ec="none", alpha=0.7, pad=0.5),
+                    zorder=6))
             ax.plot(pts[:, 0], pts[:, 1], "o", color=col, ms=3)
     for jt in mech.joints:  # joint names at the first input value
         try:
@@ -82,11 +128,16 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
                 kin.point(jt.body_a, jt.point_a)[0][0]
         except Exception:  # noqa: BLE001 - a name is decoration
             continue
-        ax.annotate(jt.name, p, xytext=(4, -9), textcoords="offset points", fontsize=6.5,
-                    color="darkred")
+        labels.append(ax.annotate(jt.name, p, xytext=(6, -10), textcoords="offset points",
+                                  fontsize=LABEL_PT - 1, color="darkred", zorder=6))
     g = mech.body(mech.ground)
-    gp = np.array(list(g.points.values()))
-    ax.plot(gp[:, 0], gp[:, 1], "^", color="k", ms=8, label="ground pivot")
+    # ground pivots: the ground's points that carry a revolute joint (a slider line's
+    # origin is a point on the line, not a pivot)
+    piv = [g.points[jt.point_a if jt.body_a == mech.ground else jt.point_b]
+           for jt in mech.joints if not isinstance(jt, Prismatic) and mech.ground in jt.bodies]
+    if piv:
+        gp = np.array(piv, float)
+        ax.plot(gp[:, 0], gp[:, 1], "^", color="k", ms=8, label="ground pivot", zorder=5)
     for jt in mech.joints:
         if isinstance(jt, Prismatic) and jt.guide == mech.ground:
             q = np.array(g.points[jt.origin])
@@ -95,13 +146,19 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
             s = kin.slider(jt.name)[0]
             a, b = q + (s.min() - 0.1 * span) * u, q + (s.max() + 0.1 * span) * u
             ax.plot([a[0], b[0]], [a[1], b[1]], "k--", lw=0.8)
-    ax.set_aspect("equal")
+    # equal scales by widening the data limits, not by shrinking the axes: a tall,
+    # narrow linkage keeps a readable width and its tick labels room
+    ax.set_aspect("equal", adjustable="datalim")
+    from matplotlib.ticker import MaxNLocator
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(title or mech.name, fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0,
-              title="colour key", title_fontsize=LEGEND_PT)
+              title="colour key (later\ninputs drawn thinner)", title_fontsize=LEGEND_PT)
+    fig.tight_layout()
+    declutter(ax, labels, hide=False)
     return _png(fig)
 
 
