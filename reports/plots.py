@@ -49,14 +49,18 @@ _NUDGES = [(0, 0)] + [(dx * r, dy * r) for r in (8, 16, 26, 38)
                                      (1, -1), (-1, -1))]
 
 
-def declutter(ax, texts, hide: bool = True) -> int:
+def declutter(ax, texts, hide: bool = True, avoid=()) -> int:
     """Move each annotation of ``texts`` (``ax.annotate`` with ``textcoords="offset
     points"``) to the first offset of :data:`_NUDGES` where its box overlaps no label
-    placed before it and stays inside the figure; a label with no free place is hidden
-    (``hide``) or left where it was.  Returns how many were hidden."""
+    placed before it and stays inside the figure, off the legend and the artists
+    ``avoid``; a label with no free place is hidden (``hide``) or left where it was.  A
+    label moved away from its point gets a thin leader line.  Returns how many were
+    hidden."""
     fig = ax.figure
     r = fig.canvas.get_renderer()
-    placed, hidden = [], 0
+    leg = ax.get_legend()
+    placed, hidden = ([leg.get_window_extent(r)] if leg is not None else []), 0
+    placed += [a.get_window_extent(r) for a in avoid]
     fb = fig.bbox
     for t in texts:
         x0, y0 = t.xyann
@@ -66,6 +70,10 @@ def declutter(ax, texts, hide: bool = True) -> int:
             inside = bb.x0 >= fb.x0 and bb.x1 <= fb.x1 and bb.y0 >= fb.y0 and bb.y1 <= fb.y1
             if inside and not any(bb.overlaps(o) for o in placed):
                 placed.append(bb)
+                if abs(dx) + abs(dy) > 12:  # far from its point: a leader line
+                    ax.annotate("", t.xy, xytext=t.xyann, textcoords="offset points",
+                                arrowprops=dict(arrowstyle="-", lw=0.5, color="0.55",
+                                                shrinkA=0, shrinkB=3))
                 break
         else:
             t.xyann = (x0, y0)
@@ -220,7 +228,8 @@ def pareto_plot(rows, title: str, analytic_time: float | None = None) -> bytes:
     """Speed against error: ``rows`` of dicts with ``engine``, ``label``,
     ``seconds_per_rev`` and ``error`` (max normalised); the analytic solver's time per
     revolution as a vertical line."""
-    fig, ax = plt.subplots(figsize=(6.0, 3.8))
+    fig, ax = plt.subplots(figsize=(7.2, 4.6))
+    labels = []
     for engine in sorted({r["engine"] for r in rows}):
         rr = [r for r in rows if r["engine"] == engine and np.isfinite(r["error"])]
         if not rr:
@@ -229,20 +238,38 @@ def pareto_plot(rows, title: str, analytic_time: float | None = None) -> bytes:
         ax.loglog([r["seconds_per_rev"] for r in rr], [max(r["error"], 1e-9) for r in rr],
                   "o", color=st.get("color"), label=engine, ms=4)
         for r in rr:
-            ax.annotate(r["label"], (r["seconds_per_rev"], max(r["error"], 1e-9)),
-                        fontsize=5, alpha=0.7)
+            labels.append(ax.annotate(r["label"], (r["seconds_per_rev"], max(r["error"], 1e-9)),
+                                      xytext=(4, 3), textcoords="offset points",
+                                      fontsize=LABEL_PT, alpha=0.85))
     for tol in (1e-2, 1e-3, 1e-4):
         ax.axhline(tol, color="grey", lw=0.6, ls=":")
     if analytic_time:
         ax.axvline(analytic_time, color="black", lw=0.8)
-        ax.annotate("analytic", (analytic_time, ax.get_ylim()[1]), fontsize=7,
+        ax.annotate("analytic", (analytic_time, ax.get_ylim()[1]), fontsize=LABEL_PT,
                     rotation=90, va="top")
     ax.set_xlabel("wall-clock seconds per simulated revolution")
     ax.set_ylabel("max normalised error (accelerations, forces)")
+    _linear_if_narrow(ax, [r["seconds_per_rev"] for r in rows], "x")
     ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=LEGEND_PT)
+    fig.tight_layout()
+    hidden = declutter(ax, labels)
+    if hidden:
+        ax.text(0.01, 0.01, f"{hidden} labels left out where they would overlap (see the "
+                "table)", transform=ax.transAxes, fontsize=NOTE_PT, color="0.35")
     return _png(fig)
+
+
+def _linear_if_narrow(ax, values, axis: str) -> None:
+    """A log axis over less than a decade labels its minor ticks in colliding
+    ``1.05x10^-2`` form: such an axis is drawn linear, with a few plain ticks."""
+    from matplotlib.ticker import MaxNLocator
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v) & (v > 0)]
+    if v.size and np.log10(v.max() / v.min()) < 1.0:
+        getattr(ax, f"set_{axis}scale")("linear")
+        getattr(ax, f"{axis}axis").set_major_locator(MaxNLocator(nbins=5))
 
 
 def timeseries_plot(t, series: dict[str, np.ndarray], title: str, ylabel: str) -> bytes:

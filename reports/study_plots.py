@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .plots import ENGINE_STYLE, _png, plt
+from .plots import ENGINE_STYLE, LABEL_PT, LEGEND_PT, NOTE_PT, TITLE_PT, _png, declutter, plt
 
 _MARKERS = {"Euler": "s", "implicitfast": "^", "implicit": "v", "RK4": "o"}
 #: Colours of the settings families: blues for MuJoCo, oranges/reds for PyBullet.
@@ -42,7 +42,8 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
     revolution (at ``analytic_points`` samples, the engines' count) as a vertical line.
     Only the Pareto-optimal points are labelled, alternately above and below.
     """
-    fig, ax = plt.subplots(figsize=(7.2, 4.6))
+    fig, ax = plt.subplots(figsize=(8.4, 5.2))
+    labels = []
     grid = grid.assign(integrator=grid["integrator"].fillna("").astype(str),
                        family=grid["family"].fillna("").astype(str),
                        ok=grid["ok"].astype(bool))
@@ -70,9 +71,10 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
             ax.step(t[idx], e[idx], where="post", color=st.get("color", "k"), lw=0.9,
                     alpha=0.7)
             for n, i in enumerate(idx):
-                ax.annotate(g["label"].iloc[i], (t[i], e[i]), fontsize=6, alpha=0.9,
-                            xytext=(4, 5 if n % 2 == 0 else -9), textcoords="offset points",
-                            color=st.get("color", "k"))
+                labels.append(ax.annotate(
+                    g["label"].iloc[i], (t[i], e[i]), fontsize=LABEL_PT - 1, alpha=0.9,
+                    xytext=(4, 5 if n % 2 == 0 else -11), textcoords="offset points",
+                    color=st.get("color", "k")))
     ymax = max(1.0, float(np.nanmax(ok["error"])) if len(ok) else 1.0)
     if len(bad):
         tb = bad["seconds_per_rev"].to_numpy(float)
@@ -80,23 +82,31 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
         if np.isfinite(tb).any():
             ax.loglog(tb, np.full(len(tb), 2 * ymax), "x", color="red", ms=5,
                       label=f"failed / diverged ({len(bad)})")
+    tol_text = []
     for tol in _TOLERANCES:
         ax.axhline(tol, color="grey", lw=0.6, ls=":")
-        ax.annotate(f"tolerance {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"),
-                    xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
-                    fontsize=6.5, color="0.35")
+        tol_text.append(ax.annotate(
+            f"tolerance {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"),
+            xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
+            fontsize=LABEL_PT - 1, color="0.35"))
     if analytic_time:
         ax.axvline(analytic_time, color="black", lw=0.9)
         what = f"{analytic_points} samples" if analytic_points else "one revolution"
         ax.annotate(f"analytic solver\n({what})", (analytic_time, 1.0),
                     xycoords=("data", "axes fraction"), xytext=(3, -3),
-                    textcoords="offset points", fontsize=6.5, va="top", ha="left")
+                    textcoords="offset points", fontsize=LABEL_PT - 1, va="top", ha="left")
     ax.set_xlabel("wall-clock time per simulated revolution (s, log)")
     ax.set_ylabel("largest error / peak, accelerations and forces (-, log)")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+    ax.legend(fontsize=LEGEND_PT, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               borderaxespad=0)
+    fig.tight_layout()
+    hidden = declutter(ax, labels, avoid=tol_text)
+    if hidden:
+        ax.text(0.01, 0.01, f"{hidden} frontier labels left out where they would overlap "
+                "(the table lists every setting)", transform=ax.transAxes,
+                fontsize=NOTE_PT, color="0.35")
     return _png(fig)
 
 
