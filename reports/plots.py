@@ -272,11 +272,33 @@ def _linear_if_narrow(ax, values, axis: str) -> None:
         getattr(ax, f"{axis}axis").set_major_locator(MaxNLocator(nbins=5))
 
 
+#: Magnitudes below this are drawn at it on the long-run log axes (a log axis has no
+#: zero); the figure says how many were (an exact zero is a value, not round-off).
+LOG_FLOOR = 1e-18
+
+
+def floor_note(ax, arrays, floor: float = LOG_FLOOR) -> int:
+    """Say on ``ax`` how many finite values of ``arrays`` are below ``floor`` in
+    magnitude (drawn at it), and whether they are exact zeros; returns that count."""
+    v = np.concatenate([np.abs(np.asarray(a, float)).ravel() for a in arrays]) \
+        if len(arrays) else np.zeros(0)
+    low = v[np.isfinite(v) & (v < floor)]
+    if low.size:
+        what = "exact zeros" if np.all(low == 0) else \
+            f"{int(np.sum(low == 0))} exact zeros, the rest round-off"
+        ax.text(0.01, 0.01, f"{low.size} values below {floor:g} ({what}) drawn at {floor:g}",
+                transform=ax.transAxes, fontsize=NOTE_PT - 1, color="0.3", va="bottom",
+                bbox=dict(fc="white", ec="none", alpha=0.8, pad=1))
+    return int(low.size)
+
+
 def timeseries_plot(t, series: dict[str, np.ndarray], title: str, ylabel: str) -> bytes:
-    """Long-run diagnostics against time (log scale of magnitudes)."""
-    fig, ax = plt.subplots(figsize=(6.0, 3.0))
+    """Long-run diagnostics against time (log scale of magnitudes; values under
+    :data:`LOG_FLOOR`, exact zeros among them, drawn at it and counted on the figure)."""
+    fig, ax = plt.subplots(figsize=(7.4, 3.6))
     for label, y in series.items():
-        ax.semilogy(t, np.maximum(np.abs(y), 1e-18), label=label, lw=0.8)
+        ax.semilogy(t, np.maximum(np.abs(y), LOG_FLOOR), label=label, lw=0.8)
+    floor_note(ax, list(series.values()))
     ax.set_xlabel("time (s)")
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3, which="both")
@@ -472,5 +494,5 @@ def draw_error_axes(ax, d, engine: str, p: dict) -> None:
     if p.get("twin") is not None:
         ax2 = ax.twinx()
         ax2.plot(p["x"], p["twin"][1], color="0.55", lw=0.8, alpha=0.8)
-        ax2.set_ylabel(p["twin"][0], color="0.45", fontsize=7)
+        ax2.set_ylabel(p["twin"][0], color="0.45", fontsize=8)
         ax2.tick_params(labelsize=7, colors="0.45")

@@ -10,7 +10,18 @@ import math
 
 import numpy as np
 
-from .plots import ENGINE_STYLE, LABEL_PT, LEGEND_PT, NOTE_PT, TITLE_PT, _png, declutter, plt
+from .plots import (
+    ENGINE_STYLE,
+    LABEL_PT,
+    LEGEND_PT,
+    LOG_FLOOR,
+    NOTE_PT,
+    TITLE_PT,
+    _png,
+    declutter,
+    floor_note,
+    plt,
+)
 
 _MARKERS = {"Euler": "s", "implicitfast": "^", "implicit": "v", "RK4": "o"}
 #: Colours of the settings families: blues for MuJoCo, oranges/reds for PyBullet.
@@ -123,13 +134,14 @@ def branch_plot(x_deg, analytic: dict[str, np.ndarray], engines: dict[str, np.nd
         st = ENGINE_STYLE.get(eng, {})
         ax.plot(x_deg, y, markers[k % len(markers)], ms=3, mfc="none",
                 color=st.get("color"), label=name)
-    for s in singular:
-        ax.axvline(s, color="red", lw=0.7, alpha=0.6)
+    for k, s in enumerate(singular):
+        ax.axvline(s, color="red", lw=0.7, alpha=0.6,
+                   label="change point (singular position)" if k == 0 else None)
     ax.set_xlabel("input angle, unwrapped (deg)")
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return _png(fig)
 
 
@@ -137,7 +149,7 @@ def long_run_plot(frame, title: str) -> bytes:
     """Long-run diagnostics per revolution (:func:`reports.studies.hard_cases`): four
     panels (loop violation, crank-speed deviation and phase drift, energy and power
     balance, acceleration and drive-effort error), one colour per engine."""
-    fig, axes = plt.subplots(2, 2, figsize=(9.0, 5.6), sharex=True)
+    fig, axes = plt.subplots(2, 2, figsize=(10.0, 6.4), sharex=True)
     panels = [
         (axes[0, 0], [("loop_violation", "-")], "max loop gap / size"),
         (axes[0, 1], [("speed_deviation", "-"), ("phase_drift", "--")],
@@ -147,21 +159,25 @@ def long_run_plot(frame, title: str) -> bytes:
         (axes[1, 1], [("alpha_error", "-"), ("effort_error", "--")],
          "alpha error (-), effort error (--)\n/ peak"),
     ]
+    drawn: dict = {}
     for engine, g in frame.groupby("engine"):
         st = ENGINE_STYLE.get(engine, {})
         for ax, cols, ylabel in panels:
             for col, ls in cols:
                 if col in g:
-                    y = np.maximum(np.abs(g[col].to_numpy(float)), 1e-18)
+                    raw = g[col].to_numpy(float)
+                    drawn.setdefault(id(ax), []).append(raw)
+                    y = np.maximum(np.abs(raw), LOG_FLOOR)
                     ax.semilogy(g["revolution"], y, ls, color=st.get("color"), lw=0.9,
                                 label=f"{engine} {col}")
-            ax.set_ylabel(ylabel, fontsize=7)
+            ax.set_ylabel(ylabel, fontsize=LABEL_PT - 1)
     for ax, _, _ in panels:
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=LEGEND_PT - 1, loc="best")
+        floor_note(ax, drawn.get(id(ax), []))  # exact zeros drawn at the floor, said so
     for ax in axes[1]:
         ax.set_xlabel("revolution")
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(title, fontsize=TITLE_PT)
     fig.tight_layout()
     return _png(fig)
 
