@@ -618,7 +618,9 @@ def cmd_animate(args) -> int:
     if args.engine:
         from .verdict_runs import engine_list
         for e in engine_list(args.engine):
-            r = engine_run(mech, tree, e, args.frames, times=fr.times)  # a sample a frame
+            from .progress import engine_progress
+            with engine_progress(f"{e}: {mech.name}, {fr.n} frames"):
+                r = engine_run(mech, tree, e, args.frames, times=fr.times)  # a frame a sample
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
             poses = engine_poses(r, tree, fr.values, False, times=fr.times)

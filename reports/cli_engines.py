@@ -39,9 +39,11 @@ def cmd_compare(args) -> int:
                             {"timestep": args.timestep})
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     out, all_ok = [], True
+    from reports.progress import engine_progress
     for eng in engines:
-        r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
-                                  args.samples)
+        with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
+            r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
+                                      args.samples)
         ok = r.ok and verdict(comps)
         all_ok &= ok
         out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))

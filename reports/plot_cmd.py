@@ -90,9 +90,11 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     lk = tree.linkage
     runs, comps, notes = {}, {}, []
     if engines:
+        from .progress import engine_progress
         from .verdict_runs import run_comparison
         for e in engines:
-            r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
+            with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
+                r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
