@@ -65,6 +65,7 @@ class Comparison:
         ``normalised`` are ``null`` where not measured, and ``measured`` says so."""
         d = json_safe(asdict(self))
         d["measured"] = self.measured
+        d["judged"] = not self.quantity.endswith("[engine]")  # an engine's own reading: no
         return d
 
     def __str__(self) -> str:

@@ -116,3 +116,14 @@ def test_table_figure_and_junit_name_the_same_worst_input(tmp_path):
     # and the figure's own axis places the worst error at that input
     p = err.panels[ENGINE]
     assert np.isclose(p["worst"][2], float(table_at), atol=1e-6)
+
+
+def test_engine_failure_reason_uses_the_same_convention():
+    """An engine's failure reason names the driver value as the verdict row does: a
+    run that stopped 390 deg along the motion said '390 deg' there and '30 deg' in the
+    table."""
+    from sim_models import compile_linkage
+    from sim_models.engine_run import fmt_value
+    assert fmt_value(compile_linkage(load_case("seed-four-bar")), math.radians(390.0)) \
+        == "30 deg"
+    assert fmt_value(compile_linkage(load_case("hibbeler-16-30")), 0.1) == "0.1 m"
