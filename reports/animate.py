@@ -319,9 +319,9 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
     eng_art = _engines(ax, fr, list(body_art))
     quiv = _force_arrows(ax, fr, size)
     # under the axes, where it covers neither the linkage nor the legend
-    info = fig.text(0.02, 0.01, "", va="bottom", ha="left", fontsize=8,
+    info = fig.text(0.02, 0.01, "", va="bottom", ha="left", fontsize=9,
                     family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=9, loc="upper right")
     from analytic.input_display import InputConvention
     conv = fr.convention or InputConvention(fr.revolute, fr.revolute)
 
