@@ -673,7 +673,8 @@ class QuantityCheck:
 
     def message(self) -> str:
         """One line naming the quantity, what happened, by how much and where."""
-        at = f" at {self.at:.6g} {self.at_unit}" if math.isfinite(self.at) else ""
+        from analytic.input_display import format_input
+        at = f" at {format_input(self.at, self.at_unit)}" if math.isfinite(self.at) else ""
         if self.status == "missing":
             return f"{self.quantity}: recorded (error {self.base:.3g} of peak) but no " \
                    "longer compared"

@@ -34,7 +34,8 @@ def cmd_record(args) -> int:
     for r in base.runs:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
                 default=None)
-        worst = f"worst {w.quantity} {w.error:.3g} of peak at {w.at:.6g} {w.at_unit}" \
+        from analytic.input_display import format_input
+        worst = f"worst {w.quantity} {w.error:.3g} of peak at {format_input(w.at, w.at_unit)}" \
             if w else "nothing compared"
         print(f"{r.label}: {len(r.quantities)} quantities, {worst}")
     if problems:

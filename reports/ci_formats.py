@@ -80,7 +80,8 @@ class CiCase:
 
 # ============================================================================ builders
 def _at(value: float, unit: str) -> str:
-    return f"{value:.6g} {unit}" if math.isfinite(value) else ""
+    from analytic.input_display import format_input  # the one input convention of every output
+    return format_input(value, unit)
 
 
 def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiCase]:

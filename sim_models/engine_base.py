@@ -169,7 +169,7 @@ def finish(session: Session, plan: Plan, rec: Recorder, request: RunRequest,
         by_time=plan.by_time, notes=tuple(session.notes),
         drive_effort_engine=rec.effort_engine if readings else None,
         joint_force_engine=rec.force_engine if readings else None,
-        q=rec.q, qd=rec.qd, qdd=rec.qdd, extra=ex)
+        q=rec.q, qd=rec.qd, qdd=rec.qdd, extra=ex, origin=rec.origin)
 
 
 # ============================================================================ session
