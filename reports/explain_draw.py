@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+from analytic.positions import size_of
+
 from .explain_blocks import Figure
 from .explain_loops import angle, length
 
@@ -37,6 +39,7 @@ def _bodies(ctx):
     """Segments between the joint points of each moving body (file unit)."""
     kin, topo, mech = ctx.kin, ctx.lk.topo, ctx.mech
     segs = []
+    same = 1e-9 * size_of(topo) / ctx.L   # one point, to the solver's closure
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
             continue
@@ -45,7 +48,7 @@ def _bodies(ctx):
             if body.name in j.bodies:
                 pn = j.point_a if j.body_a == body.name else j.point_b
                 z = complex(kin.point_c(b, pn)[0][0]) / ctx.L
-                if all(abs(z - p) > 1e-12 for p in pts):
+                if all(abs(z - p) > same for p in pts):
                     pts.append(z)
         for i in range(len(pts) - 1):
             segs.append(((pts[i].real, pts[i].imag), (pts[i + 1].real, pts[i + 1].imag)))
@@ -64,7 +67,7 @@ def polygon_figure(ctx, loop, n: int) -> Figure:
 def _frame(geo, segs):
     xs = [p[0] for g in geo for p in (g[1], g[2])] + [p[0] for s in segs for p in s]
     ys = [p[1] for g in geo for p in (g[1], g[2])] + [p[1] for s in segs for p in s]
-    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9)
+    span = max(max(xs) - min(xs), max(ys) - min(ys)) or 1.0  # any size: lengths scale
     k = WIDTH / span
     return min(xs), max(ys), k, (max(xs) - min(xs)) * k, (max(ys) - min(ys)) * k
 
@@ -133,7 +136,7 @@ def _clamp_text(svg: str, W: float, H: float) -> str:
 
 def _tikz(geo, segs) -> str:
     x0, y1, k, w, h = _frame(geo, segs)
-    s = 12.0 / max(w, h, 1e-9) * k  # about 12 cm across
+    s = 12.0 / (max(w, h) or 1.0) * k  # about 12 cm across
 
     def P(p):
         return f"({(p[0] - x0) * s:.3f},{(p[1] - y1) * s + h / k * s:.3f})"
