@@ -16,12 +16,14 @@ from collections import Counter
 from . import baseline as bl
 from . import ci_formats
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 # ============================================================================ record
 def cmd_record(args) -> int:
     from analytic.cases import case_names
     from sim_models.registry import get_engine, split_overrides
+    check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
     engines = _engines(args.engine)
     models = []
     for m in args.models:
@@ -58,6 +60,8 @@ def _engines(choice: list[str] | None) -> list[str]:
 
 # ============================================================================ check
 def cmd_check(args) -> int:
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the baseline", args.baseline)])
     base = bl.load(args.baseline)
     keep = None
     if args.case or args.engine:

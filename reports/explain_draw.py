@@ -8,12 +8,14 @@ mu(theta_k)``, y up.  The linkage's bodies are drawn faintly underneath.
 
 from __future__ import annotations
 
+import html
 import math
 
 from analytic.positions import size_of
 
 from .explain_blocks import Figure
 from .explain_loops import angle, length
+from .explain_render import _tex_text
 
 COLOURS = ["#c0392b", "#2471a3", "#1e8449", "#7d3c98", "#b9770e", "#117a65", "#a04000",
            "#34495e"]
@@ -117,7 +119,8 @@ def _svg(geo, segs) -> str:
                    f'font-style="italic">r<tspan baseline-shift="sub" font-size="11">{lab}'
                    "</tspan></text>")
         out.append(f'<circle cx="{tx:.1f}" cy="{ty:.1f}" r="3" fill="#222"/>')
-        out.append(f'<text x="{tx - 14:.1f}" y="{ty + 18:.1f}" font-size="13">{tn}</text>')
+        out.append(f'<text x="{tx - 14:.1f}" y="{ty + 18:.1f}" font-size="13">'
+                   f'{html.escape(tn)}</text>')
     out.append("</svg>")
     return _clamp_text("\n".join(out), W, H)
 
@@ -153,6 +156,7 @@ def _tikz(geo, segs) -> str:
         if abs(r) * s > 1e-3:
             out.append(rf"\draw[->, very thick] {P(tail)} -- {P(tip)} node[midway, "
                        rf"above left] {{$r_{{{lab}}}$}};")
-        out.append(rf"\fill {P(tail)} circle (1.5pt) node[below left] {{{tn}}};")
+        out.append(rf"\fill {P(tail)} circle (1.5pt) node[below left] "
+                   f"{{{_tex_text(tn)}}};")
     out.append(r"\end{tikzpicture}")
     return "\n".join(out)

@@ -34,6 +34,19 @@ def _cross(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
+def compile_refusal(mech, e: ValueError) -> EngineRefusal:
+    """The one-line refusal of a mechanism whose model MuJoCo's compiler rejects
+    (``e``, its ``ValueError``): the same for a run (``compare``) and for the model files
+    (``models``)."""
+    reason = str(e).replace("Error:", "").split("\n")[0].strip()
+    size = max((math.dist(p, q) for b in mech.bodies for p in b.points.values()
+                for q in b.points.values()), default=0.0)
+    # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
+    return EngineRefusal(f"mechanism {mech.name!r} (size {size:.3g} m): MuJoCo cannot "
+                         f"compile its model ({reason}); its compiler rejects the "
+                         "geometry of links shorter than about 1e-6 m")
+
+
 class MujocoSession(Session):
     """A compiled MuJoCo model of one linkage, driven through its prescribed motion."""
 
@@ -63,13 +76,7 @@ class MujocoSession(Session):
         try:
             self.model, warnings = compile_spec(spec, s)
         except ValueError as e:  # MuJoCo's compiler refuses the model: one line, typed
-            reason = str(e).replace("Error:", "").split("\n")[0].strip()
-            size = max((math.dist(p, q) for b in st.mech.bodies for p in b.points.values()
-                        for q in b.points.values()), default=0.0)
-            # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
-            raise EngineRefusal(f"mechanism {st.mech.name!r} (size {size:.3g} m): MuJoCo cannot "
-                                f"compile its model ({reason}); its compiler rejects the "
-                                "geometry of links shorter than about 1e-6 m") from None
+            raise compile_refusal(st.mech, e) from None
         self.notes.extend(warnings)
         m = self.model
         self.data = mujoco.MjData(m)

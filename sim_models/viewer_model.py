@@ -127,8 +127,13 @@ LIMIT_PAD = 0.05
 
 
 def viewer_xml(mech: Mechanism, settings: MujocoSettings | None = None) -> str:
-    """MJCF text of :func:`viewer_spec` (what ``xval models`` writes)."""
-    return viewer_spec(mech, settings).to_xml()
+    """MJCF text of :func:`viewer_spec` (what ``xval models`` writes); a model MuJoCo's
+    compiler rejects is the run's one-line :func:`compile_refusal`."""
+    from .mujoco_engine import compile_refusal
+    try:
+        return viewer_spec(mech, settings).to_xml()
+    except ValueError as e:
+        raise compile_refusal(mech, e) from None
 
 
 
