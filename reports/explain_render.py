@@ -49,10 +49,30 @@ def _unit_tex(u: str) -> str:
     return r"\ \mathrm{{{}}}".format(u.replace("²", "^2").replace("deg", r"{}^\circ")) if u else ""
 
 
+def _sci(value: str) -> tuple[str, str | None]:
+    """A printed value split as mantissa and power of ten (``6.73338e-13`` ->
+    ``('6.73338', '-13')``; ``None`` without an exponent)."""
+    m, _, e = value.partition("e")
+    return (m, str(int(e))) if e else (value, None)
+
+
+def _value_tex(value: str) -> str:
+    m, e = _sci(value)
+    return m if e is None else rf"{m} \cdot 10^{{{e}}}"
+
+
+def _value_ml(value: str) -> str:
+    m, e = _sci(value)
+    if e is None:
+        return f"<mn>{m}</mn>"
+    return (f"<mn>{m}</mn><mo>\u22c5</mo><msup><mn>10</mn><mn>{e.replace('-', chr(0x2212))}"
+            "</mn></msup>")
+
+
 def _chain_tex(b: Math) -> str:
     parts = [S.latex(p) for p in b.parts]
     if b.value is not None:
-        v = b.value + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
+        v = _value_tex(b.value) + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
         parts.append(v)
     if len(parts) <= 2:
         return " = ".join(parts)
@@ -128,7 +148,7 @@ def _chain_ml(b: Math) -> str:
         unit = {"deg": "<mo>°</mo>"}.get(b.unit, f"<mspace width='0.3em'/><mtext>"
                                          f"{_html.escape(b.unit.replace('^2', '²'))}</mtext>"
                                          if b.unit else "")
-        items.append(f"<mrow><mn>{b.value}</mn>{unit}</mrow>")
+        items.append(f"<mrow>{_value_ml(b.value)}{unit}</mrow>")
     head = '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">'
     if len(items) <= 2:
         return f"{head}<mrow>{'<mo>=</mo>'.join(items)}</mrow></math>"

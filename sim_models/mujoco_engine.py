@@ -42,9 +42,12 @@ def compile_refusal(mech, e: ValueError) -> EngineRefusal:
     size = max((math.dist(p, q) for b in mech.bodies for p in b.points.values()
                 for q in b.points.values()), default=0.0)
     # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
+    why = ("; its compiler rejects the geometry of links shorter than about 1e-6 m"
+           if "too close" in reason else
+           "; its compiler rejects a moving body's mass or inertia below mjMINVAL (1e-15)"
+           if "mjMINVAL" in reason else "")
     return EngineRefusal(f"mechanism {mech.name!r} (size {size:.3g} m): MuJoCo cannot "
-                         f"compile its model ({reason}); its compiler rejects the "
-                         "geometry of links shorter than about 1e-6 m")
+                         f"compile its model ({reason}){why}")
 
 
 class MujocoSession(Session):
