@@ -211,6 +211,36 @@ def force_sections(ctx) -> list:
     return out
 
 
+def _body_power(ctx, b, info) -> tuple[list, float]:
+    """One link's share of the power balance: ``m a_G·v_G + I α ω`` less the power of
+    its gravity and loads, as ``(signed terms as printed, value W)``."""
+    kin = ctx.kin
+    m, inertia, w = info["m"], info["I"], info["omega"]
+    aG, vG = _snap(info["aG"]), _snap(info["vG"])
+    terms, total = [], 0.0
+    d = _dot_expr(aG, vG)
+    if m > 0 and d is not None:
+        terms.append((1, S.prod(S.num(m), d)))
+        total += m * (aG.real * vG.real + aG.imag * vG.imag)
+    if inertia > 0 and w != 0 and info["alpha"] != 0:
+        terms.append((1, S.prod(S.num(inertia), S.num(info["alpha"]), S.num(w))))
+        total += inertia * info["alpha"] * w
+    d = _dot_expr(info["g"], vG)
+    if d is not None:
+        terms.append((-1, d))
+        total -= info["g"].real * vG.real + info["g"].imag * vG.imag
+    for ld, F, _ in info["loads"]:
+        vP = _snap(complex(kin.point_c(b, ld.point)[1][0])) if ld.point else vG
+        d = _dot_expr(F, vP)
+        if d is not None:
+            terms.append((-1, d))
+            total -= F.real * vP.real + F.imag * vP.imag
+        if ld.torque and w:
+            terms.append((-1, S.prod(S.num(ld.torque), S.num(w))))
+            total -= ld.torque * w
+    return terms, total
+
+
 def _force_table(ctx, unk, x):
     mech, topo, nums = ctx.mech, ctx.lk.topo, ctx.polys.numbers
     size = size_of(topo)
@@ -256,34 +286,22 @@ def _drive(ctx, unk, x, eqs):
                 note=f"the matrix method gives {S.fmt(float(frc.effort[0]))} {unit}"),
            Math([sp.Symbol("P"), S.prod(sym, rate), p_num], S.fmt_of(power, p_num), "W",
                 S.text(p_num))]
-    terms, total = [], 0.0
-    for b, _, _, info in eqs:
-        m, inertia, w = info["m"], info["I"], info["omega"]
-        aG, vG = _snap(info["aG"]), _snap(info["vG"])
-        d = _dot_expr(aG, vG)
-        if m > 0 and d is not None:
-            terms.append((1, S.prod(S.num(m), d)))
-            total += m * (aG.real * vG.real + aG.imag * vG.imag)
-        if inertia > 0 and w != 0 and info["alpha"] != 0:
-            terms.append((1, S.prod(S.num(inertia), S.num(info["alpha"]), S.num(w))))
-            total += inertia * info["alpha"] * w
-        d = _dot_expr(info["g"], vG)
-        if d is not None:
-            terms.append((-1, d))
-            total -= info["g"].real * vG.real + info["g"].imag * vG.imag
-        for ld, F, _ in info["loads"]:
-            vP = _snap(complex(kin.point_c(b, ld.point)[1][0])) if ld.point else vG
-            d = _dot_expr(F, vP)
-            if d is not None:
-                terms.append((-1, d))
-                total -= F.real * vP.real + F.imag * vP.imag
-            if ld.torque and w:
-                terms.append((-1, S.prod(S.num(ld.torque), S.num(w))))
-                total -= ld.torque * w
-    bal = S.signed_sum(terms)
+    # one line per link: a single sum over every link scrolled off any page
+    per_body = [(b, *_body_power(ctx, b, info)) for b, _, _, info in eqs]
+    # a link's round-off power (the crank at constant speed) is its printed 0 in the sum too
+    per_body = [(b, t, 0.0 if S.fmt_of(v, S.signed_sum(t)) == "0" else v)
+                for b, t, v in per_body if t]
+    total = sum(v for _, _, v in per_body)
+    names = [S.name("P", str(ctx.polys.numbers[b])) for b, _, _ in per_body]
+    nums = S.signed_sum([(1 if v >= 0 else -1, S.num(abs(v))) for _, _, v in per_body])
     out += [Para(["Check by the power balance: the input power equals the rate of change of "
                   "kinetic energy, Σ (m a_G·v_G + I α ω), less the power of the loads and of "
-                  "gravity, Σ F·v_P:"]),
-            Math([sp.Symbol("P"), bal], S.fmt_of(total, bal), "W", S.text(bal),
+                  "gravity, Σ F·v_P; one term per moving link, each worked below:"]),
+            Math([sp.Symbol("P"), S.signed_sum([(1, n) for n in names]), nums],
+                 S.fmt_of(total, nums), "W", S.text(nums),
                  note=f"T ω − (this) = {power - total:.3g} W")]
+    for (b, terms, v), nm in zip(per_body, names, strict=True):
+        bal = S.signed_sum(terms)
+        out.append(Math([nm, bal], S.fmt_of(v, bal), "W", S.text(bal),
+                        note=f"link {ctx.polys.numbers[b]} ({ctx.lk.topo.body_names[b]})"))
     return out

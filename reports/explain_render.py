@@ -86,8 +86,16 @@ def _cell_md(c) -> str:
     return f"${S.latex(c)}$"
 
 
+def _numbers(doc: Document) -> dict[int, int]:
+    """Tables numbered in order (``Table 3``), as a reader refers to them; the key
+    (``variables1-1``) stays the anchor a link or a test finds the table by."""
+    tables = [b for b in doc.blocks if isinstance(b, Table)]
+    return {id(t): n for n, t in enumerate(tables, start=1)}
+
+
 def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain") -> str:
     out = [f"# {doc.title}", ""]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out += ["#" * b.level + " " + b.text, ""]
@@ -100,7 +108,7 @@ def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain"
             if b.check is not None:
                 out += [f"`{_calc(b)}`", ""]
         elif isinstance(b, Table):
-            out += [f"*Table {b.key}: {b.caption}*", ""]
+            out += [f'<a id="{b.key}"></a>*Table {num[id(b)]}: {b.caption}*', ""]
             out.append("| " + " | ".join(_cell_md(c) for c in b.header) + " |")
             out.append("|" + "---|" * len(b.header))
             for row in b.rows:
@@ -165,6 +173,7 @@ def to_html(doc: Document) -> str:
     out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
            f"<title>{_html.escape(doc.title)}</title><style>{_CSS}</style></head><body>",
            f"<h1>{_html.escape(doc.title)}</h1>"]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out.append(f"<h{b.level}>{_html.escape(b.text)}</h{b.level}>")
@@ -177,8 +186,8 @@ def to_html(doc: Document) -> str:
             if b.check is not None:
                 out.append(f'<code class="calc">{_html.escape(_calc(b))}</code>')
         elif isinstance(b, Table):
-            out.append(f'<p class="caption">Table {b.key}: {_html.escape(b.caption)}</p>'
-                       f'<table id="{b.key}"><tr>'
+            out.append(f'<p class="caption">Table {num[id(b)]}: {_html.escape(b.caption)}'
+                       f'</p><table id="{b.key}"><tr>'
                        + "".join(f"<th>{_ml(c)}</th>" for c in b.header) + "</tr>")
             for row in b.rows:
                 out.append("<tr>" + "".join(f"<td>{_ml(c)}</td>" for c in row) + "</tr>")
@@ -221,6 +230,7 @@ def to_latex(doc: Document) -> str:
            r"\usepackage{amsmath,amssymb,graphicx}", r"\usepackage{tikz}",
            r"\usepackage[margin=2cm]{geometry}", r"\allowdisplaybreaks",
            r"\begin{document}", rf"\section*{{{_tex_text(doc.title)}}}"]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out.append({2: r"\subsection*{%s}", 3: r"\subsubsection*{%s}"}.get(
@@ -236,7 +246,7 @@ def to_latex(doc: Document) -> str:
             if b.check is not None:
                 out.append(r"{\footnotesize\texttt{" + _tex_text(_calc(b)) + "}}\n")
         elif isinstance(b, Table):
-            out.append(r"\begin{center}{\small\itshape Table " + _tex_text(b.key) + ": "
+            out.append(r"\begin{center}{\small\itshape Table " + str(num[id(b)]) + ": "
                        + _tex_text(b.caption) + r"}\\[2pt]")
             out.append(r"\begin{tabular}{" + "|c" * len(b.header) + "|}\\hline")
             out.append(" & ".join(_tex_cell(c) for c in b.header) + r"\\\hline")

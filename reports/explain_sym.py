@@ -37,7 +37,9 @@ MU = sp.Function("mu")
 SIGMA = sp.Function("sigma")
 
 _GREEK = {"theta": "\u03b8", "mu": "\u03bc", "sigma": "\u03c3", "omega": "\u03c9",
-          "alpha": "\u03b1", "delta": "\u03b4"}
+          "alpha": "\u03b1", "delta": "\u03b4", "gamma": "\u03b3", "beta": "\u03b2",
+          "phi": "\u03c6", "psi": "\u03c8", "tau": "\u03c4", "rho": "\u03c1",
+          "lambda": "\u03bb", "epsilon": "\u03b5", "Sigma": "\u03a3"}
 
 
 def r(k: str, dots: int = 0) -> sp.Symbol:

@@ -38,10 +38,10 @@ def explain(capsys, *argv) -> str:
 
 
 def table(md: str, key: str) -> dict[str, list[str]]:
-    """Rows of the Markdown table whose caption starts ``*Table key:``, by the row's
-    first cell (LaTeX symbols kept as written)."""
+    """Rows of the Markdown table anchored ``<a id="key">`` (its caption reads ``Table N:
+    ...``), by the row's first cell (LaTeX symbols kept as written)."""
     lines = md.splitlines()
-    i = next(k for k, line in enumerate(lines) if line.startswith(f"*Table {key}:"))
+    i = next(k for k, line in enumerate(lines) if line.startswith(f'<a id="{key}"></a>*Table '))
     rows = {}
     for line in lines[i + 3:]:  # caption, blank, header
         if not line.startswith("|"):
@@ -286,7 +286,7 @@ def test_calc_lines_over_the_cycle(case):
         md = render(explain_doc(mech, float(v)), "md")
         assert check_calc_lines(md) >= 4
         assert re.search(r"\bnan\b|\binf\b", md, re.IGNORECASE) is None
-        for n in range(1, md.count("*Table matrix-") + 1):
+        for n in range(1, md.count('<a id="matrix-') + 1):
             for _, (_u, hand, _m, diff) in table(md, f"matrix-{n}").items():
                 assert float(diff) <= 1e-8 * max(1.0, abs(float(hand)))
         if mech.has_mass:   # the per-body equilibrium against the solver's tree method
@@ -562,3 +562,34 @@ def test_near_a_toggle_the_solution_or_one_line(capsys, tmp_path, offset):
         assert code == 2 and out.err.startswith("xval: error:") and out.err.count("\n") == 1
     if offset == -1e-7:   # the reported input: solve works there, so must explain
         assert code == 0
+
+
+def test_html_greek_letters_and_numbered_captions(capsys):
+    """gamma was typeset as the word; captions read 'Table variables1-1'."""
+    page = explain(capsys, "seed-four-bar", "--format", "html")
+    assert "<mi>gamma</mi>" not in page and "<mi>\u03b3</mi>" in page
+    caps = re.findall(r'<p class="caption">Table ([^:]*):', page)
+    assert caps == [str(n) for n in range(1, len(caps) + 1)] and len(caps) >= 8
+    assert 'id="variables1-1"' in page
+
+
+def test_html_equations_fit_the_page(capsys, tmp_path):
+    """Every displayed equation fits the page's 1100 px column (the power balance was
+    one sum over every link and scrolled), measured by Chromium's layout."""
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI=true but no Chromium: .ci/run should have installed it")
+        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    page = explain(capsys, "seed-four-bar", "--format", "html")
+    probe = ("<script>document.title = 'over:' + [...document.querySelectorAll('.eq')]"
+             ".filter(e => e.scrollWidth > e.clientWidth + 1).map(e => e.textContent"
+             ".slice(0, 40)).join('|');</script></body>")
+    f = tmp_path / "p.html"
+    f.write_text(page.replace("</body>", probe), encoding="utf-8")
+    dom = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                          f"--user-data-dir={tmp_path / 'p'}", "--window-size=1200,1600",
+                          "--dump-dom", f.as_uri()], check=True, timeout=60,
+                         capture_output=True, text=True).stdout
+    over = re.search(r"<title>over:(.*?)</title>", dom, re.S)
+    assert over is not None and over.group(1) == "", over and over.group(1)
