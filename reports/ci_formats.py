@@ -156,6 +156,7 @@ def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = Non
     total = sum(c.time for c in cases)
     counts = {"tests": str(len(cases)), "failures": str(fails), "errors": str(errors),
               "time": _secs(total)}
+    suite = _clean(suite)  # a path or name may carry what XML cannot: every text cleaned
     root = ET.Element("testsuites", {"name": suite, **counts})
     ts = ET.SubElement(root, "testsuite", {
         "name": suite, **counts, "skipped": "0",
@@ -164,9 +165,10 @@ def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = Non
     props = ET.SubElement(ts, "properties")
     for k, v in {"python": platform.python_version(), "platform": platform.platform(),
                  **(properties or {})}.items():
-        ET.SubElement(props, "property", {"name": str(k), "value": str(v)})
+        ET.SubElement(props, "property", {"name": _clean(k), "value": _clean(v)})
     for c in cases:
-        tc = ET.SubElement(ts, "testcase", {"classname": f"xval.{c.engine}", "name": c.case,
+        tc = ET.SubElement(ts, "testcase", {"classname": _clean(f"xval.{c.engine}"),
+                                            "name": _clean(c.case),
                                             "time": _secs(c.time)})
         if c.status in ("fail", "error"):
             tag = "failure" if c.status == "fail" else "error"
@@ -186,8 +188,10 @@ def _secs(t: float) -> str:
 
 
 def _clean(text: str) -> str:
-    """XML 1.0 forbids most control characters (an engine message might carry one)."""
-    return "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20)
+    """XML 1.0 forbids most control characters (an engine message might carry one), lone
+    surrogates (a file name's undecodable bytes) and U+FFFE/U+FFFF."""
+    return "".join(ch for ch in str(text) if ch in "\t\n\r" or (
+        ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF and ch not in "\ufffe\uffff"))
 
 
 # ============================================================================ Markdown
