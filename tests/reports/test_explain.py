@@ -464,7 +464,6 @@ def test_a_micro_mechanism_is_printed_at_its_own_scale():
         worked(scaled("seed-four-bar", 1e-3, 1e-6), 60)
     t_seed, t_micro = _torque(seed), _torque(micro)
     assert t_micro != 0.0 and t_micro == pytest.approx(t_seed * 1e-12, rel=1e-5)
-    assert not re.search(r"= 0\\ \\mathrm\{(N m|W)\}", micro)
     p = re.findall(rf"`calc: ({NUMBER})\*15 = ({NUMBER})`", micro)
     assert p and float(p[0][1]) == pytest.approx(t_micro * 15, rel=1e-5)
     # every moment equation of a link with an angular acceleration keeps -I alpha
