@@ -218,14 +218,16 @@ def _ml_tree(fragment: str):
 def _fit(rows: list[str]) -> str:
     """A style that shrinks a displayed equation to the column when its widest row
     would be wider (as LaTeX's ``\\resizebox`` in the tex format; MathML has no line
-    breaking and the page no script), never below 45 % (the page then scrolls)."""
+    breaking and the page no script), never below 60 %, where the text would be too
+    small to read: such an equation (a long acceleration elimination of a second loop)
+    scrolls in its own box."""
     try:
         width = max(_ml_width(_ml_tree(r)) for r in rows) * _GLYPH_EM
     except SyntaxError:   # ElementTree's ParseError: estimate nothing, shrink nothing
         return ""
     if width <= _EQ_EM:
         return ""
-    return f' style="font-size: {max(45, int(100 * _EQ_EM / width))}%"'
+    return f' style="font-size: {max(60, int(100 * _EQ_EM / width))}%"'
 
 
 def to_html(doc: Document) -> str:
