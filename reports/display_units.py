@@ -247,7 +247,10 @@ def convert_result(res: dict, units: DisplayUnits) -> dict:
         inp["acceleration"] = inp["acceleration"] * L
     b = r["bodies"]
     sw = scale_of([d["omega"] for d in b.values()]) * units.W
-    sa = scale_of([d["alpha"] for d in b.values()])
+    # an angular acceleration's own scale is omega^2 too: a link whose alpha is exactly
+    # 0 at this input (round-off 4e-12 rad/s^2 at 200 rad/s) is not judged by itself
+    sa = max(scale_of([d["alpha"] for d in b.values()]),
+             scale_of([d["omega"] for d in b.values()]) ** 2)
     for d in b.values():
         d["angle_deg"] = snap(d["angle_deg"] * degA, 2 * math.pi * units.A)
         d["omega"] = snap(d["omega"] * units.W, sw)
