@@ -604,6 +604,8 @@ def cmd_animate(args) -> int:
     if args.out is None:
         raise OutputError("option --out is required: F.gif, F.mp4 or F.html")
     check_out(args.out, FORMATS)
+    from .cli_paths import check_outputs
+    check_outputs([("--out", args.out)], [("the case file", args.case)])
     if Path(args.out).suffix.lower() == ".mp4":
         from matplotlib import animation
         if not animation.writers.is_available("ffmpeg"):

@@ -16,12 +16,14 @@ from collections import Counter
 from . import baseline as bl
 from . import ci_formats
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 # ============================================================================ record
 def cmd_record(args) -> int:
     from analytic.cases import case_names
     from sim_models.registry import settings_from_options
+    check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
     engines = _engines(args.engine)
     models = []
     for m in args.models:
@@ -69,6 +71,8 @@ def _engines(choice: list[str] | None) -> list[str]:
 
 # ============================================================================ check
 def cmd_check(args) -> int:
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the baseline", args.baseline)])
     base = bl.load(args.baseline)
     overrides = _check_overrides(args.set, base)
     keep = None

@@ -197,6 +197,7 @@ def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = Non
               command: str = "compare") -> str:
     """The JUnit XML document: one ``testsuite`` per model file (its ``file``
     attribute), one ``testcase`` per entry, classname ``xval.<command>.<engine>``."""
+    suite = _clean(suite)  # a path or name may carry what XML cannot: every text cleaned
     root = ET.Element("testsuites", {"name": suite, **_counts(cases)})
     files = list(dict.fromkeys(c.file for c in cases)) or [""]
     for f in files:
@@ -205,13 +206,13 @@ def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = Non
                  **_counts(group), "skipped": "0",
                  "timestamp": _dt.datetime.now().replace(microsecond=0).isoformat(),
                  "hostname": socket.gethostname() or "localhost"}
-        ts = ET.SubElement(root, "testsuite", {**attrs, **({"file": f} if f else {})})
+        ts = ET.SubElement(root, "testsuite", {**attrs, **({"file": _clean(f)} if f else {})})
         engines = {f"engine.{c.engine}": c.version for c in group if c.version}
         props = ET.SubElement(ts, "properties")
         for k, v in {"linkage-xval": _tool_version(), **dict(sorted(engines.items())),
                      "python": platform.python_version(), "platform": platform.platform(),
                      **(properties or {})}.items():
-            ET.SubElement(props, "property", {"name": str(k), "value": str(v)})
+            ET.SubElement(props, "property", {"name": _clean(k), "value": _clean(v)})
         for c in group:
             _testcase(ts, c, command)
     ET.indent(root)
@@ -219,8 +220,8 @@ def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = Non
 
 
 def _testcase(ts, c: CiCase, command: str) -> None:
-    tc = ET.SubElement(ts, "testcase", {"classname": f"xval.{command}.{c.engine}",
-                                        "name": c.case, "time": _secs(c.time)})
+    tc = ET.SubElement(ts, "testcase", {"classname": _clean(f"xval.{command}.{c.engine}"),
+                                        "name": _clean(c.case), "time": _secs(c.time)})
     if c.status in ("fail", "error"):
         tag = "failure" if c.status == "fail" else "error"
         el = ET.SubElement(tc, tag, {"message": _clean(c.message or c.kind),
@@ -237,8 +238,10 @@ def _secs(t: float) -> str:
 
 
 def _clean(text: str) -> str:
-    """XML 1.0 forbids most control characters (an engine message might carry one)."""
-    return "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20)
+    """XML 1.0 forbids most control characters (an engine message might carry one), lone
+    surrogates (a file name's undecodable bytes) and U+FFFE/U+FFFF."""
+    return "".join(ch for ch in str(text) if ch in "\t\n\r" or (
+        ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF and ch not in "\ufffe\uffff"))
 
 
 # ============================================================================ Markdown

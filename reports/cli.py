@@ -201,7 +201,9 @@ def cmd_solve(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from .cli_paths import check_outputs
     from .display_units import DisplayUnits, convert_frame
+    check_outputs([("--csv", args.csv)], [("the case file", args.case)])
     mech = load_case(args.case)
     streamed = bool(args.csv) and args.points > STREAM_POINTS  # written block by block
     opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints), streamed)

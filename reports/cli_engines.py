@@ -9,6 +9,7 @@ import json
 import sys
 
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 def cmd_models(args) -> int:
@@ -33,6 +34,8 @@ def cmd_compare(args) -> int:
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
     settings = settings_for(engines, list(args.set or ()),
                             {"--timestep": ("timestep", args.timestep),

@@ -199,7 +199,8 @@ def _probe_dir(d: Path, what: str) -> None:
 
 
 def output_file(text: str) -> str:
-    """An argparse type: a file to (over)write, or ``-`` for standard output."""
+    """An argparse type: a file to (over)write, or ``-`` for standard output.  The
+    folders it is in are created when missing (the README's ``--out ci/base.json``)."""
     if text == "-":
         return text
     p = Path(text)
@@ -207,7 +208,11 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise argparse.ArgumentTypeError(f"folder {str(parent)!r} does not exist")
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise argparse.ArgumentTypeError(f"cannot create folder {str(parent)!r}: "
+                                             f"{e.strerror}") from None
     if p.exists() and not os.access(p, os.W_OK):
         raise argparse.ArgumentTypeError(f"file {text!r} is not writable")
     _probe_dir(parent, "a file")

@@ -185,6 +185,10 @@ def cmd_plot(args) -> int:
         if not ok and not args.out:
             raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
     mech = load_case(args.case)
+    from .cli_paths import check_outputs, safe_stem
+    # the default name is made safe from the description's (never '../x' or '/x')
+    out = args.out or (None if args.show else f"{safe_stem(mech.name)}-plot.png")
+    check_outputs([("--out" if args.out else "the figure", out)], [("the case file", args.case)])
     what = parse_what(args.what)
     units = DisplayUnits.parse(args.units)
     engines, settings = [], {}
@@ -208,7 +212,6 @@ def cmd_plot(args) -> int:
         except NoDisplay as e:
             cannot_show = e
     fig = draw(figs, err, units, title, motion_line(mech, runs, units))
-    out = args.out or (None if args.show else f"{mech.name}-plot.png")
     for n in notes:
         print("note:", n)
     if out:

@@ -343,10 +343,13 @@ def compile_refusal(e: ValueError, mech: Mechanism) -> EngineRefusal:
     reason = str(e).replace("Error:", "").split("\n")[0].strip()
     size = max((math.dist(p, q) for b in mech.bodies for p in b.points.values()
                 for q in b.points.values()), default=0.0)
-    # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
+    # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m; the
+    # reason says which limit (micro-four-bar.toml: masses of 2e-7 kg, I 1.7e-16 kg m^2)
+    why = ("; its compiler rejects a moving body's mass or inertia below mjMINVAL (1e-15)"
+           if "mjMINVAL" in reason else
+           "; its compiler rejects the geometry of links shorter than about 1e-6 m")
     return EngineRefusal(f"mechanism {mech.name!r} (size {size:.3g} m): MuJoCo cannot "
-                         f"compile its model ({reason}); its compiler rejects the "
-                         "geometry of links shorter than about 1e-6 m")
+                         f"compile its model ({reason}){why}")
 
 
 def compile_spec(spec, settings: MujocoSettings | None = None, mech: Mechanism | None = None):

@@ -21,6 +21,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from analytic import Mechanism, case_names, load_case
+from analytic.errors import OutputError
 
 from .mjcf import MujocoSettings
 from .urdf import build_urdf
@@ -54,7 +55,13 @@ def write_models(out: str | Path = MODELS_DIR, cases: list[str] | None = None) -
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for case in cases or case_names():
-        for name, text in model_texts(case).items():
+        texts = model_texts(case)
+        for name in texts:
+            if Path(case).is_file() and (out / name).exists() and \
+                    (out / name).samefile(case):
+                raise OutputError(f"--out {str(out)!r}: the model file {name!r} would "
+                                  f"overwrite the case file {case!r}; give another folder")
+        for name, text in texts.items():
             p = out / name
             p.write_text(text)
             paths.append(p)
