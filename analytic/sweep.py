@@ -67,6 +67,37 @@ class SweepResult:
         return nearest_event(self, at, kinds)
 
 
+def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf
+                  ) -> np.ndarray:
+    """Input angles (rad) moved to values whose degree value, printed in full, reads back
+    as the same angle (``radians(degrees(v)) == v``; :func:`input_degrees` prints it):
+    to the nearest 1e-10 deg where the grid is coarse enough that this cannot reorder
+    it or leave ``[lo, hi]`` (``359``, not ``358.99999999999994``), else by a few ulps.
+    A row of the table is then solved at exactly the input it prints."""
+    v = np.asarray(values, float).copy()
+    if not len(v):
+        return v
+    d = np.degrees(v)
+    r = np.radians(np.round(d, 10))
+    if len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8:
+        v = np.where((r >= lo) & (r <= hi), r, v)
+    for _ in range(8):  # radians(degrees(.)) reaches a fixed point in 1-2 steps
+        w = np.radians(np.degrees(v))
+        ok = (w == v) | (np.radians(np.round(np.degrees(v), 10)) == v)
+        if ok.all():
+            break
+        v = np.where(ok, v, w)
+    return v
+
+
+def input_degrees(values: np.ndarray) -> np.ndarray:
+    """The input column of a revolute driver, deg: ``values`` (rad) in degrees, to 1e-10
+    deg where that reads back as the same angle, else in full (17 digits)."""
+    v = np.asarray(values, float)
+    r = np.round(np.degrees(v), 10)
+    return np.where(np.radians(r) == v, r, np.degrees(v))
+
+
 def input_values(linkage: Linkage, points: int, start: float | None = None
                  ) -> tuple[np.ndarray, bool, list]:
     """The sweep's input values: a full turn from ``start`` (default the reference
@@ -78,7 +109,7 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
     if linkage.driver_is_revolute and len(feas) == 1 and \
             feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
         a = v0 if start is None else start
-        return a + 2 * math.pi * np.arange(points) / points, True, feas
+        return exact_degrees(a + 2 * math.pi * np.arange(points) / points), True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
             # stay a hair inside the limit positions, where the Jacobian is singular:
@@ -93,9 +124,18 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
                     continue
                 if np.all(ends.condition < SINGULAR_CONDITION):
                     break
+            if linkage.driver_is_revolute:  # printable inputs, still half the pad inside
+                x = exact_degrees(x, lo + pad / 2, hi - pad / 2)
             return x, False, feas
     raise AssemblyError(f"mechanism {linkage.mech.name!r}: the reference input is not in a "
                         f"feasible range {feas}", v0, feas)
+
+
+def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
+                 ) -> np.ndarray:
+    """``points`` input values (SI) from ``input_range[0]`` to ``input_range[1]``."""
+    x = np.linspace(*input_range, points)
+    return exact_degrees(x) if linkage.driver_is_revolute else x
 
 
 def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
@@ -369,8 +409,8 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
     mech, topo = linkage.mech, linkage.topo
     rev = linkage.driver_is_revolute
     cols: dict[str, np.ndarray] = {
-        # degrees rounded to 1e-10 deg: 359 deg, not 358.99999999999994
-        "input": np.round(np.degrees(kin.value), 10) if rev else kin.value,
+        # the value solved at: radians(input) is the row's input (exact_degrees)
+        "input": input_degrees(kin.value) if rev else kin.value,
         "input_velocity": kin.velocity, "input_acceleration": kin.acceleration}
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
@@ -515,7 +555,7 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
     if values is not None:
         values, feas = np.asarray(values, float), linkage.feasible_ranges()
     elif input_range is not None:
-        values, feas = np.linspace(*input_range, points), linkage.feasible_ranges()
+        values, feas = range_values(linkage, input_range, points), linkage.feasible_ranges()
     else:
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")
