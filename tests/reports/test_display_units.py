@@ -87,8 +87,8 @@ def test_sweep_csv_units(tmp_path):
     a, b = pd.read_csv(si), pd.read_csv(conv)
     # the input in rad is the value solved at: radians of the printed degrees, exactly
     np.testing.assert_array_equal(b["input [rad]"], np.radians(a["input [deg]"]))
-    np.testing.assert_allclose(b["crank.omega [rpm]"], a["crank.omega [rad/s]"] * 60 / (2 * math.pi),
-                               rtol=REL)
+    np.testing.assert_allclose(b["crank.omega [rpm]"],
+                               a["crank.omega [rad/s]"] * 60 / (2 * math.pi), rtol=REL)
     np.testing.assert_allclose(b["slide.s [mm]"], 1000 * a["slide.s [m]"], rtol=REL)
     # the piston's y stays on the line: 0 (never round-off) in both
     assert (b["piston.C.y [mm]"] == 0).all() and (a["piston.C.y [m]"] == 0).all()
