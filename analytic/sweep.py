@@ -40,6 +40,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
+from .refine import least_transmission, rate_roots, sign_brackets
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
@@ -140,32 +141,15 @@ def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
 
 def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
                ) -> list[float]:
-    """Input values where ``y`` changes sign, linearly interpolated.
-
-    Samples within 1e-9 of the series' peak (or of ``scale``, the size the series would
-    have if it moved at all, when larger) of zero are round-off, not sign: a stretch of
-    them (a parallelogram's translating coupler) yields at most one crossing, between
-    the significant samples on either side, and a series of round-off alone none.
-    """
-    n = len(y)
-    peak = max(float(np.max(np.abs(y))) if n else 0.0, scale)
-    sig = np.flatnonzero(np.abs(y) > 1e-9 * peak) if peak > 0 else np.array([], int)
+    """Input values where ``y`` changes sign, linearly interpolated between the samples
+    of :func:`analytic.refine.sign_brackets` (which says which samples are round-off)."""
     out = []
-    if len(sig) < 2:
-        return out
-    a, b = sig[:-1], sig[1:]
-    if periodic:
-        a, b = np.append(a, sig[-1]), np.append(b, sig[0])
-    # only the pairs whose signs differ (a list of every pair held ~120 B a sample)
-    flip = np.flatnonzero(y[a] * y[b] < 0)
     period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    for i, k in zip(a[flip], b[flip], strict=True):
+    for i, k in sign_brackets(x, y, periodic, scale):
         y0, y1 = y[i], y[k]
-        if y0 * y1 < 0:
-            x1 = x[k] if k > i else x[k] + period
-            v = x[i] + (x1 - x[i]) * y0 / (y0 - y1)
-            out.append(float(v - period if periodic and v > x[-1] + (x[1] - x[0]) / 2
-                             else v))
+        x1 = x[k] if k > i else x[k] + period
+        v = x[i] + (x1 - x[i]) * y0 / (y0 - y1)
+        out.append(float(v - period if periodic and v > x[-1] + (x[1] - x[0]) / 2 else v))
     return out
 
 
@@ -179,11 +163,14 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     * ``change_point``: a singular position where two branches cross, passed on the
       branch named in the detail (``crossings``, see :mod:`analytic.branches`);
     * ``limit``: a body's angular velocity or a slider's velocity changes sign: the
-      extreme (toggle) positions of rockers and the dead centres of sliders; and, for
+      extreme (toggle) positions of rockers and the dead centres of sliders, located
+      on the solver between the samples (:mod:`analytic.refine`, to 1e-12 rad or of
+      the size); and, for
       a sweep of a limited range (``feasible``), the input's own limit positions at
       the ends of the range, beyond which the loops cannot close (located to 1e-9);
     * ``min_transmission``: the least transmission angle of each dyad (folded into
-      0..90 deg) and its largest deviation from 90 deg.
+      0..90 deg) and its largest deviation from 90 deg, located on the solver
+      (:func:`analytic.refine.least_transmission`).
 
     Inputs are in the frame's units (deg or m); a full cycle's are wrapped into one
     turn from its first value.
@@ -212,7 +199,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         # one row per rotation group (bodies of a group share omega)
         if any(topo.group_of[o] == topo.group_of[b] for o in range(b)):
             continue
-        for v in _crossings(xr, (kin.omega[:, b] * np.sign(kin.velocity))[regular], periodic,
+        for v in rate_roots(linkage, xr, (kin.omega[:, b] * np.sign(kin.velocity))[regular],
+                            periodic, lambda k, b=b: (k.omega[:, b], k.alpha[:, b]),
                             w_in * (1.0 if rev else 1.0 / size)):
             rows.append(("limit", name, float(conv(v)), "omega = 0 (extreme angle)"))
     for j in topo.prismatic:
@@ -220,8 +208,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         if j == topo.driver_joint:
             continue
         _, sd, _ = kin.slider(jn)
-        for v in _crossings(xr, (sd * np.sign(kin.velocity))[regular], periodic,
-                            w_in * (size if rev else 1.0)):
+        for v in rate_roots(linkage, xr, (sd * np.sign(kin.velocity))[regular], periodic,
+                            lambda k, jn=jn: k.slider(jn)[1:], w_in * (size if rev else 1.0)):
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
@@ -253,12 +241,10 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
                                  "the branch whose velocity is continuous)"))
-    for jn, tr in kin.transmission.items():
-        folded = np.minimum(tr, 180.0 - tr)
-        i = int(np.argmin(folded))
-        rows.append(("min_transmission", jn, float(conv(x[i])),
-                     f"least transmission angle {folded[i]:.3f} deg (raw {tr[i]:.3f} deg; "
-                     f"largest deviation from 90 deg: {90.0 - folded[i]:.3f} deg)"))
+    for jn, least, at, raw in least_transmission(linkage, kin, periodic):
+        rows.append(("min_transmission", jn, float(conv(at)),
+                     f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
+                     f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
     ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
     if periodic and rev and len(ev) and len(x):
         a = float(np.degrees(x[0]))

@@ -203,7 +203,12 @@ def cmd_sweep(args) -> int:
     kw = {"velocity": args.omega}
     if args.range is not None:
         rev = isinstance(mech.driver_joint, Revolute)
-        if not (np.all(np.isfinite(args.range)) and args.range[1] > args.range[0]):
+        for v in args.range:  # the range --angle (or --value) accepts
+            try:
+                (opt.angle_deg if rev else opt.length_m)(repr(v))
+            except argparse.ArgumentTypeError as e:
+                raise opt.UsageError(f"argument --range: {e}") from None
+        if not args.range[1] > args.range[0]:
             raise LinkageError(f"option --range: {args.range[0]} {args.range[1]} must be two "
                                "finite numbers, the second larger")
         kw["input_range"] = tuple(math.radians(v) if rev else v for v in args.range)

@@ -1,0 +1,188 @@
+"""Events located on the solver, not between the sweep's samples.
+
+A sweep samples the input; an event (a rocker's extreme angle, a slider's dead centre,
+a dyad's least transmission angle) lies between two samples.  Interpolating the
+samples places it to the grid's accuracy only (O(h^2): 7e-4 deg at 1 deg spacing).
+Here each one is bracketed by the samples and then located by a safeguarded Newton
+iteration on the exact solver (:meth:`analytic.kinematics.Linkage.kinematics` at unit
+input velocity and zero input acceleration, where a body's angular velocity is
+``d theta / d input`` and its angular acceleration ``d^2 theta / d input^2``: the
+function and its exact derivative), all brackets of a kind at once, to
+:data:`INPUT_TOL`.  The located input is then as exact as the solver; what a sweep
+prints there (6 decimals) is within the tolerance of the digits shown.
+
+Inputs are SI (rad or m) throughout.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from .positions import size_of
+
+#: A located event's input tolerance: 1e-12 rad (5.7e-11 deg), or 1e-12 of the
+#: mechanism's size (m) for a prismatic input: below the 1e-9 deg (or m) the sweep's
+#: six printed decimals need, and above the ~1e-15 relative that the rounding of the
+#: rates leaves in the root of a simple zero.
+INPUT_TOL = 1e-12
+#: Newton steps at most (quadratic convergence from a bracket of one grid step needs
+#: 4-6; a step that leaves the bracket is replaced by bisection, 1 bit a step).
+MAX_STEPS = 100
+
+#: ``rate(kin) -> (g, dg)``: a quantity that changes sign at the event, and its
+#: derivative with respect to the input, per configuration (``(N,)`` each), from a
+#: :class:`analytic.kinematics.Kinematics` at unit input velocity and zero input
+#: acceleration.
+Rate = Callable[[object], tuple[np.ndarray, np.ndarray]]
+
+
+def tolerance(linkage) -> float:
+    """:data:`INPUT_TOL` in the input's units (rad, or m scaled by the mechanism's size)."""
+    return INPUT_TOL * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))
+
+
+def unit_rate_kinematics(linkage, x: np.ndarray):
+    """Kinematics at inputs ``x`` (SI) at unit input velocity and zero acceleration: the
+    rates are derivatives with respect to the input."""
+    x = np.asarray(x, float)
+    return linkage.kinematics(x, np.ones(len(x)), np.zeros(len(x)), on_singular="flag")
+
+
+def sign_brackets(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
+                  ) -> list[tuple[int, int]]:
+    """Pairs of sample indices ``(i, k)`` between which ``y`` changes sign.
+
+    Samples within 1e-9 of the series' peak (or of ``scale``, the size the series would
+    have if it moved at all, when larger) of zero are round-off, not sign: a stretch of
+    them (a parallelogram's translating coupler) yields at most one bracket, between
+    the significant samples on either side, and a series of round-off alone none.  With
+    ``periodic``, the last sample pairs with the first (``k < i``)."""
+    n = len(y)
+    y = np.asarray(y, float)
+    peak = max(float(np.max(np.abs(y))) if n else 0.0, scale)
+    sig = np.flatnonzero(np.abs(y) > 1e-9 * peak) if peak > 0 else np.array([], int)
+    if len(sig) < 2:
+        return []
+    a, b = sig[:-1], sig[1:]
+    if periodic:
+        a, b = np.append(a, sig[-1]), np.append(b, sig[0])
+    # only the pairs whose signs differ (a list of every pair held ~120 B a sample)
+    flip = np.flatnonzero(y[a] * y[b] < 0)
+    return [(int(i), int(k)) for i, k in zip(a[flip], b[flip], strict=True)]
+
+
+def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
+    """The input in each bracket ``[lo_i, hi_i]`` (SI, ``lo < hi``) where ``rate``
+    changes sign, to :func:`tolerance`; NaN where the rate is not finite at an end or
+    has the same sign at both (no sign change to locate)."""
+    a, b = np.asarray(lo, float).copy(), np.asarray(hi, float).copy()
+    m = len(a)
+    if not m:
+        return np.zeros(0)
+    g, _ = rate(unit_rate_kinematics(linkage, np.concatenate([a, b])))
+    ga, gb = g[:m].copy(), g[m:].copy()
+    out = np.full(m, np.nan)
+    ok = np.isfinite(ga) & np.isfinite(gb) & (ga * gb <= 0)
+    out[ok & (ga == 0)] = a[ok & (ga == 0)]
+    out[ok & (gb == 0) & (ga != 0)] = b[ok & (gb == 0) & (ga != 0)]
+    act = np.flatnonzero(ok & (ga != 0) & (gb != 0))
+    if not act.size:
+        return out
+    tol = tolerance(linkage)
+    a, b, ga, gb = a[act], b[act], ga[act], gb[act]
+    x = a - ga * (b - a) / (gb - ga)  # the interpolated crossing: the first guess
+    failed = np.zeros(len(x), bool)
+    for _ in range(MAX_STEPS):
+        g, dg = rate(unit_rate_kinematics(linkage, x))
+        g, dg = np.asarray(g, float), np.asarray(dg, float)
+        failed |= ~np.isfinite(g)  # a singular configuration inside: not located
+        left = np.sign(g) == np.sign(ga)
+        a, ga = np.where(left, x, a), np.where(left, g, ga)
+        b, gb = np.where(left, b, x), np.where(left, gb, g)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = x - g / dg
+        inside = np.isfinite(newton) & (newton > a) & (newton < b)
+        nxt = np.where(inside, newton, 0.5 * (a + b))
+        done = (g == 0) | ~np.isfinite(g) | (np.abs(nxt - x) <= tol) | (b - a <= tol)
+        x = np.where((g == 0) | ~np.isfinite(g), x, nxt)
+        if done.all():
+            break
+    out[act] = np.where(failed, np.nan, x)
+    return out
+
+
+def rate_roots(linkage, x: np.ndarray, y: np.ndarray, periodic: bool, rate: Rate,
+               scale: float = 0.0) -> list[float]:
+    """Inputs (SI) where the sampled series ``y(x)`` changes sign (:func:`sign_brackets`),
+    each located on the solver by :func:`locate` (``rate`` gives the same quantity and
+    its derivative); a periodic sweep's roots are wrapped into its turn ``[x[0],
+    x[0] + period)``.  A bracket the solver cannot resolve keeps the interpolated
+    crossing."""
+    x = np.asarray(x, float)
+    br = sign_brackets(x, y, periodic, scale)
+    if not br:
+        return []
+    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
+    i = np.array([p[0] for p in br])
+    k = np.array([p[1] for p in br])
+    lo, hi = x[i], np.where(k > i, x[k], x[k] + period)
+    yi, yk = np.asarray(y, float)[i], np.asarray(y, float)[k]
+    guess = lo + (hi - lo) * yi / (yi - yk)
+    got = locate(linkage, lo, hi, rate)
+    v = np.where(np.isfinite(got), got, guess)
+    if periodic:
+        v = x[0] + np.mod(v - x[0], period)
+    return [float(u) for u in v]
+
+
+# --------------------------------------------------------------------------- transmission
+def _rotating_body(linkage, vectors: np.ndarray, E: np.ndarray) -> int:
+    """The body whose orientation a link vector of a dyad turns with: the one whose
+    angle to it stays constant over the configurations (``vectors`` ``(N,)``, ``E``
+    ``(N, B)`` complex)."""
+    rel = np.angle(vectors[:, None] * E.conj())
+    spread = np.abs(np.angle(np.exp(1j * (rel - rel[:1]))))
+    return int(np.argmin(np.max(spread, axis=0)))
+
+
+def least_transmission(linkage, kin, periodic: bool) -> list[tuple[str, float, float, float]]:
+    """Each dyad's least transmission angle (folded into 0..90 deg) over a sweep:
+    ``(joint, least_deg, at (SI), raw_deg)``.  An interior least value is located on
+    the solver where the two links' relative angular velocity vanishes (the transmission
+    angle is the angle between them); one at an end of a limited sweep stays there."""
+    x = np.asarray(kin.value, float)
+    n = len(x)
+    tr = kin.transmission
+    if not tr or not n:
+        return []
+    probe = None
+    out = []
+    for jn, mu in tr.items():
+        mu = np.asarray(mu, float)
+        folded = np.minimum(mu, 180.0 - mu)
+        i = int(np.argmin(folded))
+        at, least, raw = float(x[i]), float(folded[i]), float(mu[i])
+        if n >= 3 and (periodic or 0 < i < n - 1):
+            if probe is None:  # configurations spread over the sweep, to tell the bodies
+                probe = unit_rate_kinematics(linkage, x[np.linspace(0, n - 1, 9).astype(int)])
+                vecs = {name: (e1, e2) for name, e1, e2 in probe.transmission_vectors}
+            e1, e2 = vecs[jn]
+            b1, b2 = (_rotating_body(linkage, e, probe.E) for e in (e1, e2))
+            period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
+            lo = x[i - 1] if i > 0 else x[-1] - period
+            hi = x[i + 1] if i < n - 1 else x[0] + period
+            got = locate(linkage, np.array([lo]), np.array([hi]),
+                         lambda k, b1=b1, b2=b2: (k.omega[:, b2] - k.omega[:, b1],
+                                                  k.alpha[:, b2] - k.alpha[:, b1]))[0]
+            if math.isfinite(got):
+                m = float(unit_rate_kinematics(linkage, np.array([got])).transmission[jn][0])
+                f = min(m, 180.0 - m)
+                if f <= least:  # the located extreme is the least (never above a sample)
+                    at, least, raw = got, f, m
+                    if periodic:
+                        at = float(x[0] + np.mod(at - x[0], period))
+        out.append((jn, least, at, raw))
+    return out
