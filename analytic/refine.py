@@ -104,7 +104,7 @@ def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
         b, gb = np.where(left, b, x), np.where(left, gb, g)
         with np.errstate(divide="ignore", invalid="ignore"):
             newton = x - g / dg
-        inside = np.isfinite(newton) & (newton > a) & (newton < b)
+        inside = np.isfinite(newton) & (newton >= a) & (newton <= b)
         nxt = np.where(inside, newton, 0.5 * (a + b))
         done = (g == 0) | ~np.isfinite(g) | (np.abs(nxt - x) <= tol) | (b - a <= tol)
         x = np.where((g == 0) | ~np.isfinite(g), x, nxt)
