@@ -32,4 +32,4 @@ def test_summary_names_each_stroke_once(capsys):
     assert "swing of rocker: 47.6432 deg" in out and "rocker rocker" not in out
     assert main(["sweep", "quick-return"]) == 0
     out = capsys.readouterr().out
-    assert "stroke of slider ram: 0.5 m" in out and "slider ram:" not in out
+    assert "stroke of slider ram: 0.5 m" in out and "slider ram: stroke" not in out
