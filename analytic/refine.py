@@ -186,3 +186,37 @@ def least_transmission(linkage, kin, periodic: bool) -> list[tuple[str, float, f
                         at = float(x[0] + np.mod(at - x[0], period))
         out.append((jn, least, at, raw))
     return out
+
+
+# --------------------------------------------------------------------------- peaks
+#: A located peak's input tolerance relative to the bracket's scale (1 rad or the
+#: mechanism's size): a maximum's position is determined only to ~sqrt(eps) of its
+#: curvature (the value is flat there), so 1e-9 of a radian (6e-8 deg) is what a
+#: bracketed minimiser can reach; the peak's value is then exact to rounding.
+PEAK_XTOL = 1e-9
+
+
+#: Configurations per round of :func:`peak`: each round narrows the bracket 32-fold.
+PEAK_GRID = 65
+
+
+def peak(linkage, lo: float, hi: float, value: Callable[[np.ndarray], np.ndarray]
+         ) -> tuple[float, float] | None:
+    """The input in ``[lo, hi]`` (SI) where ``value(inputs)`` (magnitudes from the solver
+    at those inputs, ``(N,)``) is largest, and that value: a grid of :data:`PEAK_GRID`
+    configurations around the best so far, narrowed 32-fold a round until the bracket
+    is :data:`PEAK_XTOL` (one vectorised solve a round).  ``None`` when the value is not
+    finite inside."""
+    tol = PEAK_XTOL * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))
+    best = None
+    for _ in range(12):
+        t = np.linspace(lo, hi, PEAK_GRID)
+        v = np.asarray(value(t), float)
+        if not np.all(np.isfinite(v)):
+            return None
+        k = int(np.argmax(v))
+        best = (float(t[k]), float(v[k]))
+        if hi - lo <= tol:
+            break
+        lo, hi = t[max(k - 1, 0)], t[min(k + 1, PEAK_GRID - 1)]
+    return best

@@ -18,7 +18,8 @@ the summary and the table beside it are the same computation.
 * **Transmission angle** of each dyad: its least value folded into 0..90 deg and its
   largest deviation from 90 deg (= 90 - least), with where it occurs.
 * **Peak drive effort** and the event nearest it (a peak next to a limit or singular
-  position is the mechanism's own, not an error).
+  position is the mechanism's own, not an error); an interior peak is located on the
+  solver between the samples beside the largest one (:func:`analytic.refine.peak`).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .mechanism import Revolute
-from .refine import least_transmission, rate_roots, unit_rate_kinematics
+from .refine import least_transmission, peak, rate_roots, unit_rate_kinematics
 from .tolerances import SINGULAR_CONDITION
 
 #: The peak drive effort is said to sit at an event (singular position, change point,
@@ -270,6 +271,9 @@ def summarise(result, nearest_event=None) -> Summary:
             summ.effort_name = "drive torque" if rev else "drive force"
             summ.effort_unit = "N m" if rev else "N"
             summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
+            got = _located_peak(lk, kin, eff, i, periodic)
+            if got is not None and got[1] >= summ.peak_effort:
+                summ.peak_effort, summ.peak_effort_at = got[1], float(conv(got[0]))
             if nearest_event is not None:
                 ev = nearest_event(result, float(x[i]),
                                    kinds=("singular", "change_point", "input_limit"))
@@ -279,6 +283,30 @@ def summarise(result, nearest_event=None) -> Summary:
         summ.power_balance = float(np.max(np.abs(frc.power_residual[regular]))
                                    / _power_scale(kin, frc, regular))
     return summ
+
+
+def _located_peak(lk, kin, eff: np.ndarray, i: int, periodic: bool):
+    """The peak drive effort next to the largest sample ``i``, located on the solver
+    between its neighbours (:func:`analytic.refine.peak`) at the sweep's own input rates:
+    ``(input SI, |effort|)``; ``None`` at an end of a limited sweep or beside a singular
+    sample (where the largest sample is what the table shows)."""
+    n = len(eff)
+    if n < 3 or not (periodic or 0 < i < n - 1) or \
+            not (np.isfinite(eff[i - 1]) and np.isfinite(eff[(i + 1) % n])):
+        return None
+    x = np.asarray(kin.value, float)
+    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
+    lo = x[i - 1] if i > 0 else x[-1] - period
+    hi = x[i + 1] if i < n - 1 else x[0] + period
+    vel, acc = float(kin.velocity[i]), float(kin.acceleration[i])
+
+    def value(t):
+        k = lk.kinematics(t, np.full(len(t), vel), np.full(len(t), acc), on_singular="flag")
+        return np.abs(lk.forces(k).effort)
+    got = peak(lk, lo, hi, value)
+    if got is not None and periodic:
+        got = (float(x[0] + np.mod(got[0] - x[0], period)), got[1])
+    return got
 
 
 def _power_scale(kin, frc, regular) -> float:

@@ -103,3 +103,21 @@ def test_quick_return_exact_two_to_one_at_default_points(capsys):
     ratios = re.findall(r"(ram|rocker): .*?time ratio (\d+\.\d+)", out.replace("\n    ", " "))
     assert sorted(ratios) == [("ram", "2.0000"), ("rocker", "2.0000")], out
     assert "rocker rocker" not in out
+
+
+@pytest.mark.parametrize("case", ["seed-four-bar", "quick-return"])
+def test_peak_effort_between_samples(case):
+    """The peak drive torque at the default points is the peak of the curve, not of the
+    samples: no configuration of a dense scan around it (1e-5 deg apart) exceeds it,
+    and the densest sample is within the scan's own sampling error of it."""
+    lk = Linkage(load_case(case))
+    s = lk.sweep(360, start=0.0).summary
+    at = math.radians(s.peak_effort_at)
+    t = at + np.radians(np.linspace(-0.02, 0.02, 4001))
+    d = lk.kinematics(t, on_singular="flag")
+    dense = np.abs(lk.forces(d).effort)
+    # rounding of the torque (~1e-15 relative) on the located side
+    assert np.max(dense) <= s.peak_effort * (1 + 1e-12)
+    # a sample 5e-6 deg from the peak misses it by curvature x h^2: < 1e-10 relative
+    assert np.max(dense) == pytest.approx(s.peak_effort, rel=1e-10)
+    assert abs(math.degrees(t[int(np.argmax(dense))]) - s.peak_effort_at) < 2e-5
