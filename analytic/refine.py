@@ -82,7 +82,8 @@ def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
     m = len(a)
     if not m:
         return np.zeros(0)
-    g, _ = rate(unit_rate_kinematics(linkage, np.concatenate([a, b])))
+    g, _ = _call(rate, unit_rate_kinematics(linkage, np.concatenate([a, b])),
+                 np.concatenate([np.arange(m), np.arange(m)]))
     ga, gb = g[:m].copy(), g[m:].copy()
     out = np.full(m, np.nan)
     ok = np.isfinite(ga) & np.isfinite(gb) & (ga * gb <= 0)
@@ -92,11 +93,11 @@ def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
     if not act.size:
         return out
     tol = tolerance(linkage)
-    a, b, ga, gb = a[act], b[act], ga[act], gb[act]
+    a, b, ga, gb, ids = a[act], b[act], ga[act], gb[act], act
     x = a - ga * (b - a) / (gb - ga)  # the interpolated crossing: the first guess
     failed = np.zeros(len(x), bool)
     for _ in range(MAX_STEPS):
-        g, dg = rate(unit_rate_kinematics(linkage, x))
+        g, dg = _call(rate, unit_rate_kinematics(linkage, x), ids)
         g, dg = np.asarray(g, float), np.asarray(dg, float)
         failed |= ~np.isfinite(g)  # a singular configuration inside: not located
         left = np.sign(g) == np.sign(ga)
@@ -114,28 +115,90 @@ def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
     return out
 
 
-def rate_roots(linkage, x: np.ndarray, y: np.ndarray, periodic: bool, rate: Rate,
-               scale: float = 0.0) -> list[float]:
-    """Inputs (SI) where the sampled series ``y(x)`` changes sign (:func:`sign_brackets`),
-    each located on the solver by :func:`locate` (``rate`` gives the same quantity and
-    its derivative); a periodic sweep's roots are wrapped into its turn ``[x[0],
-    x[0] + period)``.  A bracket the solver cannot resolve keeps the interpolated
-    crossing."""
-    x = np.asarray(x, float)
-    br = sign_brackets(x, y, periodic, scale)
-    if not br:
-        return []
+def _call(rate, kin, ids):
+    """``rate(kin)``, or ``rate(kin, ids)`` for a rate that serves several brackets
+    (``ids``: the bracket of each configuration)."""
+    g, dg = rate(kin, ids) if getattr(rate, "per_bracket", False) else rate(kin)
+    return np.asarray(g, float), np.asarray(dg, float)
+
+
+def turning_points(linkage, kin, periodic: bool) -> dict:
+    """The limit positions of every rotation group and every slider over a sweep, all
+    located in one iteration: ``{("group", g): [input SI, ...], ("slider", joint):
+    [...]}``.  A group's are where its angular velocity changes sign, a slider's where
+    its sliding velocity does (:func:`sign_brackets` of the regular samples,
+    samples below 1e-9 of the input's rate scale being round-off).  Computed once per
+    sweep (kept on ``kin``): the events and the summary read the same inputs."""
+    memo = getattr(kin, "_turning_points", None)
+    if memo is not None and memo[0] == periodic:
+        return memo[1]
+    from .tolerances import SINGULAR_CONDITION
+    topo = linkage.topo
+    x = np.asarray(kin.value, float)
+    regular = np.asarray(kin.condition < SINGULAR_CONDITION)
+    xr = x[regular]
+    sign = np.sign(kin.velocity)[regular]
+    w_in = float(np.max(np.abs(kin.velocity))) if len(x) else 0.0
+    size = size_of(topo)
+    rev = linkage.driver_is_revolute
+    series = {}  # key -> (sampled series, scale, rate)
+    for g in range(topo.n_groups):
+        b = int(np.flatnonzero(topo.group_of == g)[0])
+        series[("group", g)] = (kin.omega[:, b][regular] * sign,
+                                w_in * (1.0 if rev else 1 / size),
+                                lambda k, b=b: (k.omega[:, b], k.alpha[:, b]))
+    for j in topo.prismatic:
+        if j == topo.driver_joint:
+            continue
+        jn = topo.joint_names[j]
+        series[("slider", jn)] = (kin.slider(jn)[1][regular] * sign,
+                                  w_in * (size if rev else 1.0),
+                                  lambda k, jn=jn: k.slider(jn)[1:])
+    out = _roots_together(linkage, xr, periodic, series) if len(xr) > 1 else \
+        {k: [] for k in series}
+    try:
+        kin._turning_points = (periodic, out)
+    except AttributeError:  # pragma: no cover - a kinematics without a __dict__
+        pass
+    return out
+
+
+def _roots_together(linkage, x, periodic, series) -> dict:
+    """The sign changes of several sampled series over the same inputs ``x``
+    (:func:`sign_brackets`), located together by one :func:`locate` (one solve a step
+    for all); a bracket the solver cannot resolve keeps the interpolated crossing, and
+    a periodic sweep's roots are wrapped into its turn ``[x[0], x[0] + period)``."""
     period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    i = np.array([p[0] for p in br])
-    k = np.array([p[1] for p in br])
-    lo, hi = x[i], np.where(k > i, x[k], x[k] + period)
-    yi, yk = np.asarray(y, float)[i], np.asarray(y, float)[k]
-    guess = lo + (hi - lo) * yi / (yi - yk)
-    got = locate(linkage, lo, hi, rate)
-    v = np.where(np.isfinite(got), got, guess)
+    keys, lo, hi, guess = [], [], [], []
+    for key, (y, scale, _) in series.items():
+        y = np.asarray(y, float)
+        for i, k in sign_brackets(x, y, periodic, scale):
+            x1 = x[k] if k > i else x[k] + period
+            keys.append(key)
+            lo.append(x[i])
+            hi.append(x1)
+            guess.append(x[i] + (x1 - x[i]) * y[i] / (y[i] - y[k]))
+    out = {k: [] for k in series}
+    if not keys:
+        return out
+    idx = np.array([list(series).index(k) for k in keys])
+    rates = [r for _, _, r in series.values()]
+
+    def rate(kn, ids):  # each bracket's own series, from one solve of all of them
+        sel = idx[ids]
+        g, dg = np.empty(kn.n), np.empty(kn.n)
+        for r in np.unique(sel):
+            gi, di = rates[r](kn)
+            g[sel == r], dg[sel == r] = np.asarray(gi)[sel == r], np.asarray(di)[sel == r]
+        return g, dg
+    rate.per_bracket = True
+    got = locate(linkage, np.array(lo), np.array(hi), rate)
+    v = np.where(np.isfinite(got), got, np.array(guess))
     if periodic:
         v = x[0] + np.mod(v - x[0], period)
-    return [float(u) for u in v]
+    for key, u in zip(keys, v, strict=True):
+        out[key].append(float(u))
+    return out
 
 
 # --------------------------------------------------------------------------- transmission
@@ -153,6 +216,18 @@ def least_transmission(linkage, kin, periodic: bool) -> list[tuple[str, float, f
     ``(joint, least_deg, at (SI), raw_deg)``.  An interior least value is located on
     the solver where the two links' relative angular velocity vanishes (the transmission
     angle is the angle between them); one at an end of a limited sweep stays there."""
+    memo = getattr(kin, "_least_transmission", None)
+    if memo is not None and memo[0] == periodic:
+        return memo[1]
+    out = _least_transmission(linkage, kin, periodic)
+    try:
+        kin._least_transmission = (periodic, out)  # the events and the summary read it
+    except AttributeError:  # pragma: no cover - a kinematics without a __dict__
+        pass
+    return out
+
+
+def _least_transmission(linkage, kin, periodic: bool) -> list:
     x = np.asarray(kin.value, float)
     n = len(x)
     tr = kin.transmission
@@ -196,15 +271,15 @@ def least_transmission(linkage, kin, periodic: bool) -> list[tuple[str, float, f
 PEAK_XTOL = 1e-9
 
 
-#: Configurations per round of :func:`peak`: each round narrows the bracket 32-fold.
-PEAK_GRID = 65
+#: Configurations per round of :func:`peak`: each round narrows the bracket 64-fold.
+PEAK_GRID = 129
 
 
 def peak(linkage, lo: float, hi: float, value: Callable[[np.ndarray], np.ndarray]
          ) -> tuple[float, float] | None:
     """The input in ``[lo, hi]`` (SI) where ``value(inputs)`` (magnitudes from the solver
     at those inputs, ``(N,)``) is largest, and that value: a grid of :data:`PEAK_GRID`
-    configurations around the best so far, narrowed 32-fold a round until the bracket
+    configurations around the best so far, narrowed 64-fold a round until the bracket
     is :data:`PEAK_XTOL` (one vectorised solve a round).  ``None`` when the value is not
     finite inside."""
     tol = PEAK_XTOL * (1.0 if linkage.driver_is_revolute else size_of(linkage.topo))

@@ -13,7 +13,7 @@ the summary and the table beside it are the same computation.
   direction of the slower stroke.
 * The limit positions (where the rate changes sign), and the stroke's and swing's
   extremes there, are located on the solver between the samples
-  (:func:`analytic.refine.rate_roots`, to 1e-12 rad or of the size), so they, the spans
+  (:func:`analytic.refine.turning_points`, to 1e-12 rad or of the size), so they, the spans
   and the ratio are exact to the digits printed, at any number of points.
 * **Transmission angle** of each dyad: its least value folded into 0..90 deg and its
   largest deviation from 90 deg (= 90 - least), with where it occurs.
@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .mechanism import Revolute
-from .refine import least_transmission, peak, rate_roots, unit_rate_kinematics
+from .refine import least_transmission, peak, turning_points, unit_rate_kinematics
 from .tolerances import SINGULAR_CONDITION
 
 #: The peak drive effort is said to sit at an event (singular position, change point,
@@ -134,11 +134,10 @@ class Summary:
         return out
 
 
-def _turning_points(lk, kin, rate_series, periodic, rate, value, samples, turn):
-    """The limit positions of a series (where ``rate_series`` changes sign), located on
-    the solver: ``[(input SI, value there)]``, the value (``value(kinematics)``) on the
-    samples' own turn when ``turn`` (360 for an unwrapped angle in deg)."""
-    roots = rate_roots(lk, kin.value, rate_series, periodic, rate)
+def _turning_points(lk, kin, roots, value, samples, turn):
+    """The limit positions ``roots`` (SI, :func:`analytic.refine.turning_points`) with
+    the series' value there: ``[(input SI, value)]``, the value (``value(kinematics)``)
+    on the samples' own turn when ``turn`` (360 for an unwrapped angle in deg)."""
     if not roots:
         return []
     vals = np.asarray(value(unit_rate_kinematics(lk, np.array(roots))), float)
@@ -222,8 +221,7 @@ def summarise(result, nearest_event=None) -> Summary:
             continue
         jn = topo.joint_names[j]
         s = kin.slider(jn)[0]
-        turns = _turning_points(lk, kin, kin.slider(jn)[1], periodic,
-                                lambda k, jn=jn: k.slider(jn)[1:],
+        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[("slider", jn)],
                                 lambda k, jn=jn: k.slider(jn)[0], s, None)
         lo, hi = _extremes(s, periodic, turns)
         st = dict(kind="slider", name=jn, low=lo, high=hi, travel=hi - lo)
@@ -247,9 +245,9 @@ def summarise(result, nearest_event=None) -> Summary:
         if periodic and abs(net) > 180.0:
             summ.strokes.append(Stroke("rocker", body, math.nan, math.nan, math.nan, True))
             continue
-        turns = _turning_points(lk, kin, kin.omega[:, b], periodic,
-                                lambda k, b=b: (k.omega[:, b], k.alpha[:, b]),
-                                lambda k, b=b: np.degrees(k.theta[:, b]), th, 360.0)
+        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[
+            ("group", int(topo.group_of[b]))], lambda k, b=b: np.degrees(k.theta[:, b]),
+            th, 360.0)
         lo, hi = _extremes(th, periodic, turns)
         st = dict(kind="rocker", name=body, low=lo, high=hi, travel=hi - lo)
         if periodic and _reversals(th) == 2:

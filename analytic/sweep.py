@@ -40,7 +40,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
-from .refine import least_transmission, rate_roots, sign_brackets
+from .refine import least_transmission, sign_brackets, turning_points
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
@@ -188,9 +188,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         rows.append(("singular", "loop Jacobian", float(conv(x[i])),
                      f"condition number {kin.condition[i]:.3g}"))
     # rates at a singular sample are not determined by the input: no limits from them
-    regular = kin.condition < SINGULAR_CONDITION
-    xr = x[regular]
-    w_in = float(np.max(np.abs(kin.velocity))) if len(x) else 0.0
+    # (analytic.refine.turning_points: the regular samples bracket, the solver locates)
+    turns = turning_points(linkage, kin, periodic)
     size = size_of(topo)
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
@@ -199,17 +198,13 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         # one row per rotation group (bodies of a group share omega)
         if any(topo.group_of[o] == topo.group_of[b] for o in range(b)):
             continue
-        for v in rate_roots(linkage, xr, (kin.omega[:, b] * np.sign(kin.velocity))[regular],
-                            periodic, lambda k, b=b: (k.omega[:, b], k.alpha[:, b]),
-                            w_in * (1.0 if rev else 1.0 / size)):
+        for v in turns[("group", int(topo.group_of[b]))]:
             rows.append(("limit", name, float(conv(v)), "omega = 0 (extreme angle)"))
     for j in topo.prismatic:
         jn = topo.joint_names[j]
         if j == topo.driver_joint:
             continue
-        _, sd, _ = kin.slider(jn)
-        for v in rate_roots(linkage, xr, (sd * np.sign(kin.velocity))[regular], periodic,
-                            lambda k, jn=jn: k.slider(jn)[1:], w_in * (size if rev else 1.0)):
+        for v in turns[("slider", jn)]:
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
