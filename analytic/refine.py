@@ -33,7 +33,8 @@ INPUT_TOL = 1e-12
 MAX_STEPS = 100
 
 #: ``rate(kin) -> (g, dg)``: a quantity that changes sign at the event, and its
-#: derivative with respect to the input, per configuration (``(N,)`` each), from a
+#: derivative with respect to the input (NaN where there is none: the iteration is then
+#: regula falsi), per configuration (``(N,)`` each), from a
 #: :class:`analytic.kinematics.Kinematics` at unit input velocity and zero input
 #: acceleration.
 Rate = Callable[[object], tuple[np.ndarray, np.ndarray]]
@@ -74,15 +75,23 @@ def sign_brackets(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0
     return [(int(i), int(k)) for i, k in zip(a[flip], b[flip], strict=True)]
 
 
-def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
+def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate, zero=None) -> np.ndarray:
     """The input in each bracket ``[lo_i, hi_i]`` (SI, ``lo < hi``) where ``rate``
     changes sign, to :func:`tolerance`; NaN where the rate is not finite at an end or
-    has the same sign at both (no sign change to locate)."""
+    has the same sign at both (no sign change to locate).  ``zero`` (per bracket,
+    default 0): magnitudes at most this are round-off of 0; where the rate is 0 over an
+    interval, its middle is the input returned."""
     a, b = np.asarray(lo, float).copy(), np.asarray(hi, float).copy()
     m = len(a)
     if not m:
         return np.zeros(0)
-    g, _ = _call(rate, unit_rate_kinematics(linkage, np.concatenate([a, b])),
+    zero = np.zeros(m) if zero is None else np.asarray(zero, float)
+
+    def rate_(kn, ids):  # the rate with its round-off set to 0
+        g, dg = _call(rate, kn, ids)
+        return np.where(np.abs(g) <= zero[ids], 0.0, g), dg
+    rate_.per_bracket = True
+    g, _ = _call(rate_, unit_rate_kinematics(linkage, np.concatenate([a, b])),
                  np.concatenate([np.arange(m), np.arange(m)]))
     ga, gb = g[:m].copy(), g[m:].copy()
     out = np.full(m, np.nan)
@@ -96,23 +105,53 @@ def locate(linkage, lo: np.ndarray, hi: np.ndarray, rate: Rate) -> np.ndarray:
     a, b, ga, gb, ids = a[act], b[act], ga[act], gb[act], act
     x = a - ga * (b - a) / (gb - ga)  # the interpolated crossing: the first guess
     failed = np.zeros(len(x), bool)
+    kept = np.zeros(len(x), int)  # which end the last two steps kept (Illinois)
     for _ in range(MAX_STEPS):
-        g, dg = _call(rate, unit_rate_kinematics(linkage, x), ids)
-        g, dg = np.asarray(g, float), np.asarray(dg, float)
+        g, dg = _call(rate_, unit_rate_kinematics(linkage, x), ids)
         failed |= ~np.isfinite(g)  # a singular configuration inside: not located
-        left = np.sign(g) == np.sign(ga)
+        left = np.sign(g) == np.sign(ga)  # a 0 (or NaN) moves neither end
+        right = np.sign(g) == np.sign(gb)
         a, ga = np.where(left, x, a), np.where(left, g, ga)
-        b, gb = np.where(left, b, x), np.where(left, gb, g)
+        b, gb = np.where(right, x, b), np.where(right, g, gb)
+        # without a derivative (dg NaN): regula falsi, the end kept twice in a row
+        # halved (Illinois: superlinear, never stalls on one side)
+        side = np.where(left, 1, -1)
+        gb = np.where(side + kept == 2, 0.5 * gb, gb)
+        ga = np.where(side + kept == -2, 0.5 * ga, ga)
+        kept = side
         with np.errstate(divide="ignore", invalid="ignore"):
-            newton = x - g / dg
+            newton = np.where(np.isfinite(dg), x - g / dg, (a * gb - b * ga) / (gb - ga))
         inside = np.isfinite(newton) & (newton >= a) & (newton <= b)
         nxt = np.where(inside, newton, 0.5 * (a + b))
         done = (g == 0) | ~np.isfinite(g) | (np.abs(nxt - x) <= tol) | (b - a <= tol)
         x = np.where((g == 0) | ~np.isfinite(g), x, nxt)
         if done.all():
             break
+    flat = (g == 0) & ~failed
+    if flat.any():  # a zero over a band (a dyad snapped to its toggle): its middle
+        x[flat] = _zero_band_middle(linkage, rate_, ids[flat], a[flat], x[flat], b[flat], tol)
     out[act] = np.where(failed, np.nan, x)
     return out
+
+
+def _zero_band_middle(linkage, rate, ids, a, z, b, tol):
+    """The middle of the interval around ``z`` where ``rate`` is exactly 0 (``a`` and
+    ``b``: the nearest inputs either side where it is not): both edges by bisection.
+    The solver sets a dyad within :data:`analytic.tolerances.TOGGLE_SNAP` of its
+    toggle exactly onto it, so a determinant is exactly 0 over a band about 1e-6 wide,
+    centred on the singular position to first order."""
+    lo = np.stack([a, z])  # (2, k): bracket of the left edge, then the right's
+    hi = np.stack([z, b])
+    for _ in range(MAX_STEPS):
+        m = 0.5 * (lo + hi)
+        g, _ = _call(rate, unit_rate_kinematics(linkage, m.ravel()), np.tile(ids, 2))
+        inner = (g.reshape(m.shape) == 0)  # inside the band
+        # left edge: band on the right (hi side); right edge: band on the left (lo side)
+        lo[0], hi[0] = np.where(inner[0], lo[0], m[0]), np.where(inner[0], m[0], hi[0])
+        lo[1], hi[1] = np.where(inner[1], m[1], lo[1]), np.where(inner[1], hi[1], m[1])
+        if np.all(hi - lo <= tol):
+            break
+    return 0.5 * (0.5 * (lo[0] + hi[0]) + 0.5 * (lo[1] + hi[1]))
 
 
 def _call(rate, kin, ids):
@@ -120,6 +159,17 @@ def _call(rate, kin, ids):
     (``ids``: the bracket of each configuration)."""
     g, dg = rate(kin, ids) if getattr(rate, "per_bracket", False) else rate(kin)
     return np.asarray(g, float), np.asarray(dg, float)
+
+
+def sign_changes(linkage, x: np.ndarray, y: np.ndarray, periodic: bool, rate: Rate,
+                 scale: float = 0.0) -> list[float]:
+    """Inputs (SI) where the sampled series ``y(x)`` changes sign, located on the solver
+    (``rate``: the same quantity and its derivative or NaN); see
+    :func:`_roots_together`."""
+    y = np.asarray(y, float)
+    zero = 1e-9 * max(float(np.max(np.abs(y))) if len(y) else 0.0, scale)  # as the samples'
+    return _roots_together(linkage, np.asarray(x, float), periodic,
+                           {0: (y, scale, rate)}, zero)[0] if len(x) > 1 else []
 
 
 def turning_points(linkage, kin, periodic: bool) -> dict:
@@ -163,7 +213,7 @@ def turning_points(linkage, kin, periodic: bool) -> dict:
     return out
 
 
-def _roots_together(linkage, x, periodic, series) -> dict:
+def _roots_together(linkage, x, periodic, series, zero: float = 0.0) -> dict:
     """The sign changes of several sampled series over the same inputs ``x``
     (:func:`sign_brackets`), located together by one :func:`locate` (one solve a step
     for all); a bracket the solver cannot resolve keeps the interpolated crossing, and
@@ -192,7 +242,7 @@ def _roots_together(linkage, x, periodic, series) -> dict:
             g[sel == r], dg[sel == r] = np.asarray(gi)[sel == r], np.asarray(di)[sel == r]
         return g, dg
     rate.per_bracket = True
-    got = locate(linkage, np.array(lo), np.array(hi), rate)
+    got = locate(linkage, np.array(lo), np.array(hi), rate, np.full(len(lo), zero))
     v = np.where(np.isfinite(got), got, np.array(guess))
     if periodic:
         v = x[0] + np.mod(v - x[0], period)

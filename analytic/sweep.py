@@ -40,7 +40,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
-from .refine import least_transmission, sign_brackets, turning_points
+from .refine import least_transmission, sign_changes, turning_points
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
@@ -139,26 +139,13 @@ def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
     return exact_degrees(x) if linkage.driver_is_revolute else x
 
 
-def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
-               ) -> list[float]:
-    """Input values where ``y`` changes sign, linearly interpolated between the samples
-    of :func:`analytic.refine.sign_brackets` (which says which samples are round-off)."""
-    out = []
-    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    for i, k in sign_brackets(x, y, periodic, scale):
-        y0, y1 = y[i], y[k]
-        x1 = x[k] if k > i else x[k] + period
-        v = x[i] + (x1 - x[i]) * y0 / (y0 - y1)
-        out.append(float(v - period if periodic and v > x[-1] + (x[1] - x[0]) / 2 else v))
-    return out
-
-
 def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                 feasible: list | None = None, crossings: list | None = None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
 
-    * ``singular``: the loop Jacobian's determinant changes sign or its condition
-      number exceeds :data:`SINGULAR_CONDITION`: the output cannot be driven
+    * ``singular``: the loop Jacobian's determinant changes sign (located on the solver
+      by regula falsi, :func:`analytic.refine.sign_changes`) or its condition number
+      exceeds :data:`SINGULAR_CONDITION` at a sample: the output cannot be driven
       there (dead centre) or the linkage may switch branch (change point);
     * ``change_point``: a singular position where two branches cross, passed on the
       branch named in the detail (``crossings``, see :mod:`analytic.branches`);
@@ -180,7 +167,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     x = kin.value
     conv = np.degrees if rev else (lambda v: v)
     rows = []
-    for v in _crossings(x, kin.determinant, periodic):
+    for v in sign_changes(linkage, x, kin.determinant, periodic,
+                          lambda k: (k.determinant, np.full(k.n, np.nan))):
         rows.append(("singular", "loop Jacobian", float(conv(v)),
                      "determinant changes sign: dead centre or change point"))
     hi = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))

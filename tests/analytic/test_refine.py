@@ -121,3 +121,15 @@ def test_peak_effort_between_samples(case):
     # a sample 5e-6 deg from the peak misses it by curvature x h^2: < 1e-10 relative
     assert np.max(dense) == pytest.approx(s.peak_effort, rel=1e-10)
     assert abs(math.degrees(t[int(np.argmax(dense))]) - s.peak_effort_at) < 2e-5
+
+
+def test_singular_positions_between_samples():
+    """A parallelogram (ground = coupler, crank = rocker) is flat, its loop Jacobian
+    singular, at theta2 = 0 and 180 deg: the determinant's sign changes are located
+    there from a grid that misses both (the solver sets the dyad exactly onto its
+    toggle within ~1e-6 rad of it: the middle of that band is the position)."""
+    lk = Linkage(four_bar(0.4, 0.1, 0.4, 0.1, theta=math.radians(30), masses=None))
+    res = lk.sweep(361, start=0.3)
+    sing = _events(res, "singular", "loop Jacobian")
+    assert len(sing) == 2
+    assert np.all(np.minimum(_circ(sing, 0.0), _circ(sing, 180.0)) < EVENT_TOL_DEG), sing
