@@ -210,7 +210,10 @@ def row_scales(cols: dict, revolute: bool) -> dict[str, np.ndarray]:
 
     * an angle: a turn (360 deg);
     * a length, velocity, acceleration, angular rate or force: the largest finite
-      magnitude of that kind in the same row (the input's own value left out);
+      magnitude of that kind in the same row (the input's own value left out), and for
+      the rates at least what the row's motion implies with its largest coordinate ``L``
+      as lever: a velocity ``omega L``, an angular rate ``v / L``, an angular
+      acceleration ``omega^2`` and ``a / L``, an acceleration ``alpha L``;
     * a moment (joint couple, drive torque): that, or the row's force scale times its
       largest coordinate (the lever of the forces, m) when larger;
     * the drive power: that, or the drive effort's scale times the input rate.
@@ -229,6 +232,14 @@ def row_scales(cols: dict, revolute: bool) -> dict[str, np.ndarray]:
         return m
     sc = {k: peak(k) for k in ("length", "velocity", "acceleration", "omega", "alpha",
                                "force")}
+    # the row's motion sets the kinematic scales even where every value of a kind is
+    # round-off (a rod's alpha at a dead centre: 4e-12 rad/s^2 at 200 rad/s)
+    lever = np.where(sc["length"] > 0, sc["length"], np.inf)
+    sc["velocity"] = np.maximum(sc["velocity"], sc["omega"] * sc["length"])
+    sc["omega"] = np.maximum(sc["omega"], sc["velocity"] / lever)
+    sc["alpha"] = np.maximum.reduce([sc["alpha"], sc["omega"] ** 2,
+                                     sc["acceleration"] / lever])
+    sc["acceleration"] = np.maximum(sc["acceleration"], sc["alpha"] * sc["length"])
     sc["angle"] = np.full(n, 360.0)
     sc["moment"] = np.maximum(peak("moment"), sc["force"] * sc["length"])
     rate = np.abs(np.atleast_1d(np.asarray(cols.get("input_velocity", 0.0), float)))

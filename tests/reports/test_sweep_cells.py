@@ -151,3 +151,17 @@ def test_streamed_rows_are_the_rows(tmp_path, block):
     np.testing.assert_array_equal(a[:, 0], b[:, 0])  # the inputs, exactly
     scale = np.max(np.abs(a), axis=0)
     assert np.all(np.abs(a - b) <= CELL_TOL * np.maximum(scale, 1e-300) * 1e3)
+
+
+def test_round_off_of_a_zero_is_zero_at_a_dead_centre(tmp_path):
+    """A centred slider-crank at constant speed: at theta = 0 and 180 deg the rod's
+    angular acceleration is exactly 0 (d^2/dt^2 of asin(r/L sin theta) vanishes with
+    sin theta), every other angular acceleration of the row too, so the row's own alpha
+    values are round-off (4e-12 rad/s^2 at 200 rad/s): the row's motion (omega^2) is
+    their scale, and they print 0."""
+    csv = tmp_path / "s.csv"
+    assert run("sweep", "seed-slider-crank", "--points", "12", "--csv", str(csv))[0] == 0
+    t = pd.read_csv(csv).set_index("input [deg]")
+    for at in (0.0, 180.0):
+        assert t.loc[at, "rod.alpha [rad/s^2]"] == 0.0
+        assert t.loc[at, "rod.omega [rad/s]"] != 0.0
