@@ -225,8 +225,8 @@ def _roots_together(linkage, x, periodic, series, zero: float = 0.0) -> dict:
         for i, k in sign_brackets(x, y, periodic, scale):
             x1 = x[k] if k > i else x[k] + period
             keys.append(key)
-            lo.append(x[i])
-            hi.append(x1)
+            lo.append(min(x[i], x1))  # inputs given in decreasing order too
+            hi.append(max(x[i], x1))
             guess.append(x[i] + (x1 - x[i]) * y[i] / (y[i] - y[k]))
     out = {k: [] for k in series}
     if not keys:
@@ -299,7 +299,7 @@ def _least_transmission(linkage, kin, periodic: bool) -> list:
             period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
             lo = x[i - 1] if i > 0 else x[-1] - period
             hi = x[i + 1] if i < n - 1 else x[0] + period
-            got = locate(linkage, np.array([lo]), np.array([hi]),
+            got = locate(linkage, np.array([min(lo, hi)]), np.array([max(lo, hi)]),
                          lambda k, b1=b1, b2=b2: (k.omega[:, b2] - k.omega[:, b1],
                                                   k.alpha[:, b2] - k.alpha[:, b1]))[0]
             if math.isfinite(got):
@@ -341,7 +341,7 @@ def peak(linkage, lo: float, hi: float, value: Callable[[np.ndarray], np.ndarray
             return None
         k = int(np.argmax(v))
         best = (float(t[k]), float(v[k]))
-        if hi - lo <= tol:
+        if abs(hi - lo) <= tol:
             break
         lo, hi = t[max(k - 1, 0)], t[min(k + 1, PEAK_GRID - 1)]
     return best

@@ -133,3 +133,15 @@ def test_singular_positions_between_samples():
     sing = _events(res, "singular", "loop Jacobian")
     assert len(sing) == 2
     assert np.all(np.minimum(_circ(sing, 0.0), _circ(sing, 180.0)) < EVENT_TOL_DEG), sing
+
+
+def test_events_of_inputs_given_in_decreasing_order():
+    """Explicit inputs from 359.5 down to 0.5 deg locate the same events (the brackets
+    are ordered, whatever the order of the samples)."""
+    lk = Linkage(load_case("seed-four-bar"))
+    up = lk.sweep(360, start=0.0)
+    down = lk.sweep(values=np.radians(np.arange(359.5, 0, -1.0)))
+    for kind, where in (("limit", "rocker"), ("limit", "coupler"), ("min_transmission", "B")):
+        np.testing.assert_allclose(_events(down, kind, where), _events(up, kind, where),
+                                   atol=EVENT_TOL_DEG)
+    assert down.summary.peak_effort_at == pytest.approx(up.summary.peak_effort_at, abs=1e-6)
