@@ -194,12 +194,13 @@ def case_or_file(text: str) -> str:
     """An argparse type: a built-in case name, or a readable TOML file (returned as
     an absolute path, so that worker processes and file names do not depend on the
     current folder)."""
-    from analytic.cases import case_names
-    if text in case_names():
+    from analytic.cases import case_names, hard_case_names
+    if text in case_names() or text in hard_case_names():
         return text
     p = Path(text)
     if p.is_file():
         return str(p.resolve())
     if text.endswith(".toml") or os.sep in text:
         raise argparse.ArgumentTypeError(f"no such file {text!r}")
-    raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}")
+    raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}, "
+                                     f"hard cases {hard_case_names()}")

@@ -175,7 +175,7 @@ class ExudynSettings(EngineSettings):
     rank while the input turns on, the index-3 Newton matrix is singular, the position
     along the singular direction is fixed only to about the square root of the Newton
     tolerance, and the integrator turns that into a velocity error.  Measured on
-    ``reports/hard_cases/parallelogram-four-bar.toml`` (2 revolutions, 36 samples):
+    ``analytic/cases/hard/parallelogram-four-bar.toml`` (2 revolutions, 36 samples):
 
     * defaults: forces 0.13 of peak off 10 deg past the change point (it decays over
       about 20 deg);

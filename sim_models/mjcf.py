@@ -43,6 +43,7 @@ import numpy as np
 from analytic import Mechanism
 
 from .engine_base import EngineSettings, SettingsError
+from .model_numbers import snap
 from .tree import SimModelError, SimTree
 
 #: Oldest MuJoCo accepted: before 3.7.0 connect/weld constraints lacked the
@@ -242,11 +243,13 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     for tj in st.joints:
         c = tj.child
         parent = specs[tj.parent]
-        body = parent.add_body(name=names[c], pos=[tj.rel_pos[0], tj.rel_pos[1], 0.0],
-                               quat=_quat_z(tj.rel_angle))
+        # round-off of an exact zero made 0, so the written MJCF is the same on any CPU
+        body = parent.add_body(name=names[c], pos=[snap(tj.rel_pos[0], st.size),
+                                                   snap(tj.rel_pos[1], st.size), 0.0],
+                               quat=_quat_z(snap(tj.rel_angle)))
         body.explicitinertial = True
         body.mass = float(st.mass[c])
-        body.ipos = [float(st.com[c][0]), float(st.com[c][1]), 0.0]
+        body.ipos = [snap(st.com[c][0], st.size), snap(st.com[c][1], st.size), 0.0]
         inertia = float(st.inertia[c])
         body.inertia = [0.6 * inertia, 0.6 * inertia, inertia]
         if tj.kind == "hinge":

@@ -20,7 +20,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from analytic import case_names, load_case
+from analytic import Mechanism, case_names, load_case
 
 from .mjcf import MujocoSettings
 from .urdf import build_urdf
@@ -36,6 +36,11 @@ def model_texts(case: str) -> dict[str, str]:
     an actuator and the assembled state as keyframe ``assembled``."""
     mech = load_case(case)
     name = case if case in case_names() else Path(case).stem
+    return mechanism_model_texts(mech, name)
+
+
+def mechanism_model_texts(mech: Mechanism, name: str) -> dict[str, str]:
+    """File name -> text of the generated models of ``mech``, files named ``name.*``."""
     xml = viewer_xml(mech, MujocoSettings())
     urdf, closures = build_urdf(mech)
     return {f"{name}.xml": xml, f"{name}.urdf": urdf,

@@ -280,7 +280,7 @@ def test_change_point_is_a_failed_run_that_names_it():
     Assembled at 30 deg and turning forward, the first one met is 180 deg: the run fails
     there with a reason naming it, and no sample is read past it."""
     from pathlib import Path
-    mech = load_case(Path(__file__).parents[2] / "reports/hard_cases/parallelogram-four-bar.toml")
+    mech = load_case(Path(__file__).parents[2] / "analytic/cases/hard/parallelogram-four-bar.toml")
     r = run(mech, "exudyn", revolutions=2, samples=36)
     assert not r.ok
     assert "change point of driver 'O2' at 180 deg" in r.reason
