@@ -295,6 +295,11 @@ def _finite(x, what: str, where: str) -> None:
             raise DescriptionError(f"{what} must be a finite number, got {x!r}", where)
 
 
+#: Relative slack of a range's upper bound: a value typed in a display unit (deg) that
+#: equals the printed bound converts to SI within a few ulps of it (4 x 2.2e-16).
+RANGE_ROUND_OFF = 8.9e-16
+
+
 def check_range(x, limit: float, what: str, where: str | None, unit: str = "",
                 scale: float = 1.0, lo: float | None = None) -> None:
     """Raise :class:`DescriptionError` unless every value of ``x`` is finite and in range.
@@ -305,8 +310,10 @@ def check_range(x, limit: float, what: str, where: str | None, unit: str = "",
     """
     _finite(x, what, where)
     u = f" {unit}" if unit else ""
+    # the bound as printed is accepted: 360000 deg converts to 1 ulp above 2000 pi rad
+    top = limit * (1 + RANGE_ROUND_OFF)
     for v in (x if isinstance(x, tuple | list) else (x,)):
-        if (abs(v) <= limit) if lo is None else (lo <= v <= limit):
+        if (abs(v) <= top) if lo is None else (lo <= v <= top):
             continue
         rng = (f"|{what}| <= {limit / scale:g}{u}" if lo is None
                else f"{lo / scale:g} to {limit / scale:g}{u}")

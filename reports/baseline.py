@@ -266,6 +266,9 @@ def _parse(doc, p: Path) -> Baseline:
         raise BaselineError(f"{where}: schema_version {ver!r} is not supported (this "
                             f"xval reads {SCHEMA_VERSION})")
     runs = _get(doc, "runs", list, where)
+    if not runs:  # a baseline that judges nothing must not pass
+        raise BaselineError(f"{where}: 'runs' is empty: a baseline with no runs judges "
+                            "nothing; record one with xval baseline record")
     out, seen = [], set()
     for i, r in enumerate(runs):
         rec = _parse_run(r, f"{where}: runs[{i}]")
@@ -298,6 +301,7 @@ def _parse_run(r, where: str) -> RunRecord:
     case = _get(r, "case", str, where)
     engine = _get(r, "engine", str, where)
     where = f"{where} ({case} / {engine})"
+    _known_engine(engine, where)
     model = _get(r, "model", dict, where)
     kinds = [k for k in ("builtin", "file") if k in model]
     if len(kinds) != 1:
@@ -311,8 +315,10 @@ def _parse_run(r, where: str) -> RunRecord:
     if request["mode"] != "run":
         raise BaselineError(f"{where}: request mode {request['mode']!r}: only 'run' is "
                             "supported")
+    _request_in_range(request, where)
     settings = _get(r, "settings", dict, where)
     _get(settings, "fields", dict, f"{where}: settings")
+    _settings_in_range(engine, settings, where)
     vers = _get(r, "versions", dict, where)
     qs = []
     for j, q in enumerate(_get(r, "quantities", list, where)):
@@ -331,7 +337,100 @@ def _parse_run(r, where: str) -> RunRecord:
                                  _num(q.get("peak"))))
     if len({q.quantity for q in qs}) != len(qs):
         raise BaselineError(f"{where}: a quantity is recorded twice")
+    if not qs:  # nothing to judge: the run would pass whatever its errors
+        raise BaselineError(f"{where}: 'quantities' is empty: a run with no recorded "
+                            "quantity judges nothing; record it again")
     return RunRecord(case, engine, src, dict(request), settings, dict(vers), tuple(qs))
+
+
+def _known_engine(engine: str, where: str) -> None:
+    """A registered engine name (an engine whose library is missing is a failed run at
+    check time, not a bad file)."""
+    from sim_models.registry import engine_names
+    if engine not in engine_names():
+        raise BaselineError(f"{where}: 'engine' {engine!r} is not a known engine; engines: "
+                            f"{', '.join(engine_names())}")
+
+
+def _settings_in_range(engine: str, settings: dict, where: str) -> None:
+    """The recorded settings: the engine's class, every field present (a missing one
+    would silently run at today's default), typed as the class declares, and within its
+    range (the settings class checks it, as for ``--set``: one definition)."""
+    from sim_models.engine_settings import SettingsError
+    from sim_models.registry import get_engine
+    from sim_models.tree import SimModelError
+    try:
+        eng = get_engine(engine)
+    except (SimModelError, ImportError):  # its library is missing: a failed run, later
+        return
+    cls, fields = eng.settings_class, settings["fields"]
+    if settings.get("class", cls.__name__) != cls.__name__:
+        raise BaselineError(f"{where}: settings class {settings['class']!r} is not "
+                            f"{engine}'s ({cls.__name__})")
+    types = cls.field_types()
+    unknown = sorted(set(fields) - set(types))
+    if unknown:
+        raise BaselineError(f"{where}: settings field {unknown[0]!r}: {engine} has no "
+                            f"setting {unknown[0]!r} (settings: {', '.join(types)})")
+    missing = [k for k in types if k not in fields]
+    if missing:
+        raise BaselineError(f"{where}: settings field {missing[0]!r} is missing (it would "
+                            f"run at today's default {getattr(cls(), missing[0])!r}); "
+                            "record the baseline again")
+    for k, typ in types.items():
+        need = _json_type_problem(fields[k], typ)
+        if need:
+            raise BaselineError(f"{where}: settings field {k}={_json_value(fields[k])}: "
+                                f"must be {need}")
+    try:
+        cls.from_overrides(fields, eng.name)
+    except SettingsError as e:
+        raise BaselineError(f"{where}: settings field {e.key}={_json_value(e.value)}: "
+                            f"{e.problem}") from None
+
+
+def _json_type_problem(v, typ) -> str | None:
+    """What a JSON value of a settings field of type ``typ`` must be, when it is not."""
+    def number(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+    if typ is bool:
+        return None if isinstance(v, bool) else "true or false"
+    if typ is int:
+        return None if isinstance(v, int) and not isinstance(v, bool) else "a whole number"
+    if typ is float:
+        return None if number(v) else "a number"
+    if typ is str:
+        return None if isinstance(v, str) else "a string"
+    if isinstance(v, list) and all(number(x) for x in v):
+        return None
+    return "a list of numbers"
+
+
+#: The command-line option that takes each request value, for the message.
+_REQUEST_OPTIONS = {"revolutions": "--revolutions", "samples": "--samples"}
+
+
+def _request_in_range(request: dict, where: str) -> None:
+    """The request within the command line's ranges (:class:`sim_models.engine_run.
+    RunRequest` checks them: one definition): e.g. revolutions 1 to 1000, samples 2 to
+    3600, a finite loop-gap threshold."""
+    from sim_models.engine_run import RunRequest
+    from sim_models.engine_settings import SettingsError
+    keys = ("revolutions", "samples", "max_violation", "max_speed_error", "chords", "mode")
+    try:
+        RunRequest(**{k: request[k] for k in keys})
+    except SettingsError as e:
+        flag = _REQUEST_OPTIONS.get(e.key)
+        raise BaselineError(f"{where}: request {e.key}={_json_value(e.value)}: {e.problem}"
+                            + (f"; the range of {flag}" if flag else "")) from None
+
+
+def _json_value(v) -> str:
+    """``v`` as the file spells it (``true``, ``NaN``, ``"bogus"``)."""
+    try:
+        return json.dumps(v)
+    except (TypeError, ValueError):
+        return repr(v)
 
 
 def _num(v) -> float:
@@ -636,7 +735,8 @@ def check(baseline: Baseline, factor: float = DEFAULT_FACTOR, runner: Runner | N
     (e.g. settings the engine no longer accepts); everything about the runs themselves
     is in the returned :class:`RunCheck`."""
     if not (factor > 1 and math.isfinite(factor)):
-        raise BaselineError(f"--factor must be a finite number above 1, got {factor!r}")
+        raise BaselineError(f"the drift factor must be a finite number above 1, got "
+                            f"{factor!r}")
     runner = runner or run_and_compare
     return [check_run(rec, baseline, factor, runner) for rec in baseline.runs
             if select is None or select(rec)]

@@ -9,7 +9,6 @@ file that cannot be used (one line naming the file, entry and key).  ``record`` 
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections import Counter
 
@@ -21,13 +20,12 @@ from . import cli_options as opt
 # ============================================================================ record
 def cmd_record(args) -> int:
     from analytic.cases import case_names
-    from sim_models.registry import get_engine, split_overrides
+    from sim_models.registry import settings_from_options
     engines = _engines(args.engine)
     models = []
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
-    per = split_overrides(args.set or (), engines)
-    settings = {e: get_engine(e).settings(per.get(e)) for e in engines}
+    settings = settings_from_options(engines, args.set or ())
     req = bl.request_dict(args.revolutions, args.samples)
     base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance)
@@ -126,17 +124,6 @@ def versions_line(checks) -> str:
 
 
 # ============================================================================ parser
-def _factor(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v > 1):
-        raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
-                                         "finite number above 1")
-    return v
-
-
 _tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
                               why="an error relative to the quantity's peak")
 
@@ -168,7 +155,7 @@ def register(sub) -> None:
     r.set_defaults(func=cmd_record)
     c = bsub.add_parser("check", help="re-run a baseline's runs and fail on drift")
     c.add_argument("baseline", metavar="BASELINE_JSON")
-    c.add_argument("--factor", type=_factor, default=bl.DEFAULT_FACTOR,
+    c.add_argument("--factor", type=opt.drift_factor, default=bl.DEFAULT_FACTOR,
                    help=f"largest allowed growth over the baseline (default "
                         f"{bl.DEFAULT_FACTOR:g}; errors below {bl.DRIFT_FLOOR:g} of peak "
                         "count as that floor)")

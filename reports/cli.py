@@ -149,7 +149,7 @@ def _print_tables(res: dict, units=None) -> None:
         t.add_column(c, justify="right")
     for n, d in res["points"].items():
         p, v, a = d["position"], d["velocity"], d["acceleration"]
-        t.add_row(n, text(p[0]), text(p[1]), text(v[0]), text(v[1]),
+        t.add_row(n, text(p[0], ".9g"), text(p[1], ".9g"), text(v[0]), text(v[1]),
                   text(math.hypot(*v)), text(a[0]), text(a[1]), text(math.hypot(*a)))
     con.print(t)
     if res["sliders"]:
@@ -157,7 +157,7 @@ def _print_tables(res: dict, units=None) -> None:
         for c in ("joint", f"s ({lu})", f"s' ({vu})", f"s'' ({au})"):
             t.add_column(c, justify="right")
         for n, d in res["sliders"].items():
-            t.add_row(n, text(d["s"]), text(d["v"]), text(d["a"]))
+            t.add_row(n, text(d["s"], ".9g"), text(d["v"]), text(d["a"]))
         con.print(t)
     if res["drive"] is not None:
         t = Table(title="Joint forces (by body_a on body_b, world axes)")
@@ -209,12 +209,8 @@ def cmd_sweep(args) -> int:
     kw = {"velocity": args.omega}
     if args.range is not None:
         rev = isinstance(mech.driver_joint, Revolute)
-        for v in args.range:  # the range --angle (or --value) accepts
-            try:
-                (opt.angle_deg if rev else opt.length_m)(repr(v))
-            except argparse.ArgumentTypeError as e:
-                raise opt.UsageError(f"argument --range: {e}") from None
-        if not args.range[1] > args.range[0]:
+        opt.check_input_range(args.range, rev)  # capped like --angle / --value
+        if not (np.all(np.isfinite(args.range)) and args.range[1] > args.range[0]):
             raise LinkageError(f"option --range: {args.range[0]} {args.range[1]} must be two "
                                "finite numbers, the second larger")
         kw["input_range"] = tuple(math.radians(v) if rev else v for v in args.range)

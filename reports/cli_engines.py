@@ -34,9 +34,9 @@ def cmd_compare(args) -> int:
     from sim_models import compile_linkage
     mech = load_case(args.case)
     engines = engine_list(args.engine, args.mode)
-    settings = settings_for(engines, list(args.set or ()) +
-                            ([f"mujoco.integrator={args.integrator}"] if args.integrator else []),
-                            {"timestep": args.timestep})
+    settings = settings_for(engines, list(args.set or ()),
+                            {"--timestep": ("timestep", args.timestep),
+                             "--integrator": ("integrator", args.integrator)})
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     out, all_ok = [], True
     for eng in engines:

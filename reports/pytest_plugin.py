@@ -282,9 +282,16 @@ def baseline_params(path) -> list:
 
 
 # ============================================================================ pytest hooks
+def _factor_option(text: str) -> float:
+    """``--xval-factor``: checked where pytest parses it (a finite number above 1), so a
+    bad value is a usage error naming the option, never a silent default."""
+    from reports.cli_options import drift_factor  # only when the option is given
+    return drift_factor(text)
+
+
 def pytest_addoption(parser) -> None:
     group = parser.getgroup("xval", "linkage-xval engine checks")
-    group.addoption("--xval-factor", type=float, default=None,
+    group.addoption("--xval-factor", type=_factor_option, default=None,
                     help="default drift factor of xval baseline assertions (default 10)")
     parser.addini("xval_baseline", "baseline file checked by the xval_baseline fixture "
                   "(relative to the rootdir)", default="")
@@ -294,7 +301,8 @@ def pytest_addoption(parser) -> None:
 def xval(pytestconfig) -> Xval:
     """Engine-against-analytic assertions with a session-wide run cache."""
     from reports.baseline import DEFAULT_FACTOR
-    factor = pytestconfig.getoption("--xval-factor") or DEFAULT_FACTOR
+    factor = pytestconfig.getoption("--xval-factor")
+    factor = DEFAULT_FACTOR if factor is None else factor
     return Xval(pytestconfig.rootpath, factor)
 
 

@@ -10,7 +10,8 @@ import numpy as np
 
 from analytic import Mechanism, Revolute
 
-from .engine_settings import EngineSettings
+from . import ranges
+from .engine_settings import EngineSettings, SettingsError
 from .sampling import Plan
 from .tree import SimTree
 
@@ -227,6 +228,23 @@ class RunRequest:
     max_speed_error: float = 1e-2
     chords: str = "moving"
     mode: str = "run"               # "run" or "instantaneous"
+
+    def __post_init__(self):
+        """Every value within :mod:`sim_models.ranges` (the command line's ranges):
+        :class:`~sim_models.engine_settings.SettingsError` naming the key otherwise."""
+        for key, rng in self.ranges().items():
+            value = getattr(self, key)
+            problem = rng.problem(value)
+            if problem:
+                raise SettingsError(f"run request {key}={value!r}: {problem}", key, value,
+                                    problem)
+
+    def ranges(self) -> dict:
+        """The accepted range of each field (samples: states in the instantaneous mode)."""
+        return {"mode": ranges.MODES, "revolutions": ranges.REVOLUTIONS,
+                "samples": ranges.STATES if self.mode == "instantaneous" else ranges.SAMPLES,
+                "max_violation": ranges.MAX_VIOLATION,
+                "max_speed_error": ranges.MAX_SPEED_ERROR, "chords": ranges.CHORDS}
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ import numpy as np
 
 from analytic import Mechanism
 
-from .mjcf import MujocoSettings, build_mjcf, require_mujoco
+from .mjcf import MujocoSettings, build_mjcf, compile_spec, require_mujoco
 from .model_numbers import model_value
 from .tree import SimTree
 
@@ -91,7 +91,7 @@ def viewer_spec(mech: Mechanism, settings: MujocoSettings | None = None,
 def assembled_state(spec, st: SimTree) -> tuple[np.ndarray, np.ndarray]:
     """``qpos, qvel`` of the compiled model at the analytic assembled state with the
     prescribed rate (tree coordinates of :meth:`SimTree.coords` at the reference)."""
-    m = spec.compile()
+    m, _ = compile_spec(spec, None, st.mech)  # refused in one line, as compare refuses
     _, qd, _ = st.coords(st.kin_ref)
     qpos = np.array(m.qpos0, float)
     qvel = np.zeros(m.nv)

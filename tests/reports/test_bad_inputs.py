@@ -23,7 +23,7 @@ from analytic.cases import case_path
 from reports.cli import main
 
 SEED = case_path("seed-four-bar").read_text()
-HARD = Path(__file__).resolve().parents[2] / "reports" / "hard_cases"
+HARD = Path(__file__).resolve().parents[2] / "analytic" / "cases" / "hard"
 # the seed four-bar at 1e-8 scale (a 4 nm linkage; the file is in mm)
 NANOMETRE = SEED
 for _k in ("400", "100", "300", "250", "310", "230", "50", "150", "125"):

@@ -267,7 +267,8 @@ def test_bad_baseline_files_are_one_line_status_2(name, tmp_path, capsys):
     (lambda r: r["request"].update(samples="many"), "'samples' must be a whole number"),
     (lambda r: r["model"].update(file="x.toml"), "exactly one of 'builtin' or 'file'"),
     (lambda r: r["settings"]["fields"].update(warp=9), "no setting 'warp'"),
-    (lambda r: r["settings"]["fields"].update(timestep="fast"), "timestep='fast'"),
+    (lambda r: r["settings"]["fields"].update(timestep="fast"),
+     'timestep="fast": must be a number'),
 ])
 def test_bad_entries_name_the_run_and_key(edit, msg, mujoco_baseline, tmp_path, capsys):
     p = _edited(mujoco_baseline, tmp_path / "b.json", lambda d: edit(d["runs"][0]))
