@@ -20,7 +20,7 @@ import pytest
 
 from .cli_run import run
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data" / "bugs"
 
 #: A cell and ``solve`` compute the same configuration by the same solver, possibly by
 #: another path (the fused kernel for the table, numpy for one configuration): they
