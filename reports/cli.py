@@ -308,8 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
                    default="continuous",
                    help="branch taken at a change point: the one whose velocity is "
                         "continuous (default), or hold / switch the dyad signs")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP + "; the CSV's columns "
-                   "then name their units")
+    s.add_argument("--units", type=units_option, help=UNITS_HELP + " (each CSV column "
+                   "names its unit: 'crank.omega [rpm]')")
     s.set_defaults(func=cmd_sweep)
     _register_more(sub)
     return p

@@ -388,7 +388,7 @@ def test_pipe_into_head_keeps_the_first_lines():
     r = _xval("xval sweep seed-four-bar --points 50000 --csv - | head -2")
     assert r.stderr == "", r.stderr
     lines = r.stdout.splitlines()
-    assert lines[0].startswith("input,") and len(lines) == 3  # two CSV lines, then rc
+    assert lines[0].startswith("input [deg],") and len(lines) == 3  # two CSV lines, then rc
     assert lines[-1] in ("rc=141", "rc=0")
 
 
@@ -399,7 +399,7 @@ def test_csv_to_standard_output(capsys):
     cap = capsys.readouterr()
     assert code == 0 and not Path("-").exists()
     rows = cap.out.splitlines()
-    assert rows[0].startswith("input,") and len(rows) == 13
+    assert rows[0].startswith("input [deg],") and len(rows) == 13
     assert "seed-slider-crank: 12 points" in cap.err
 
 

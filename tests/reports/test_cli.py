@@ -66,8 +66,9 @@ def test_sweep_csv(capsys, tmp_path):
     assert code == 0
     df = pd.read_csv(f)
     assert len(df) == 72
-    for col in ("input", "rod.alpha", "slide.a", "C.fx", "drive.torque", "drive.power",
-                "jacobian_condition", "transmission_deg.C"):
+    for col in ("input [deg]", "rod.alpha [rad/s^2]", "slide.a [m/s^2]", "C.fx [N]",
+                "drive.torque [N m]", "drive.power [W]", "jacobian_condition [-]",
+                "transmission.C [deg]", "singular"):
         assert col in df.columns
     # dead centres of a centred slider-crank at 0 and 180 deg (closed form)
     assert "slider velocity = 0" in out and "180" in out

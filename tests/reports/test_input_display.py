@@ -94,8 +94,8 @@ def test_table_figure_and_junit_name_the_same_worst_input(tmp_path):
     worst = max(rows, key=lambda r: float(r[3]))
     table_at = worst[4]
     # the figure: xval plot's own error panel, its title as drawn
-    _, err, _, _ = plot_cmd.case_figures(load_case(CASE), ["alpha"], [ENGINE],
-                                         settings_for([ENGINE], options={"--timestep": ("timestep", TIMESTEP)}))
+    settings = settings_for([ENGINE], options={"--timestep": ("timestep", TIMESTEP)})
+    _, err, _, _ = plot_cmd.case_figures(load_case(CASE), ["alpha"], [ENGINE], settings)
     fig, ax = plots.plt.subplots()
     plots.draw_error_axes(ax, err, ENGINE, err.panels[ENGINE])
     title = ax.get_title()
