@@ -853,7 +853,7 @@ class KernelSource:
 def complex_multiply() -> str:
     """The helper for a complex product (:func:`smallmat.numpy_complex_multiply`),
     probed once per process."""
-    from .smallmat import numpy_complex_multiply
+    from .probe import numpy_complex_multiply
     return numpy_complex_multiply()
 
 
