@@ -436,24 +436,36 @@ class FusedKernel:
         return kin, (self._forces(out) if forces else None)
 
     def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",
-                   branch="continued"):
+                   branch="continued", forces: bool = False, joints: bool = False):
         """As :meth:`analytic.kinematics.Linkage.kinematics`: a
         :class:`analytic.kinematics.CompactKinematics` (``q, q', q''`` now, the rest on
         first use), or where a sample is near a singular position the full result of
         :meth:`solve` (its Jacobians screen the samples, and flag them for the numpy
-        path's singular treatment)."""
+        path's singular treatment).  ``forces``: the same pass writes the forces too
+        (kept on the result for :meth:`forces`: ``_fused_forces``); ``joints``: and
+        every joint's point (``joint_point``), so neither costs another pass."""
         from .kinematics import CompactKinematics
         values, vel, acc = self._inputs(values, velocity, acceleration)
-        out = self.alloc(len(values), 2)
+        if forces:
+            self._require_mass()
+        level = 3 if forces else 2
+        out = self.alloc(len(values), level, joints=joints)
         bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
-                                        2, fresh=True)
+                                        level, fresh=True)
         self._check(values, bad, wi, worst)
         if susp is None or len(susp):
-            return self.solve(values, vel, acc, on_singular, branch)[0]
+            kin, frc = self.solve(values, vel, acc, on_singular, branch, forces)
+            kin._fused_forces = frc
+            return kin
         N = len(values)
-        return CompactKinematics(self, self.lk, values, np.broadcast_to(vel, (N,)),
-                                 np.broadcast_to(acc, (N,)), out["q"], out["qd"], out["qdd"],
-                                 branch)
+        kin = CompactKinematics(self, self.lk, values, np.broadcast_to(vel, (N,)),
+                                np.broadcast_to(acc, (N,)), out["q"], out["qd"], out["qdd"],
+                                branch)
+        if forces:
+            kin._fused_forces = self._forces(out)
+        if joints:
+            kin.joint_point = {j: out["jp"][:, j] for j in range(self.J)}
+        return kin
 
     def deferred(self, kin) -> dict:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
@@ -464,9 +476,13 @@ class FusedKernel:
         return {k: getattr(full, k) for k in DEFERRED}
 
     def forces(self, kin):
-        """As :func:`analytic.kinetostatics.solve_forces`: one more pass of the kernel
-        at ``kin``'s inputs, writing only the forces."""
+        """As :func:`analytic.kinetostatics.solve_forces`: the forces of the pass that
+        made ``kin`` where it wrote them (:meth:`kinematics` ``forces=True``), else one
+        more pass of the kernel at ``kin``'s inputs, writing only the forces."""
         self._require_mass()
+        done = kin.__dict__.get("_fused_forces")
+        if done is not None:
+            return done
         N = kin.n
         out = self.alloc(N, 3, state=False)  # the state is kin's: the forces only
         branch = getattr(kin, "_fused_branch", "continued")
@@ -551,10 +567,10 @@ def _compact(x: np.ndarray) -> np.ndarray:
 #: Which path a call takes where the kernel is not yet in this process.  The numpy
 #: path's cost is estimated as ``NUMPY_CALL_S + NUMPY_POINT_S n`` (kinematics and
 #: forces of a four-bar at load 1: 1.2 ms at 36 points, 4.2 ms at 3,600, 0.9-1.5 us a
-#: point from 36,000 on, the six-bar about twice that); loading a compiled kernel from numba's cache costs
-#: :data:`LOAD_S` (importing numba, 0.15-0.2 s, and the load, 0.03-0.1 s) or
-#: :data:`LOAD_IMPORTED_S` once numba is imported (0.33-0.43 s in all at load 1,
-#: 0.9-1.4 s at load 2-3).  A structure's calls run on numpy
+#: point from 36,000 on, the six-bar about twice that); loading a compiled kernel from
+#: numba's cache costs :data:`LOAD_S` (importing numba and its typing context, then the
+#: load: 0.33-0.43 s in all at load 1, 0.9-1.4 s at load 2-3) or
+#: :data:`LOAD_IMPORTED_S` once numba is imported.  A structure's calls run on numpy
 #: until their estimated cost reaches the load's, then load it (never more than twice
 #: the better of the two choices made in hindsight); a call of 2**20 points or more
 #: (:data:`COMPILE_NOW_POINTS`, ``XVAL_FUSED_MIN``) compiles a kernel that is not

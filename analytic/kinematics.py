@@ -263,9 +263,28 @@ class Linkage:
             ``False``: leave the linear solve's values at singular points (used by
             :mod:`analytic.singular` itself, on regular samples).
         """
+        return self._kinematics(values, velocity, acceleration, on_singular, branch, limits)
+
+    def solve(self, values=None, velocity=None, acceleration=None,
+              on_singular: str = "raise", branch: str = "continued", joints: bool = False):
+        """``(Kinematics, Forces)`` at ``values`` (arguments as :meth:`kinematics`), in
+        one pass of the fused kernel where there is one: the same numbers as
+        ``forces(kinematics(values))``, with each quantity computed once.  ``joints``:
+        the same pass also writes every joint's point (``Kinematics.joint_point``),
+        the positions pylinkage returns.  Needs masses (:class:`MissingMassError`)."""
+        kin = self._kinematics(values, velocity, acceleration, on_singular, branch, True,
+                               forces=True, joints=joints)
+        frc = self.forces(kin)
+        if joints:
+            kin.joint_point  # noqa: B018 - computed now (on the numpy path: already)
+        return kin, frc
+
+    def _kinematics(self, values, velocity, acceleration, on_singular, branch, limits,
+                    forces: bool = False, joints: bool = False) -> Kinematics:
         fk = fused_dispatch(self, 1 if values is None else np.size(values))
-        if fk is not None:  # the fused kernel (analytic/fused.py): the same numbers, one pass
-            kin = fk.kinematics(values, velocity, acceleration, "flag", branch)
+        if fk is not None and (fk.with_forces or not forces):
+            # the fused kernel (analytic/fused.py): the same numbers, one pass
+            kin = fk.kinematics(values, velocity, acceleration, "flag", branch, forces, joints)
             if not kin._fused_singular:  # singular samples are the numpy path's to treat
                 return kin
         d = self.mech.driver

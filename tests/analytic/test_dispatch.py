@@ -7,6 +7,7 @@ import math
 import time
 
 import numpy as np
+import pytest
 
 from analytic import Linkage, fused, load_case
 from analytic.kinematics import CompactKinematics, Kinematics
@@ -90,3 +91,41 @@ def test_background_compile_marks_the_kernel_ready(monkeypatch, tmp_path):
     assert fused.on_disk(name)
     assert str(tmp_path / "n") in (tmp_path / "k" / f"{name}.ready").read_text()
     assert not list((tmp_path / "k").glob("*.compiling"))
+
+
+@pytest.mark.parametrize("case", ["seed-four-bar", "six-bar", "seed-slider-crank"])
+def test_solve_is_one_pass(case, monkeypatch):
+    """``Linkage.solve`` (kinematics, forces and joint points) runs the kernel once and
+    gives the numbers of ``forces(kinematics(x))`` and the full pass's joint points,
+    bit for bit (the same operations in the same kernel)."""
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    lk = Linkage(load_case(case))
+    x = lk.mech.driver.value + np.linspace(0.0, 0.5, 64)
+    fk = fused.kernel_for(lk)
+    kin0 = lk.kinematics(x)
+    frc0 = lk.forces(kin0)
+    jp0 = kin0.joint_point
+    passes = []
+    run = fk.run
+    monkeypatch.setattr(fk, "run", lambda *a, **k: passes.append(1) or run(*a, **k))
+    kin, frc = lk.solve(x, joints=True)
+    assert lk.forces(kin) is frc
+    assert len(passes) == 1
+    for k in ("q", "qd", "qdd"):
+        np.testing.assert_array_equal(getattr(kin, k), getattr(kin0, k))
+    np.testing.assert_array_equal(frc.effort, frc0.effort)
+    for j, f in frc0.joint_force.items():
+        np.testing.assert_array_equal(frc.joint_force[j], f)
+    for j, p in jp0.items():
+        np.testing.assert_array_equal(kin.joint_point[j], p)
+    assert len(passes) == 1
+
+
+def test_solve_on_the_numpy_path(monkeypatch):
+    """Without the kernel, ``solve`` is ``forces(kinematics(x))``."""
+    monkeypatch.setenv("XVAL_FUSED", "0")
+    lk = Linkage(load_case("seed-four-bar"))
+    x = np.linspace(0.0, 1.0, 9)
+    kin, frc = lk.solve(x, joints=True)
+    np.testing.assert_array_equal(frc.effort, lk.forces(lk.kinematics(x)).effort)
+    assert set(kin.joint_point) == set(range(len(lk.mech.joints)))
