@@ -27,6 +27,7 @@ joint points), about 600 B for a four-bar.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import math
@@ -55,6 +56,11 @@ def enabled() -> bool:
     """The fused path is on unless ``XVAL_FUSED=0`` or numba is missing."""
     if os.environ.get("XVAL_FUSED", "1").strip().lower() in ("0", "off", "no", "false"):
         return False
+    return _have_numba()
+
+
+@functools.cache
+def _have_numba() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
@@ -457,10 +463,8 @@ class FusedKernel:
             kin, frc = self.solve(values, vel, acc, on_singular, branch, forces)
             kin._fused_forces = frc
             return kin
-        N = len(values)
-        kin = CompactKinematics(self, self.lk, values, np.broadcast_to(vel, (N,)),
-                                np.broadcast_to(acc, (N,)), out["q"], out["qd"], out["qdd"],
-                                branch)
+        kin = CompactKinematics(self, self.lk, values, vel, acc, out["q"], out["qd"],
+                                out["qdd"], branch)
         if forces:
             kin._fused_forces = self._forces(out)
         if joints:
@@ -471,8 +475,7 @@ class FusedKernel:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
         full pass at its inputs."""
         from .kinematics import DEFERRED
-        full, _ = self.solve(kin.value, _compact(kin.velocity), _compact(kin.acceleration),
-                             "flag", kin._fused_branch)
+        full, _ = self.solve(kin.value, *_rates(kin), "flag", kin._fused_branch)
         return {k: getattr(full, k) for k in DEFERRED}
 
     def forces(self, kin):
@@ -486,7 +489,7 @@ class FusedKernel:
         N = kin.n
         out = self.alloc(N, 3, state=False)  # the state is kin's: the forces only
         branch = getattr(kin, "_fused_branch", "continued")
-        _, vel, acc = self._inputs(kin.value, _compact(kin.velocity), _compact(kin.acceleration))
+        _, vel, acc = self._inputs(kin.value, *_rates(kin))
         self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3, fresh=True)
         return self._forces(out)
 
@@ -554,6 +557,14 @@ class FusedKernel:
                                      fresh=fresh)
         self._check(values, bad, wi, worst)
         return values, out
+
+
+def _rates(kin) -> tuple[np.ndarray, np.ndarray]:
+    """``kin``'s input rates, each as one number where constant."""
+    r = kin.__dict__.get("_rates")
+    if r is not None:
+        return r
+    return _compact(kin.velocity), _compact(kin.acceleration)
 
 
 def _compact(x: np.ndarray) -> np.ndarray:

@@ -175,13 +175,21 @@ class CompactKinematics(Kinematics):
     that needs only ``q, q', q''``, a slider's motion or the forces never holds them."""
 
     def __init__(self, kernel, linkage, value, velocity, acceleration, q, qd, qdd, branch):
+        """``velocity, acceleration``: ``(1,)`` for a constant rate (the ``(N,)`` view
+        is made when first read: a broadcast view costs more than a small call) or
+        ``(N,)``."""
         # not Kinematics.__init__: the deferred fields stay unset until asked for
-        self.__dict__.update(linkage=linkage, value=value, velocity=velocity,
-                             acceleration=acceleration, q=q, qd=qd, qdd=qdd, at_singular=None,
+        self.__dict__.update(linkage=linkage, value=value, _rates=(velocity, acceleration),
+                             q=q, qd=qd, qdd=qdd, at_singular=None,
                              _fused_kernel=kernel, _fused_branch=branch,
                              _fused_singular=False)
 
     def __getattr__(self, name):  # only for attributes not set: the deferred ones
+        if name in ("velocity", "acceleration"):
+            d = self.__dict__
+            r = d["_rates"][name == "acceleration"]
+            d[name] = np.broadcast_to(r, (len(d["value"]),)) if len(r) == 1 else r
+            return d[name]
         if name in DEFERRED:
             d = self.__dict__
             d.update(d["_fused_kernel"].deferred(self))
