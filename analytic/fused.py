@@ -111,7 +111,7 @@ def mark_ready(name: str, fn) -> None:
     cache: ``<name>.ready`` holds the path of numba's index file, which
     :func:`on_disk` checks (an emptied numba cache makes the marker stale, not wrong)."""
     try:
-        index = fn._cache._cache_file._index_path  # numba's cache layout (0.5x-0.6x)
+        index = os.path.abspath(fn._cache._cache_file._index_path)  # numba 0.5x-0.6x
     except AttributeError:
         return
     if os.path.exists(index):
@@ -128,6 +128,9 @@ def on_disk(name: str) -> bool:
         index = (cache_dir() / f"{name}.ready").read_text()
     except OSError:
         return False
+    numba_dir = os.environ.get("NUMBA_CACHE_DIR")
+    if numba_dir and not index.startswith(os.path.abspath(numba_dir)):
+        return False  # compiled into another numba cache than this process reads
     return os.path.exists(index)
 
 

@@ -38,7 +38,10 @@ def start(fk) -> bool:
     _STARTED[name] = None
     if os.environ.get("XVAL_BACKGROUND_COMPILE", "1").strip().lower() in ("0", "off", "no"):
         return False
-    d = cache_dir()
+    try:
+        d = cache_dir()
+    except OSError:  # no writable cache: the numpy path goes on
+        return False
     lock = d / f"{name}.compiling"
     try:
         if time.time() - lock.stat().st_mtime < STALE_S:
