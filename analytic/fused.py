@@ -341,9 +341,17 @@ class FusedKernel:
     # -- the solver's results -------------------------------------------------------
     def _inputs(self, values, velocity, acceleration):
         d = self.lk.mech.driver
-        values = np.ascontiguousarray(np.atleast_1d(np.asarray(
-            d.value if values is None else values, float)))
+        if not (type(values) is np.ndarray and values.dtype == np.float64  # noqa: E721
+                and values.ndim == 1 and values.flags.c_contiguous):
+            values = np.ascontiguousarray(np.atleast_1d(np.asarray(
+                d.value if values is None else values, float)))
         N = len(values)
+        if velocity is None and acceleration is None:  # the driver's: made once
+            rates = self.__dict__.get("_driver_rates")
+            if rates is None:
+                rates = self._driver_rates = (np.array([float(d.velocity)]),
+                                              np.array([float(d.acceleration)]))
+            return (values, *rates)
 
         def rate(x):  # a constant rate stays one number: the kernel broadcasts it
             x = np.asarray(x, float)
@@ -604,10 +612,14 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
     neither in this process nor worth loading yet (see :data:`COMPILE_NOW_POINTS`).
     Once in this process, the kernel serves every call whatever its size;
     ``XVAL_FUSED=always`` takes it (compiling it if need be) at any ``n``."""
+    fk = linkage.__dict__.get("_fused_kernel")
+    mode = os.environ.get("XVAL_FUSED")
+    if mode is None and fk is not None and fk._fn is not None and fk._fn.overloads:
+        return fk  # the common case, first: in the process and not overridden
     fk = kernel_for(linkage)
     if fk is None:
         return None
-    if fk.loaded or os.environ.get("XVAL_FUSED", "1").strip() == "always":
+    if fk.loaded or (mode or "").strip() == "always":
         return fk
     spent = _SPENT.get(fk.name, 0.0) + NUMPY_CALL_S + NUMPY_POINT_S * n
     if on_disk(fk.name):
