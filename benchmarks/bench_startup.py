@@ -68,8 +68,9 @@ def _py(code: str, env: dict, timeout: float = 600.0) -> dict:
 
 
 def _env(kc: str, nc: str, **extra) -> dict:
-    env = dict(os.environ, XVAL_KERNEL_CACHE=kc, NUMBA_CACHE_DIR=nc, **extra)
+    env = dict(os.environ)
     env.pop("XVAL_FUSED", None)
+    env.update(XVAL_KERNEL_CACHE=kc, NUMBA_CACHE_DIR=nc, **extra)
     return env
 
 

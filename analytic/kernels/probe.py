@@ -31,9 +31,12 @@ def _probe() -> tuple[str, bool]:
     def fma(x, y, z):  # correctly rounded, as the FMA instruction
         return float(Fraction(x) * Fraction(y) + Fraction(z))
 
-    rng = np.random.default_rng(20261123)
-    a = rng.normal(size=64) + 1j * rng.normal(size=64)
-    b = rng.normal(size=64) + 1j * rng.normal(size=64)
+    # Python's generator, not numpy.random: importing that took 0.1 s of a process's
+    # first call (the probe runs when a kernel's source is first generated)
+    import random
+    rng = random.Random(20261123)
+    a, b = (np.array([complex(rng.gauss(0, 1), rng.gauss(0, 1)) for _ in range(64)])
+            for _ in range(2))
     got = a * b
     pairs = list(zip(a.tolist(), b.tolist(), strict=True))
     fused = np.array([complex(fma(x.real, y.real, -(x.imag * y.imag)),
