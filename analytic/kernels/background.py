@@ -60,7 +60,12 @@ def start(fk) -> bool:
             [sys.executable, "-m", "analytic.kernels.background", str(path), str(args)],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True, env=env, cwd=str(d))
-    except OSError:
+    except OSError:  # a full disk, no interpreter: the numpy path goes on
+        for p in (d / f"{name}.{os.getpid()}.args", lock):
+            try:
+                p.unlink()
+            except OSError:
+                pass
         return False
     return True
 
