@@ -129,3 +129,15 @@ def test_solve_on_the_numpy_path(monkeypatch):
     kin, frc = lk.solve(x, joints=True)
     np.testing.assert_array_equal(frc.effort, lk.forces(lk.kinematics(x)).effort)
     assert set(kin.joint_point) == set(range(len(lk.mech.joints)))
+
+
+@pytest.mark.parametrize("mode", ["always", "0"])
+def test_solve_without_masses_is_the_typed_error(mode, monkeypatch):
+    """``solve`` of a description without masses raises MissingMassError on either
+    path (no traceback from the kernel's wrapping)."""
+    from analytic import MissingMassError
+    monkeypatch.setenv("XVAL_FUSED", mode)
+    lk = Linkage(four_bar(0.4, 0.1, 0.3, 0.25, masses=None))
+    with pytest.raises(MissingMassError):
+        lk.solve(np.linspace(0.0, 1.0, 5))
+    assert lk.kinematics(np.linspace(0.0, 1.0, 5)).n == 5
