@@ -6,6 +6,7 @@ Front door::
     lk = Linkage(load_case("seed-four-bar"))
     kin = lk.kinematics()          # at the description's input
     frc = lk.forces(kin)
+    kin, frc = lk.solve(x)         # both, one pass of the compiled kernel
     table = lk.sweep(360).frame    # full cycle as a DataFrame
 """
 

@@ -27,6 +27,7 @@ joint points), about 600 B for a four-bar.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import math
@@ -44,8 +45,10 @@ from .tolerances import SINGULAR_CONDITION
 #: how many suspect (near-singular) configurations one call records; past it the
 #: screen is repeated in numpy over the stored Jacobians
 SUSPECT_CAP = 4096
-#: compile seconds of each kernel module loaded or built in this process, by name
-COMPILE_LOG: dict[str, float] = {}
+#: every specialisation of a kernel module compiled or loaded from numba's cache in this
+#: process: module name -> ``[(how, seconds), ...]``, ``how`` "compiled" or "loaded"
+#: (one entry per module: the kernel takes one set of argument types, see :func:`_arg`)
+COMPILE_LOG: dict[str, list[tuple[str, float]]] = {}
 _MODULES: dict[str, object] = {}
 
 
@@ -53,6 +56,11 @@ def enabled() -> bool:
     """The fused path is on unless ``XVAL_FUSED=0`` or numba is missing."""
     if os.environ.get("XVAL_FUSED", "1").strip().lower() in ("0", "off", "no", "false"):
         return False
+    return _have_numba()
+
+
+@functools.cache
+def _have_numba() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
@@ -68,24 +76,71 @@ def cache_dir() -> Path:
     return p
 
 
-def _load(source: str):
-    """Import the generated module (written once under its content hash; numba
-    keys its on-disk cache on the file, so an unchanged file is never rewritten)."""
-    key = hashlib.sha256(source.encode()).hexdigest()[:20]
-    name = f"xval_kernel_{key}"
-    if name in _MODULES:
-        return _MODULES[name]
-    path = cache_dir() / f"{name}.py"
+def module_name(source: str) -> str:
+    """The generated module's name: its content hash."""
+    return "xval_kernel_" + hashlib.sha256(source.encode()).hexdigest()[:20]
+
+
+def write_source(source: str) -> Path:
+    """The generated module's file (written once under its content hash; numba keys its
+    on-disk cache on the file's time stamp, so an unchanged file is never rewritten)."""
+    path = cache_dir() / f"{module_name(source)}.py"
     if not path.is_file() or path.read_text() != source:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(source)
         os.replace(tmp, path)
+    return path
+
+
+def _load(source: str):
+    """Import the generated module (imports numba)."""
+    name = module_name(source)
+    if name in _MODULES:
+        return _MODULES[name]
+    path = write_source(source)
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
     _MODULES[name] = mod
     return mod
+
+
+def mark_ready(name: str, fn) -> None:
+    """Record that ``fn`` (a kernel's dispatcher, after a call) is in numba's on-disk
+    cache: ``<name>.ready`` holds the path of numba's index file, which
+    :func:`on_disk` checks (an emptied numba cache makes the marker stale, not wrong)."""
+    try:
+        index = os.path.abspath(fn._cache._cache_file._index_path)  # numba 0.5x-0.6x
+    except AttributeError:
+        return
+    if os.path.exists(index):
+        marker = cache_dir() / f"{name}.ready"
+        tmp = marker.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(index)
+        os.replace(tmp, marker)
+
+
+def on_disk(name: str) -> bool:
+    """Whether the kernel module ``name`` is compiled in numba's on-disk cache (a
+    process then loads it instead of compiling it)."""
+    try:
+        index = (cache_dir() / f"{name}.ready").read_text()
+    except OSError:
+        return False
+    numba_dir = os.environ.get("NUMBA_CACHE_DIR")
+    if numba_dir and not index.startswith(os.path.abspath(numba_dir)):
+        return False  # compiled into another numba cache than this process reads
+    return os.path.exists(index)
+
+
+def _arg(a: np.ndarray) -> np.ndarray:
+    """An input as the kernel's one specialisation takes it: C-contiguous, writeable
+    float64 (numba types a read-only array, such as a slice of a ``broadcast_to`` view,
+    as another type, and would compile the whole kernel a second time for it)."""
+    if a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable:
+        return a
+    return np.array(a, dtype=np.float64, order="C")
 
 
 #: the kernel's output arguments, in its order
@@ -123,11 +178,9 @@ class FusedKernel:
         ks = KernelSource(linkage, self.with_forces)
         self.source = ks
         self.pf, self.pc = ks.params()
-        t0 = time.perf_counter()
-        self.module = _load(ks.source)
-        self.fn = self.module.kernel
-        self.compile_seconds = None  # measured at the first call
-        self._t_load = time.perf_counter() - t0
+        self.name = module_name(ks.source)
+        self._fn = None  # the compiled function: imported on first use (imports numba)
+        self.compile_seconds = None  # import + compile or load, at the first call
         topo = linkage.topo
         self.B, self.nq, self.J = len(topo.body_names), topo.nq, len(linkage.mech.joints)
         self.n = self.nq - 1
@@ -135,6 +188,35 @@ class FusedKernel:
         self.T = ks.n_dyad_trans
         self.trans_names = [t[0] for t in ks.trans]
         self.n_branch = ks.n_branch
+
+    @property
+    def loaded(self) -> bool:
+        """Whether the kernel is compiled or loaded in this process (a call costs only
+        its run), by this linkage or another of the same structure."""
+        fn = self._fn
+        if fn is None:
+            mod = _MODULES.get(self.name)
+            fn = getattr(mod, "kernel", None)
+        return fn is not None and len(fn.overloads) > 0
+
+    def sample_args(self) -> tuple:
+        """Arguments of a call at no configurations, of the types every call passes:
+        compiling the kernel for them compiles it for every call
+        (:mod:`analytic.kernels.background`)."""
+        level = 3 if self.with_forces else 2
+        out = self.alloc(0, level, full=True)
+        return (level, np.zeros(0), np.zeros(1), np.zeros(1), np.zeros((1, self.n_branch)),
+                self.pf, self.pc, np.zeros(1 + 2 * self.lk.topo.n_groups),
+                np.zeros(3, np.int64), np.zeros(1), np.empty(1, np.int64), *out.values())
+
+    @property
+    def fn(self):
+        if self._fn is None:
+            t0 = time.perf_counter()
+            self.module = _load(self.source.source)
+            self._fn = self.module.kernel
+            self._t_load = time.perf_counter() - t0
+        return self._fn
 
     # -- raw evaluation ---------------------------------------------------------
     def signs_for(self, values: np.ndarray, branch: str = "continued") -> np.ndarray:
@@ -233,22 +315,43 @@ class FusedKernel:
         statf = np.zeros(1)
         cap = min(N, SUSPECT_CAP)
         susp = np.empty(max(cap, 1), np.int64)
-        t0 = time.perf_counter() if self.compile_seconds is None else None
-        self.fn(level, values, velocity, acceleration, signs, self.pf, self.pc, carry, stat, statf,
-                susp, *v)
-        if t0 is not None:
-            self.compile_seconds = time.perf_counter() - t0 + self._t_load
-            COMPILE_LOG[self.module.__name__] = self.compile_seconds
+        fn = self.fn
+        nover = len(fn.overloads)
+        t0 = time.perf_counter()
+        fn(level, _arg(values), _arg(velocity), _arg(acceleration), _arg(signs), self.pf,
+           self.pc, carry, stat, statf, susp, *v)
+        if len(fn.overloads) != nover:  # a specialisation compiled or loaded: log it
+            self._log(time.perf_counter() - t0)
         nsus = int(stat[2])
         return int(stat[0]), int(stat[1]), float(statf[0]), (susp[:nsus] if nsus <= cap
                                                               else None)
 
+    def _log(self, seconds: float):
+        fn = self._fn
+        first = self.compile_seconds is None
+        seconds += self._t_load if first else 0.0
+        hits = sum(fn.stats.cache_hits.values())
+        how = "loaded" if hits > self.__dict__.get("_hits", 0) else "compiled"
+        self._hits = hits
+        COMPILE_LOG.setdefault(self.name, []).append((how, seconds))
+        if first:
+            self.compile_seconds = seconds
+        mark_ready(self.name, fn)
+
     # -- the solver's results -------------------------------------------------------
     def _inputs(self, values, velocity, acceleration):
         d = self.lk.mech.driver
-        values = np.ascontiguousarray(np.atleast_1d(np.asarray(
-            d.value if values is None else values, float)))
+        if not (type(values) is np.ndarray and values.dtype == np.float64  # noqa: E721
+                and values.ndim == 1 and values.flags.c_contiguous):
+            values = np.ascontiguousarray(np.atleast_1d(np.asarray(
+                d.value if values is None else values, float)))
         N = len(values)
+        if velocity is None and acceleration is None:  # the driver's: made once
+            rates = self.__dict__.get("_driver_rates")
+            if rates is None:
+                rates = self._driver_rates = (np.array([float(d.velocity)]),
+                                              np.array([float(d.acceleration)]))
+            return (values, *rates)
 
         def rate(x):  # a constant rate stays one number: the kernel broadcasts it
             x = np.asarray(x, float)
@@ -350,41 +453,54 @@ class FusedKernel:
         return kin, (self._forces(out) if forces else None)
 
     def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",
-                   branch="continued"):
+                   branch="continued", forces: bool = False, joints: bool = False):
         """As :meth:`analytic.kinematics.Linkage.kinematics`: a
         :class:`analytic.kinematics.CompactKinematics` (``q, q', q''`` now, the rest on
         first use), or where a sample is near a singular position the full result of
         :meth:`solve` (its Jacobians screen the samples, and flag them for the numpy
-        path's singular treatment)."""
+        path's singular treatment).  ``forces``: the same pass writes the forces too
+        (kept on the result for :meth:`forces`: ``_fused_forces``); ``joints``: and
+        every joint's point (``joint_point``), so neither costs another pass."""
         from .kinematics import CompactKinematics
         values, vel, acc = self._inputs(values, velocity, acceleration)
-        out = self.alloc(len(values), 2)
+        if forces:
+            self._require_mass()
+        level = 3 if forces else 2
+        out = self.alloc(len(values), level, joints=joints)
         bad, wi, worst, susp = self.run(values, vel, acc, self.signs_for(values, branch), out,
-                                        2, fresh=True)
+                                        level, fresh=True)
         self._check(values, bad, wi, worst)
         if susp is None or len(susp):
-            return self.solve(values, vel, acc, on_singular, branch)[0]
-        N = len(values)
-        return CompactKinematics(self, self.lk, values, np.broadcast_to(vel, (N,)),
-                                 np.broadcast_to(acc, (N,)), out["q"], out["qd"], out["qdd"],
-                                 branch)
+            kin, frc = self.solve(values, vel, acc, on_singular, branch, forces)
+            kin._fused_forces = frc
+            return kin
+        kin = CompactKinematics(self, self.lk, values, vel, acc, out["q"], out["qd"],
+                                out["qdd"], branch)
+        if forces:
+            kin._fused_forces = self._forces(out)
+        if joints:
+            kin.joint_point = {j: out["jp"][:, j] for j in range(self.J)}
+        return kin
 
     def deferred(self, kin) -> dict:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
         full pass at its inputs."""
         from .kinematics import DEFERRED
-        full, _ = self.solve(kin.value, _compact(kin.velocity), _compact(kin.acceleration),
-                             "flag", kin._fused_branch)
+        full, _ = self.solve(kin.value, *_rates(kin), "flag", kin._fused_branch)
         return {k: getattr(full, k) for k in DEFERRED}
 
     def forces(self, kin):
-        """As :func:`analytic.kinetostatics.solve_forces`: one more pass of the kernel
-        at ``kin``'s inputs, writing only the forces."""
+        """As :func:`analytic.kinetostatics.solve_forces`: the forces of the pass that
+        made ``kin`` where it wrote them (:meth:`kinematics` ``forces=True``), else one
+        more pass of the kernel at ``kin``'s inputs, writing only the forces."""
         self._require_mass()
+        done = kin.__dict__.get("_fused_forces")
+        if done is not None:
+            return done
         N = kin.n
         out = self.alloc(N, 3, state=False)  # the state is kin's: the forces only
         branch = getattr(kin, "_fused_branch", "continued")
-        _, vel, acc = self._inputs(kin.value, _compact(kin.velocity), _compact(kin.acceleration))
+        _, vel, acc = self._inputs(kin.value, *_rates(kin))
         self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3, fresh=True)
         return self._forces(out)
 
@@ -454,6 +570,14 @@ class FusedKernel:
         return values, out
 
 
+def _rates(kin) -> tuple[np.ndarray, np.ndarray]:
+    """``kin``'s input rates, each as one number where constant."""
+    r = kin.__dict__.get("_rates")
+    if r is not None:
+        return r
+    return _compact(kin.velocity), _compact(kin.acceleration)
+
+
 def _compact(x: np.ndarray) -> np.ndarray:
     """A rate series as one number when it is constant (a broadcast view or equal)."""
     x = np.asarray(x, float)
@@ -462,25 +586,56 @@ def _compact(x: np.ndarray) -> np.ndarray:
     return x
 
 
-#: ``Linkage.kinematics`` uses the kernel from this many input values on: below it the
-#: numpy path takes milliseconds, less than loading a kernel (0.5 s) or compiling one
-#: for a new structure (5-30 s, once per machine).  ``XVAL_FUSED_MIN`` overrides it.
-FUSED_MIN_POINTS = 16384
+#: Which path a call takes where the kernel is not yet in this process.  The numpy
+#: path's cost is estimated as ``NUMPY_CALL_S + NUMPY_POINT_S n`` (kinematics and
+#: forces of a four-bar at load 1: 1.2 ms at 36 points, 4.2 ms at 3,600, 0.9-1.5 us a
+#: point from 36,000 on, the six-bar about twice that); loading a compiled kernel from
+#: numba's cache costs :data:`LOAD_S` (importing numba and its typing context, then the
+#: load: 0.33-0.43 s in all at load 1, 0.9-1.4 s at load 2-3) or
+#: :data:`LOAD_IMPORTED_S` once numba is imported.  A structure's calls run on numpy
+#: until their estimated cost reaches the load's, then load it (never more than twice
+#: the better of the two choices made in hindsight); a call of 2**20 points or more
+#: (:data:`COMPILE_NOW_POINTS`, ``XVAL_FUSED_MIN``) compiles a kernel that is not
+#: cached at all (5-15 s, once per structure and machine), below that the compile runs
+#: in a background process (:mod:`analytic.kernels.background`) while the numpy path
+#: answers.
+NUMPY_CALL_S, NUMPY_POINT_S = 1e-3, 2e-6
+LOAD_S, LOAD_IMPORTED_S = 0.4, 0.1
+COMPILE_NOW_POINTS = 1 << 20
+#: estimated seconds spent on the numpy path per kernel module (this process)
+_SPENT: dict[str, float] = {}
 
 
 def dispatch(linkage, n: int) -> FusedKernel | None:
     """The kernel ``Linkage.kinematics`` should use for ``n`` input values, or ``None``
-    for the numpy path (no dyad plan, ``XVAL_FUSED=0``, no numba, or ``n`` below
-    :data:`FUSED_MIN_POINTS`; ``XVAL_FUSED=always`` uses it at any ``n``)."""
-    mode = os.environ.get("XVAL_FUSED", "1").strip()
-    if mode != "always":
+    for the numpy path: no dyad plan, ``XVAL_FUSED=0`` or no numba; or the kernel is
+    neither in this process nor worth loading yet (see :data:`COMPILE_NOW_POINTS`).
+    Once in this process, the kernel serves every call whatever its size;
+    ``XVAL_FUSED=always`` takes it (compiling it if need be) at any ``n``."""
+    fk = linkage.__dict__.get("_fused_kernel")
+    mode = os.environ.get("XVAL_FUSED")
+    if mode is None and fk is not None and fk._fn is not None and fk._fn.overloads:
+        return fk  # the common case, first: in the process and not overridden
+    fk = kernel_for(linkage)
+    if fk is None:
+        return None
+    if fk.loaded or (mode or "").strip() == "always":
+        return fk
+    spent = _SPENT.get(fk.name, 0.0) + NUMPY_CALL_S + NUMPY_POINT_S * n
+    if on_disk(fk.name):
+        if spent >= (LOAD_IMPORTED_S if "numba" in sys.modules else LOAD_S):
+            return fk
+    else:
         try:
-            least = int(os.environ.get("XVAL_FUSED_MIN", FUSED_MIN_POINTS))
+            least = int(os.environ.get("XVAL_FUSED_MIN", COMPILE_NOW_POINTS))
         except ValueError:
-            least = FUSED_MIN_POINTS
-        if n < least:
-            return None
-    return kernel_for(linkage)
+            least = COMPILE_NOW_POINTS
+        if n >= least:
+            return fk
+        from .kernels.background import start
+        start(fk)
+    _SPENT[fk.name] = spent
+    return None
 
 
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:

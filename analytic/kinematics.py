@@ -175,13 +175,21 @@ class CompactKinematics(Kinematics):
     that needs only ``q, q', q''``, a slider's motion or the forces never holds them."""
 
     def __init__(self, kernel, linkage, value, velocity, acceleration, q, qd, qdd, branch):
+        """``velocity, acceleration``: ``(1,)`` for a constant rate (the ``(N,)`` view
+        is made when first read: a broadcast view costs more than a small call) or
+        ``(N,)``."""
         # not Kinematics.__init__: the deferred fields stay unset until asked for
-        self.__dict__.update(linkage=linkage, value=value, velocity=velocity,
-                             acceleration=acceleration, q=q, qd=qd, qdd=qdd, at_singular=None,
+        self.__dict__.update(linkage=linkage, value=value, _rates=(velocity, acceleration),
+                             q=q, qd=qd, qdd=qdd, at_singular=None,
                              _fused_kernel=kernel, _fused_branch=branch,
                              _fused_singular=False)
 
     def __getattr__(self, name):  # only for attributes not set: the deferred ones
+        if name in ("velocity", "acceleration"):
+            d = self.__dict__
+            r = d["_rates"][name == "acceleration"]
+            d[name] = np.broadcast_to(r, (len(d["value"]),)) if len(r) == 1 else r
+            return d[name]
         if name in DEFERRED:
             d = self.__dict__
             d.update(d["_fused_kernel"].deferred(self))
@@ -263,9 +271,28 @@ class Linkage:
             ``False``: leave the linear solve's values at singular points (used by
             :mod:`analytic.singular` itself, on regular samples).
         """
+        return self._kinematics(values, velocity, acceleration, on_singular, branch, limits)
+
+    def solve(self, values=None, velocity=None, acceleration=None,
+              on_singular: str = "raise", branch: str = "continued", joints: bool = False):
+        """``(Kinematics, Forces)`` at ``values`` (arguments as :meth:`kinematics`), in
+        one pass of the fused kernel where there is one: the same numbers as
+        ``forces(kinematics(values))``, with each quantity computed once.  ``joints``:
+        the same pass also writes every joint's point (``Kinematics.joint_point``),
+        the positions pylinkage returns.  Needs masses (:class:`MissingMassError`)."""
+        kin = self._kinematics(values, velocity, acceleration, on_singular, branch, True,
+                               forces=True, joints=joints)
+        frc = self.forces(kin)
+        if joints:
+            kin.joint_point  # noqa: B018 - computed now (on the numpy path: already)
+        return kin, frc
+
+    def _kinematics(self, values, velocity, acceleration, on_singular, branch, limits,
+                    forces: bool = False, joints: bool = False) -> Kinematics:
         fk = fused_dispatch(self, 1 if values is None else np.size(values))
-        if fk is not None:  # the fused kernel (analytic/fused.py): the same numbers, one pass
-            kin = fk.kinematics(values, velocity, acceleration, "flag", branch)
+        if fk is not None and (fk.with_forces or not forces):
+            # the fused kernel (analytic/fused.py): the same numbers, one pass
+            kin = fk.kinematics(values, velocity, acceleration, "flag", branch, forces, joints)
             if not kin._fused_singular:  # singular samples are the numpy path's to treat
                 return kin
         d = self.mech.driver

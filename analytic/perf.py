@@ -11,7 +11,6 @@ free, so every call pays page faults to zero them again.  Measured on the
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 
 # glibc mallopt parameters (malloc.h)
 _M_TRIM_THRESHOLD = -1
@@ -27,9 +26,10 @@ def tune_allocator(mmap_threshold: int = 64 << 20, trim_threshold: int = 128 << 
     ``mallopt`` (not glibc): nothing is changed there.
     """
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        mallopt = libc.mallopt
-    except (OSError, AttributeError):
+        # the process's own symbols (the C library it runs on): find_library("c") would
+        # run ldconfig or a compiler, 50-100 ms
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError, TypeError):
         return False
     mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
     ok = mallopt(_M_MMAP_THRESHOLD, int(mmap_threshold)) == 1

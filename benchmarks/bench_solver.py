@@ -59,7 +59,7 @@ from analytic.fused import COMPILE_LOG, FusedKernel
 from analytic.perf import tune_allocator
 
 A, B, C, D, W2 = 0.1, 0.3, 0.25, 0.4, 15.0  # the S4 four-bar, m and rad/s
-SIZES = (360, 3600, 36_000, 360_000, 3_600_000)
+SIZES = (36, 360, 3600, 36_000, 360_000, 3_600_000)
 
 
 def hand_four_bar(th2, a=A, b=B, c=C, d=D, w2=W2):
@@ -143,6 +143,8 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
         "fused_kinematics_preallocated": lambda: fk4.state(x, level=2, out=out2),
         "fused_kinematics_forces_preallocated": lambda: fk4.state(x, level=3, out=out3),
         "six_bar_fused_kinematics_forces": lambda: fk6.state(x, level=3),
+        "linkage_kinematics": lambda: lk4.kinematics(x),
+        "linkage_solve": lambda: lk4.solve(x),
         "linkage_kinematics_forces": lambda: lk4.forces(lk4.kinematics(x)),
     })
     if numpy_path:
@@ -151,7 +153,7 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
             try:
                 return lk4.forces(lk4.kinematics(x))
             finally:
-                os.environ["XVAL_FUSED"] = "always"
+                del os.environ["XVAL_FUSED"]
         fns["numpy_kinematics_forces"] = numpy_kf
     return fns
 
@@ -212,9 +214,21 @@ def ratios(res: dict) -> dict:
     def r(n, a, b):
         ta, tb = np.array(res[n][a]["times"]), np.array(res[n][b]["times"])
         return {"min": float(tb.min() / ta.min()), "median": float(np.median(tb / ta))}
+    def t(n, a, b):  # time of a over time of b (below 1: a is faster)
+        ta, tb = np.array(res[n][a]["times"]), np.array(res[n][b]["times"])
+        return {"min": float(ta.min() / tb.min()), "median": float(np.median(ta / tb))}
     out = {}
     for n in res:
         row = {}
+        if "pylinkage_kinematics" in res[n]:
+            row["time: front door kinematics / pylinkage step_fast_with_kinematics"] = t(
+                n, "linkage_kinematics", "pylinkage_kinematics")
+            row["time: front door solve (kinematics + forces) / pylinkage kinematics"] = t(
+                n, "linkage_solve", "pylinkage_kinematics")
+        row["time: front door solve / one-pass kernel kinematics + forces"] = t(
+            n, "linkage_solve", "fused_kinematics_forces")
+        row["time: forces(kinematics(x)) / one-pass kernel kinematics + forces"] = t(
+            n, "linkage_kinematics_forces", "fused_kinematics_forces")
         if "pylinkage_kinematics" in res[n]:
             row["kinematics / pylinkage step_fast_with_kinematics"] = r(
                 n, "fused_kinematics", "pylinkage_kinematics")
@@ -288,6 +302,8 @@ LABELS = {
     "fused_kinematics_preallocated": "the same, kinematics into preallocated outputs",
     "fused_kinematics_forces_preallocated": "the same, kinematics + forces preallocated",
     "six_bar_fused_kinematics_forces": "fused kernel, six-bar kinematics + forces",
+    "linkage_kinematics": "`Linkage.kinematics(x)` (front door), four-bar",
+    "linkage_solve": "`Linkage.solve(x)` (front door, kinematics + forces, one pass)",
     "linkage_kinematics_forces": "`Linkage.forces(Linkage.kinematics(x))`, four-bar",
     "numpy_kinematics_forces": "the same on the numpy path (`XVAL_FUSED=0`)",
 }
@@ -365,12 +381,16 @@ def main(argv=None):
     ap.add_argument("--markdown", help="write the README's speed tables to this file")
     ap.add_argument("--flatness", type=int, default=3,
                     help="repeats of the interleaved 36k-vs-largest-size cost test (0: skip)")
+    ap.add_argument("--startup", action="store_true",
+                    help="also time first calls and xval start-up in fresh processes "
+                         "(benchmarks/bench_startup.py)")
     ap.add_argument("--cli-points", type=int, default=0,
                     help="also run xval sweep seed-four-bar --points N --csv under "
                          "/usr/bin/time -v")
     args = ap.parse_args(argv)
     tune_allocator()  # as the xval command does
-    os.environ["XVAL_FUSED"] = "always"  # Linkage's front door takes the kernel at any size
+    # the front door as a user meets it: the kernel at every size once in the process
+    os.environ.pop("XVAL_FUSED", None)
     try:
         import pylinkage  # noqa: F401
         with_pl = True
@@ -419,6 +439,13 @@ def main(argv=None):
     info["compile_log_s"] = COMPILE_LOG
     info["resident_peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print("\n" + info["load_after"], f"; resident peak {info['resident_peak_MB']:.0f} MB")
+    if args.startup:
+        import bench_startup
+        info["startup"] = {"cli_best_of_5_s": bench_startup.cli(),
+                           "allocator_ns_per_config": bench_startup.allocator(),
+                           "first_calls": bench_startup.first_calls()}
+        info["load_after_startup"] = load()
+        print(json.dumps(info["startup"], indent=1))
     if args.cli_points:
         info["cli_sweep"] = cli_sweep(args.cli_points)
         print("xval sweep:", json.dumps(info["cli_sweep"]))

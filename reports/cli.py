@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import functools
+import importlib
 import json
 import math
 import os
@@ -277,11 +278,27 @@ def write_csv(frame, path: str, stdout) -> None:
         raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = opt.OneLineParser(prog="xval", description=__doc__,
-                          formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = p.add_subparsers(dest="cmd", required=True)
-    s = sub.add_parser("cases", help="list the built-in cases")
+#: Every command: name -> (the module whose ``register(sub)`` adds it, its line in
+#: ``xval --help``), one line per command.  Only the module of the command that runs is
+#: imported (``xval --help`` imports none of them).
+COMMANDS = {
+    "cases": ("reports.cli", "list the built-in cases"),
+    "solve": ("reports.cli", "solve one configuration"),
+    "sweep": ("reports.cli", "full-cycle table"),
+    "explain": ("reports.explain", "worked solution of one configuration, in the notes' method"),
+    "models": ("reports.cli_engines", "write the MJCF/URDF files of one case, or of all"),
+    "compare": ("reports.cli_engines", "run engines and compare with the analytic solution"),
+    "baseline": ("reports.cli_engines", "record engine errors, later check them for drift"),
+    "report": ("reports.cli_engines", "the validation report (HTML, Markdown, CSV)"),
+    "plot": ("reports.plot_cmd", "full-cycle curves of one linkage (engines optional)"),
+    "animate": ("reports.animate", "the linkage moving through a cycle (GIF, MP4, HTML)"),
+    "view": ("reports.view_cmd", "MuJoCo's viewer on the linkage (needs a display)"),
+}
+
+
+def register(sub) -> None:
+    """Add ``cases``, ``solve`` and ``sweep`` to ``xval``'s subparsers."""
+    s = sub.add_parser("cases", help=COMMANDS["cases"][1])
     s.set_defaults(func=cmd_cases)
     s = sub.add_parser("solve", help="solve one configuration")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -311,27 +328,49 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--units", type=units_option, help=UNITS_HELP + " (each CSV column "
                    "names its unit: 'crank.omega [rpm]')")
     s.set_defaults(func=cmd_sweep)
-    _register_more(sub)
+
+
+class _OnlyOne:
+    """The subparsers as a module's ``register`` sees them: the command that runs gets
+    its real parser, any other command the module adds a parser that is dropped."""
+
+    def __init__(self, sub, name: str):
+        self.sub, self.name = sub, name
+
+    def add_parser(self, name, **kw):
+        if name == self.name:
+            return self.sub.add_parser(name, **kw)
+        return argparse.ArgumentParser(prog=f"xval {name}", add_help=False)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """``xval``'s parser: every command listed with its help line (:data:`COMMANDS`);
+    ``command``'s own options added by its module, the only one imported."""
+    p = opt.OneLineParser(prog="xval", description=__doc__,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    for name, (module, help_) in COMMANDS.items():
+        if name != command:
+            sub.add_parser(name, help=help_, add_help=False)
+            continue
+        mod = (sys.modules[__name__] if module == "reports.cli"
+               else importlib.import_module(module))
+        mod.register(_OnlyOne(sub, name))
     return p
 
 
-def _register_more(sub) -> None:
-    """Engine and report commands (kept apart so the solver CLI has no engine imports)."""
-    from . import explain  # xval explain: worked solutions in the notes' method
-    explain.register(sub)
-    try:
-        from . import cli_engines
-    except ImportError:  # pragma: no cover - engines not built yet
-        return
-    cli_engines.register(sub)
-    from . import cli_media  # xval plot, animate, view (issue 12)
-    cli_media.register(sub)
+def _command(argv: list[str]) -> str | None:
+    """The command ``argv`` runs (the first word; ``xval`` has no options of its own
+    besides ``--help``), or ``None``."""
+    word = next((a for a in argv if not a.startswith("-")), None)
+    return word if word in COMMANDS else None
 
 
 def main(argv: list[str] | None = None) -> int:
     _setup_once()
     try:
-        args = _parser().parse_args(argv)
+        argv = sys.argv[1:] if argv is None else list(argv)
+        args = _parser(_command(argv)).parse_args(argv)
         args.stdout = sys.stdout
         # with the table on standard output, the summary goes to standard error
         to_err = getattr(args, "csv", None) == "-"
@@ -358,9 +397,9 @@ def _setup_once() -> None:
 
 
 @functools.cache
-def _parser() -> argparse.ArgumentParser:
-    """The parser, built once (parsing leaves no state in it)."""
-    return build_parser()
+def _parser(command: str | None) -> argparse.ArgumentParser:
+    """The parser for ``command``, built once (parsing leaves no state in it)."""
+    return build_parser(command)
 
 
 def _stdout_to_devnull() -> None:

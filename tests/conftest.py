@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
 
 from analytic import Assembly, Body, Driver, Load, Mechanism, Prismatic, Revolute
+
+# no background kernel compiles from the tests' small calls (analytic.kernels.background):
+# ten structures compiling at once would load the machine; the tests that want a kernel
+# compile it in the foreground (test_dispatch turns this back on where it tests them)
+os.environ.setdefault("XVAL_BACKGROUND_COMPILE", "0")
 
 
 def rod(name, length, mass=None, extra=None):

@@ -620,6 +620,7 @@ class KernelSource:
         for d, (_, e1, e2) in enumerate(self.trans):
             s.emit(f"trv[i, {2 * d}] = {e1}", 3)
             s.emit(f"trv[i, {2 * d + 1}] = {e2}", 3)
+        s.emit("if jp.shape[0] > 0:")  # with the full result, or asked for alone
         for j in range(self.J):
             s.emit(f"jp[i, {j}] = JP{j}", 3)
 
@@ -853,7 +854,7 @@ class KernelSource:
 def complex_multiply() -> str:
     """The helper for a complex product (:func:`smallmat.numpy_complex_multiply`),
     probed once per process."""
-    from .smallmat import numpy_complex_multiply
+    from .probe import numpy_complex_multiply
     return numpy_complex_multiply()
 
 

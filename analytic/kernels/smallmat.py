@@ -8,7 +8,6 @@ matrices are passed in, so nothing is allocated per configuration.
 
 from __future__ import annotations
 
-import functools
 import math
 
 from llvmlite import ir
@@ -49,45 +48,9 @@ def cmul_plain(a, b):
     return complex(a.real * b.real - a.imag * b.imag, a.real * b.imag + a.imag * b.real)
 
 
-def numpy_complex_multiply() -> str:
-    """Which of the two helpers reproduces numpy's complex array multiply on this
-    machine (``"cmul_fused"`` or ``"cmul_plain"``; ``"cmul_fused"`` when neither does:
-    :func:`complex_multiply_reproduced` then says False), by exact rational arithmetic
-    on inputs where the two differ.  numpy dispatches its loop at run time by CPU, so
-    the answer is a property of the machine, and it is part of the kernel's source."""
-    return _probe()[0]
-
-
-def complex_multiply_reproduced() -> bool:
-    """Whether a helper reproduces numpy's complex multiply bit for bit here (the
-    compiled and numpy paths are then the same arithmetic; on a machine where neither
-    does, they differ by rounding, amplified near limit positions)."""
-    return _probe()[1]
-
-
-@functools.cache
-def _probe() -> tuple[str, bool]:
-    from fractions import Fraction
-
-    import numpy as np
-
-    def fma(x, y, z):  # correctly rounded, as the FMA instruction
-        return float(Fraction(x) * Fraction(y) + Fraction(z))
-
-    rng = np.random.default_rng(20261123)
-    a = rng.normal(size=64) + 1j * rng.normal(size=64)
-    b = rng.normal(size=64) + 1j * rng.normal(size=64)
-    got = a * b
-    pairs = list(zip(a.tolist(), b.tolist(), strict=True))
-    fused = np.array([complex(fma(x.real, y.real, -(x.imag * y.imag)),
-                              fma(x.real, y.imag, x.imag * y.real)) for x, y in pairs])
-    plain = np.array([complex(x.real * y.real - x.imag * y.imag,
-                              x.real * y.imag + x.imag * y.real) for x, y in pairs])
-    if np.array_equal(got, fused):
-        return "cmul_fused", True
-    if np.array_equal(got, plain):
-        return "cmul_plain", True
-    return "cmul_fused", False
+# the probe is numba-free (analytic.kernels.probe): generating a kernel's source, and
+# so knowing whether it is cached, does not import numba
+from .probe import complex_multiply_reproduced, numpy_complex_multiply  # noqa: E402,F401
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

@@ -1,0 +1,44 @@
+"""``xval`` imports only what the command it runs needs, and ``analytic`` no table
+library (the start-up of issue 23: building the parser had imported every engine,
+pandas and pyarrow, 0.45 s before any command started)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+#: libraries none of these commands needs (engines, tables, plots, the compiler)
+HEAVY = ("pandas", "pyarrow", "scipy", "numba", "matplotlib", "mujoco", "pybullet",
+         "exudyn", "sim_models", "sympy")
+
+
+def _imported(code: str) -> list[str]:
+    """The top-level packages of HEAVY imported by running ``code`` in a fresh process."""
+    prog = (code + "\nimport json, sys\n"
+            f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & {set(HEAVY)!r})))")
+    out = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True,
+                         timeout=120, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["cases"], ["solve", "seed-four-bar", "--json"]])
+def test_command_imports_only_what_it_runs(argv):
+    code = ("import contextlib, io\nfrom reports.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass")
+    assert _imported(code) == []
+
+
+def test_analytic_imports_no_table_library():
+    assert _imported("import analytic\nfrom analytic import stream, kinematics") == []
+
+
+def test_help_lists_every_command_without_importing_it():
+    from reports.cli import COMMANDS
+    out = subprocess.run([sys.executable, "-m", "reports.cli", "--help"], capture_output=True,
+                         text=True, timeout=120, check=True).stdout
+    for name, (_, help_) in COMMANDS.items():
+        assert name in out and help_.split()[0] in out, name
