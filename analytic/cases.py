@@ -16,10 +16,23 @@ def case_names() -> list[str]:
     return sorted(p.stem for p in CASES_DIR.glob("*.toml"))
 
 
+#: Free-motion cases (the IFToMM benchmark problems): loaded by name like the others,
+#: not listed by :func:`case_names` (the prescribed-motion runs iterate over those).
+FREE_CASES_DIR = CASES_DIR / "free"
+
+
+def free_case_names() -> list[str]:
+    """Names of the built-in free-motion cases, sorted."""
+    return sorted(p.stem for p in FREE_CASES_DIR.glob("*.toml"))
+
+
 def case_path(name: str) -> Path:
     p = CASES_DIR / f"{name}.toml"
     if not p.is_file():
-        raise DescriptionError(f"no built-in case {name!r}; cases are {case_names()}")
+        p = FREE_CASES_DIR / f"{name}.toml"
+    if not p.is_file():
+        raise DescriptionError(f"no built-in case {name!r}; cases are {case_names()}, "
+                               f"free-motion cases {free_case_names()}")
     return p
 
 

@@ -310,6 +310,8 @@ def _register_more(sub) -> None:
     """Engine and report commands (kept apart so the solver CLI has no engine imports)."""
     from . import explain  # xval explain: worked solutions in the notes' method
     explain.register(sub)
+    from . import simulate_cmd  # xval simulate: free motion (issue 20)
+    simulate_cmd.register(sub)
     try:
         from . import cli_engines
     except ImportError:  # pragma: no cover - engines not built yet
