@@ -155,6 +155,7 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         raise NoInertiaError(_no_inertia(lk, fm.value))
     e_scale = _energy_scale(mech, tm0, size)
     t, segs, switches = 0.0, [], []
+    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
     x_ref = x0
     while True:
         sysm = _System(lk, x_ref, scale)
@@ -167,7 +168,9 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         M_s = float(terms(lk, co_s, x_s[None], y[1], t).M[0])
         rate_scale = max(abs(y[1]), math.sqrt(2 * e_scale / M_s))
         atol = rtol * np.array([qs, rate_scale, e_scale, e_scale, e_scale])
-        sol = solve_ivp(sysm, (t, T), y, method=method, rtol=rtol, atol=atol,
+        # a motor table's kinks end a segment: a high-order step across one loses its order
+        t_end = next((b for b in stops if b > t), T)
+        sol = solve_ivp(sysm, (t, t_end), y, method=method, rtol=rtol, atol=atol,
                         dense_output=True, events=[sysm.switch])
         if sol.status < 0:
             raise LinkageError(f"mechanism {mech.name!r}: the integration failed at t = "
@@ -175,8 +178,11 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)
         segs.append(Segment(lk, lk.mech.driver.joint, t, float(sol.t[-1]), sol.sol, sol.t,
                             xs, sysm.nfev))
-        if sol.status == 0:
+        if sol.status == 0 and t_end >= T:
             return segs, switches
+        if sol.status == 0:  # at a table breakpoint: go on in the same coordinate
+            t, y, x_ref = t_end, sol.y[:, -1].copy(), xs[-1]
+            continue
         if len(switches) >= MAX_SWITCHES:
             raise LinkageError(f"mechanism {mech.name!r}: more than {MAX_SWITCHES} "
                                "coordinate switches")
