@@ -214,3 +214,17 @@ def _point_at(traj, body, point, t):
     seg = traj.segments[int(si[0])]
     kin = seg.lk.kinematics(np.array([y[0, 0]]), 1.0, 0.0, on_singular="flag")
     return kin.point(body, point)[0][0]
+
+
+#: DOP853 at 1e-13 against Radau (implicit, order 5) at 1e-12 on the pendulum: both
+#: reach ~1e-11 of a radian over a second; a wrong equation would differ at once.
+SECOND_METHOD = 1e-9
+
+
+def test_second_method_agrees():
+    mech = load_case("iftomm-a01-pendulum")
+    a = simulate(mech, duration=1.0)
+    b = simulate(mech, duration=1.0, rtol=1e-12, method="Radau")
+    t = np.linspace(0.0, 1.0, 11)
+    xa, xb = a.at(t, forces=False).x[:, 0], b.at(t, forces=False).x[:, 0]
+    assert np.max(np.abs(xa - xb)) <= SECOND_METHOD
