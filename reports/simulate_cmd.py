@@ -61,7 +61,12 @@ def _frame(mech, smp):
 
 
 def cmd_simulate(args) -> int:
+    from analytic.errors import OutputError
+
     from .cli import write_csv
+    if args.json and args.csv == "-":
+        raise OutputError("--json and --csv - both write to standard output; give --csv a "
+                          "file name")
     mech = load_case(args.case)
     traj = simulate(mech, args.duration)
     n = args.samples or mech.motion.samples

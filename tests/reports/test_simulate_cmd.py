@@ -128,6 +128,7 @@ def test_massless_linkage_has_no_inertia(tmp_path, capsys):
     (["--duration", "0"], r"argument --duration: 0 is out of range"),
     (["--samples", "1"], r"argument --samples: 1 is out of range"),
     (["--duration", "nan"], r"argument --duration: nan is not a finite number"),
+    (["--json", "--csv", "-"], r"--json and --csv - both write to standard output"),
 ])
 def test_bad_options(capsys, argv, message):
     code, _ = run("simulate", "iftomm-a01-pendulum", *argv)
