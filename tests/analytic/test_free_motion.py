@@ -75,9 +75,9 @@ def _seed_released(elements: bool):
     fm = FreeMotion("O2", math.radians(60.0), 0.0, 10.0)
     if elements:
         fm = replace(fm, springs=(PointSpring("coupler", "B", "ground", "O2", 30.0, 0.25),),
-                     dampers=(PointDamper("crank", "A", "ground", "O4", 0.05),),
+                     dampers=(PointDamper("crank", "A", "ground", "O4", 0.5),),
                      motors=(Motor("O2", 0.0, (0.0, 2.0, 5.0, 10.0),
-                                   (0.0, 0.3, -0.2, 0.1)),))
+                                   (0.0, 0.1, -0.1, 0.05)),))
     return replace(m, gravity=(0.0, -9.81), motion=fm)
 
 
