@@ -228,3 +228,21 @@ def test_second_method_agrees():
     t = np.linspace(0.0, 1.0, 11)
     xa, xb = a.at(t, forces=False).x[:, 0], b.at(t, forces=False).x[:, 0]
     assert np.max(np.abs(xa - xb)) <= SECOND_METHOD
+
+
+def test_slider_crank_released_from_its_slider():
+    """A prismatic initial coordinate, with a spring, a damper and a motor on the slider:
+    the slider is a poor coordinate there (it switches at once), the balance closes and
+    the kinetostatics with the slider's efforts applied as loads asks no drive effort."""
+    from analytic import Linkage
+    from analytic.motion_spec import JointDamper, JointSpring
+    m = load_case("seed-slider-crank")
+    s0 = float(Linkage(m).kinematics(np.radians([30.0])).slider("slide")[0][0])
+    fm = FreeMotion("slide", s0, 0.0, 0.05, springs=(JointSpring("slide", 2000.0, s0 - 0.01),),
+                    dampers=(JointDamper("slide", 1.0),), motors=(Motor("slide", 5.0),))
+    traj = simulate(replace(m, gravity=(0.0, -9.81), motion=fm))
+    s = traj.at(np.linspace(0.0, 0.05, 11))
+    assert traj.switches and traj.switches[0][1] == "slide"
+    assert np.max(np.abs(s.energy_residual)) <= ENERGY_REL * _energy_scale(s)
+    assert np.max(np.abs(s.drive_residual)) <= 1e-9
+    assert s.joint("slide")[0, 0] == pytest.approx(s0, abs=1e-15)
