@@ -156,12 +156,13 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     e_scale = _energy_scale(mech, tm0, size)
     t, segs, switches = 0.0, [], []
     stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
+    closed = _closed_form_joints(mech)
     x_ref = x0
     while True:
         sysm = _System(lk, x_ref, scale)
         r = sysm.ratios(float(y[0]))
         if np.max(r) > SWITCH_RATIO:  # the coordinate fails here: switch before moving
-            lk, y, x_ref = _switch(lk, sysm, y, int(np.argmax(r)), size, switches, t)
+            lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
             continue
         qs = (1.0 if isinstance(lk.mech.driver_joint, Revolute) else size)
         co_s, x_s = sysm.coeffs(float(y[0]))
@@ -189,7 +190,31 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         t, y, x_ref = float(sol.t[-1]), sol.y[:, -1].copy(), xs[-1]
         sysm.last = x_ref
         r = sysm.ratios(float(y[0]))
-        lk, y, x_ref = _switch(lk, sysm, y, int(np.argmax(r)), size, switches, t)
+        lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+
+
+def _closed_form_joints(mech) -> np.ndarray:
+    """Per joint: whether the solver has a closed form with that joint driven (else it
+    solves the positions by Newton's method, to its loop tolerance only)."""
+    from ..topology import build_topology
+    out = []
+    for j in mech.joints:
+        try:
+            topo = build_topology(replace(mech, driver=Driver(j.name, 0.0, 0.0)))
+            out.append(topo.plan is not None)
+        except LinkageError:
+            out.append(False)
+    return np.array(out)
+
+
+def _pick(r: np.ndarray, closed: np.ndarray) -> int:
+    """The new coordinate: among the joints moving at least half as fast as the fastest
+    (relative to it every other coefficient is then at most 2 < SWITCH_RATIO, so it
+    does not switch back at once), a closed-form one if any, the fastest of them."""
+    ok = r >= 0.5 * np.max(r)
+    pref = ok & closed
+    pool = pref if pref.any() else ok
+    return int(np.argmax(np.where(pool, r, -1.0)))
 
 
 def _switch(lk, sysm, y, j: int, size, switches, t):
