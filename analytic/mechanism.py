@@ -36,6 +36,7 @@ Conventions (used everywhere in this package)
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -298,6 +299,11 @@ def _finite(x, what: str, where: str) -> None:
             raise DescriptionError(f"{what} must be a finite number, got {x!r}", where)
 
 
+#: Relative slack of a range's upper bound: a value typed in a display unit (deg) that
+#: equals the printed bound converts to SI within a few ulps of it (4 x 2.2e-16).
+RANGE_ROUND_OFF = 8.9e-16
+
+
 def check_range(x, limit: float, what: str, where: str | None, unit: str = "",
                 scale: float = 1.0, lo: float | None = None) -> None:
     """Raise :class:`DescriptionError` unless every value of ``x`` is finite and in range.
@@ -308,8 +314,10 @@ def check_range(x, limit: float, what: str, where: str | None, unit: str = "",
     """
     _finite(x, what, where)
     u = f" {unit}" if unit else ""
+    # the bound as printed is accepted: 360000 deg converts to 1 ulp above 2000 pi rad
+    top = limit * (1 + RANGE_ROUND_OFF)
     for v in (x if isinstance(x, tuple | list) else (x,)):
-        if (abs(v) <= limit) if lo is None else (lo <= v <= limit):
+        if (abs(v) <= top) if lo is None else (lo <= v <= top):
             continue
         rng = (f"|{what}| <= {limit / scale:g}{u}" if lo is None
                else f"{lo / scale:g} to {limit / scale:g}{u}")
@@ -338,6 +346,7 @@ def validate(mech: Mechanism) -> None:
     the hints, connectivity to ground, the mobility (Gruebler: exactly one degree
     of freedom) and a user's loops (closed cycles of distinct bodies).
     """
+    _check_names(mech)
     bodies = _check_bodies(mech)
     _check_joints(mech, bodies)
     _check_size(mech)
@@ -348,6 +357,37 @@ def validate(mech: Mechanism) -> None:
         _check_loops(mech)
     if mech.motion is not None:
         check_motion(mech)
+
+
+def _bad_char(text: str, allow: str = "") -> str | None:
+    """The first character of ``text`` that no file may carry: a control character
+    (Unicode category Cc: U+0000-U+001F, U+007F-U+009F) other than those in ``allow``,
+    a lone surrogate, or U+FFFE/U+FFFF, none of which XML 1.0 (the MJCF, URDF and JUnit
+    files) can hold and which make terminal output and file names lie."""
+    for ch in text:
+        if ch in allow:
+            continue
+        if unicodedata.category(ch) in ("Cc", "Cs") or ch in "\ufffe\uffff":
+            return ch
+    return None
+
+
+def _check_names(mech: Mechanism) -> None:
+    """Every name (the mechanism's, bodies', points', joints') and the description
+    without control characters: refused here, where every door (a file, the Python
+    API) passes, so that no writer has to guess what a user meant by one."""
+    names = [("name", mech.name, mech.source), ("ground", mech.ground, mech.source)]
+    for b in mech.bodies:
+        bw = _where(mech, f"body {b.name!r}")
+        names += [("body name", b.name, bw)] + [("point name", pn, bw) for pn in b.points]
+    names += [("joint name", j.name, _where(mech, f"joint {j.name!r}")) for j in mech.joints]
+    for key, text, where in names:
+        if (ch := _bad_char(text)) is not None:
+            raise DescriptionError(f"{key} {text!r} contains the control character "
+                                   f"U+{ord(ch):04X}; names must be printable text", where)
+    if (ch := _bad_char(mech.description, "\n\t\r")) is not None:
+        raise DescriptionError(f"description contains the control character U+{ord(ch):04X}"
+                               "; only line breaks and tabs are allowed", mech.source)
 
 
 def _check_bodies(mech: Mechanism) -> dict[str, Body]:

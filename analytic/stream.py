@@ -239,9 +239,10 @@ def _csv_writer():
 
 def _sweep_values(linkage, points, start, input_range):
     """The sweep's input values as :func:`analytic.sweep.sweep` chooses them."""
-    from .sweep import input_values
+    from .sweep import input_values, range_values
     if input_range is not None:
-        return np.linspace(*input_range, points), False, linkage.feasible_ranges(), False
+        return range_values(linkage, input_range, points), False, linkage.feasible_ranges(), \
+            False
     values, full, feas = input_values(linkage, points, start)
     return values, full, feas, True
 
@@ -251,9 +252,9 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
     """:func:`analytic.sweep.sweep` written to the CSV ``path`` (or ``"-"``: standard
     output, or an open text file) block by block.
 
-    ``convert`` maps each block's table before it is written (display units: the
-    round-off snapping of :func:`reports.display_units.convert_frame` then takes its
-    scale per block of :data:`BLOCK` rows, not over the whole table).
+    ``convert`` maps each block's table before it is written (display units and the
+    round-off snapping of :func:`reports.display_units.convert_frame`, which reads each
+    row alone: the block size changes no cell).
 
     Returns a :class:`analytic.sweep.SweepResult` whose ``frame`` is ``None`` (the table
     is in the file) and whose kinematics and forces hold only the series the events

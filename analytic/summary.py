@@ -11,10 +11,15 @@ the summary and the table beside it are the same computation.
   spans of its two strokes (between its limit positions); at constant input speed the
   times are in the same ratio.  Reported as slower / quicker (>= 1), with the
   direction of the slower stroke.
+* The limit positions (where the rate changes sign), and the stroke's and swing's
+  extremes there, are located on the solver between the samples
+  (:func:`analytic.refine.turning_points`, to 1e-12 rad or of the size), so they, the spans
+  and the ratio are exact to the digits printed, at any number of points.
 * **Transmission angle** of each dyad: its least value folded into 0..90 deg and its
   largest deviation from 90 deg (= 90 - least), with where it occurs.
 * **Peak drive effort** and the event nearest it (a peak next to a limit or singular
-  position is the mechanism's own, not an error).
+  position is the mechanism's own, not an error); an interior peak is located on the
+  solver between the samples beside the largest one (:func:`analytic.refine.peak`).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .mechanism import Revolute
+from .refine import least_transmission, peak, turning_points, unit_rate_kinematics
 from .tolerances import SINGULAR_CONDITION
 
 #: The peak drive effort is said to sit at an event (singular position, change point,
@@ -96,10 +102,11 @@ class Summary:
         for s in self.strokes:
             unit = "m" if s.kind == "slider" else "deg"
             if s.turns_fully:
-                out.append(f"{s.kind} {s.name}: turns fully")
+                out.append(f"{s.name} turns fully")
                 continue
-            line = (f"{s.kind} {s.name}: {'stroke' if s.kind == 'slider' else 'swing'} "
-                    f"{s.travel:.6g} {unit} ({s.low:.6g} to {s.high:.6g} {unit})")
+            # "stroke of slider ram", "swing of rocker" (a body's name often is its kind)
+            what = f"stroke of slider {s.name}" if s.kind == "slider" else f"swing of {s.name}"
+            line = f"{what}: {s.travel:.6g} {unit} ({s.low:.6g} to {s.high:.6g} {unit})"
             if s.time_ratio is not None:
                 line += (f", time ratio {s.time_ratio:.4f} (slower stroke {s.slow_direction}"
                          f" over {s.slow_span:.4f} {u} of input, quicker over "
@@ -127,9 +134,31 @@ class Summary:
         return out
 
 
-def _spans(x: np.ndarray, y: np.ndarray, period: float):
+def _turning_points(lk, kin, roots, value, samples, turn):
+    """The limit positions ``roots`` (SI, :func:`analytic.refine.turning_points`) with
+    the series' value there: ``[(input SI, value)]``, the value (``value(kinematics)``)
+    on the samples' own turn when ``turn`` (360 for an unwrapped angle in deg)."""
+    if not roots:
+        return []
+    vals = np.asarray(value(unit_rate_kinematics(lk, np.array(roots))), float)
+    if turn:  # on the turn of the nearest sample
+        near = np.asarray(samples)[np.argmin(np.abs(np.asarray(kin.value)[None, :]
+                                                    - np.array(roots)[:, None]), axis=1)]
+        vals = vals + turn * np.round((near - vals) / turn)
+    return list(zip(roots, vals.tolist(), strict=True))
+
+
+def _spans(x: np.ndarray, y: np.ndarray, period: float, turns=(), conv=None):
     """Input spans of the increasing and decreasing strokes of a periodic ``y(x)``
-    with one maximum and one minimum per period (parabolic interpolation)."""
+    with one maximum and one minimum per period: between its two limit positions
+    ``turns`` (:func:`_turning_points`), else by parabolic interpolation of the
+    samples."""
+    if len(turns) == 2:
+        (x0, y0), (x1, y1) = turns
+        xmax, xmin = (x0, x1) if y0 > y1 else (x1, x0)
+        inc = float(conv(xmax) - conv(xmin)) % period
+        return inc, period - inc
+
     def vertex(i):
         n = len(y)
         a, b, c = y[(i - 1) % n], y[i], y[(i + 1) % n]
@@ -141,10 +170,14 @@ def _spans(x: np.ndarray, y: np.ndarray, period: float):
     return inc, period - inc
 
 
-def _extremes(y: np.ndarray, periodic: bool) -> tuple[float, float]:
-    """Least and greatest value of sampled ``y``: an interior extreme (or any, when
-    periodic) is the vertex of the parabola through it and its neighbours, which
-    removes the sampling error (O(h^2)) of the plain min/max."""
+def _extremes(y: np.ndarray, periodic: bool, turns=()) -> tuple[float, float]:
+    """Least and greatest value of ``y``: of the samples and of the limit positions
+    ``turns`` located between them (:func:`_turning_points`); without those, an
+    interior extreme (or any, when periodic) is the vertex of the parabola through it
+    and its neighbours, which removes the sampling error (O(h^2)) of the plain min/max."""
+    if len(turns):
+        v = [t[1] for t in turns]
+        return min(float(np.min(y)), min(v)), max(float(np.max(y)), max(v))
     out = []
     n = len(y)
     for i, sgn in ((int(np.argmin(y)), -1), (int(np.argmax(y)), 1)):
@@ -188,10 +221,12 @@ def summarise(result, nearest_event=None) -> Summary:
             continue
         jn = topo.joint_names[j]
         s = kin.slider(jn)[0]
-        lo, hi = _extremes(s, periodic)
+        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[("slider", jn)],
+                                lambda k, jn=jn: k.slider(jn)[0], s, None)
+        lo, hi = _extremes(s, periodic, turns)
         st = dict(kind="slider", name=jn, low=lo, high=hi, travel=hi - lo)
         if periodic and _reversals(s) == 2:
-            inc, dec = _spans(x, s, period)
+            inc, dec = _spans(x, s, period, turns, conv)
             slow, quick, dirn = (inc, dec, "increasing") if inc >= dec else \
                 (dec, inc, "decreasing")
             st.update(slow_span=slow, quick_span=quick, slow_direction=f"(s {dirn})")
@@ -210,18 +245,19 @@ def summarise(result, nearest_event=None) -> Summary:
         if periodic and abs(net) > 180.0:
             summ.strokes.append(Stroke("rocker", body, math.nan, math.nan, math.nan, True))
             continue
-        lo, hi = _extremes(th, periodic)
+        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[
+            ("group", int(topo.group_of[b]))], lambda k, b=b: np.degrees(k.theta[:, b]),
+            th, 360.0)
+        lo, hi = _extremes(th, periodic, turns)
         st = dict(kind="rocker", name=body, low=lo, high=hi, travel=hi - lo)
         if periodic and _reversals(th) == 2:
-            inc, dec = _spans(x, th, period)
+            inc, dec = _spans(x, th, period, turns, conv)
             slow, quick, dirn = (inc, dec, "ccw") if inc >= dec else (dec, inc, "cw")
             st.update(slow_span=slow, quick_span=quick, slow_direction=f"({dirn})")
         summ.strokes.append(Stroke(**st))
-    for jn, tr in kin.transmission.items():
-        folded = np.minimum(tr, 180.0 - tr)
-        i = int(np.argmin(folded))
-        summ.transmission.append(TransmissionSummary(jn, float(folded[i]), float(x[i]),
-                                                     float(90.0 - folded[i])))
+    for jn, least, at, _ in least_transmission(lk, kin, periodic):
+        summ.transmission.append(TransmissionSummary(jn, least, float(conv(at)),
+                                                     90.0 - least))
     # forces at a singular sample are not determined by the motion: left out
     regular = kin.condition < SINGULAR_CONDITION
     summ.singular_samples = int(np.sum(~regular))
@@ -233,6 +269,9 @@ def summarise(result, nearest_event=None) -> Summary:
             summ.effort_name = "drive torque" if rev else "drive force"
             summ.effort_unit = "N m" if rev else "N"
             summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
+            got = _located_peak(lk, kin, eff, i, periodic)
+            if got is not None and got[1] >= summ.peak_effort:
+                summ.peak_effort, summ.peak_effort_at = got[1], float(conv(got[0]))
             if nearest_event is not None:
                 ev = nearest_event(result, float(x[i]),
                                    kinds=("singular", "change_point", "input_limit"))
@@ -242,6 +281,30 @@ def summarise(result, nearest_event=None) -> Summary:
         summ.power_balance = float(np.max(np.abs(frc.power_residual[regular]))
                                    / _power_scale(kin, frc, regular))
     return summ
+
+
+def _located_peak(lk, kin, eff: np.ndarray, i: int, periodic: bool):
+    """The peak drive effort next to the largest sample ``i``, located on the solver
+    between its neighbours (:func:`analytic.refine.peak`) at the sweep's own input rates:
+    ``(input SI, |effort|)``; ``None`` at an end of a limited sweep or beside a singular
+    sample (where the largest sample is what the table shows)."""
+    n = len(eff)
+    if n < 3 or not (periodic or 0 < i < n - 1) or \
+            not (np.isfinite(eff[i - 1]) and np.isfinite(eff[(i + 1) % n])):
+        return None
+    x = np.asarray(kin.value, float)
+    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
+    lo = x[i - 1] if i > 0 else x[-1] - period
+    hi = x[i + 1] if i < n - 1 else x[0] + period
+    vel, acc = float(kin.velocity[i]), float(kin.acceleration[i])
+
+    def value(t):
+        k = lk.kinematics(t, np.full(len(t), vel), np.full(len(t), acc), on_singular="flag")
+        return np.abs(lk.forces(k).effort)
+    got = peak(lk, lo, hi, value)
+    if got is not None and periodic:
+        got = (float(x[0] + np.mod(got[0] - x[0], period)), got[1])
+    return got
 
 
 def _power_scale(kin, frc, regular) -> float:

@@ -40,6 +40,7 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
+from .refine import least_transmission, sign_changes, turning_points
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
 from .tolerances import SINGULAR_CONDITION
@@ -67,6 +68,37 @@ class SweepResult:
         return nearest_event(self, at, kinds)
 
 
+def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf
+                  ) -> np.ndarray:
+    """Input angles (rad) moved to values whose degree value, printed in full, reads back
+    as the same angle (``radians(degrees(v)) == v``; :func:`input_degrees` prints it):
+    to the nearest 1e-10 deg where the grid is coarse enough that this cannot reorder
+    it or leave ``[lo, hi]`` (``359``, not ``358.99999999999994``), else by a few ulps.
+    A row of the table is then solved at exactly the input it prints."""
+    v = np.asarray(values, float).copy()
+    if not len(v):
+        return v
+    d = np.degrees(v)
+    r = np.radians(np.round(d, 10))
+    if len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8:
+        v = np.where((r >= lo) & (r <= hi), r, v)
+    for _ in range(8):  # radians(degrees(.)) reaches a fixed point in 1-2 steps
+        w = np.radians(np.degrees(v))
+        ok = (w == v) | (np.radians(np.round(np.degrees(v), 10)) == v)
+        if ok.all():
+            break
+        v = np.where(ok, v, w)
+    return v
+
+
+def input_degrees(values: np.ndarray) -> np.ndarray:
+    """The input column of a revolute driver, deg: ``values`` (rad) in degrees, to 1e-10
+    deg where that reads back as the same angle, else in full (17 digits)."""
+    v = np.asarray(values, float)
+    r = np.round(np.degrees(v), 10)
+    return np.where(np.radians(r) == v, r, np.degrees(v))
+
+
 def input_values(linkage: Linkage, points: int, start: float | None = None
                  ) -> tuple[np.ndarray, bool, list]:
     """The sweep's input values: a full turn from ``start`` (default the reference
@@ -78,7 +110,7 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
     if linkage.driver_is_revolute and len(feas) == 1 and \
             feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
         a = v0 if start is None else start
-        return a + 2 * math.pi * np.arange(points) / points, True, feas
+        return exact_degrees(a + 2 * math.pi * np.arange(points) / points), True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
             # stay a hair inside the limit positions, where the Jacobian is singular:
@@ -93,57 +125,39 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
                     continue
                 if np.all(ends.condition < SINGULAR_CONDITION):
                     break
+            if linkage.driver_is_revolute:  # printable inputs, still half the pad inside
+                x = exact_degrees(x, lo + pad / 2, hi - pad / 2)
             return x, False, feas
     raise AssemblyError(f"mechanism {linkage.mech.name!r}: the reference input is not in a "
                         f"feasible range {feas}", v0, feas)
 
 
-def _crossings(x: np.ndarray, y: np.ndarray, periodic: bool, scale: float = 0.0
-               ) -> list[float]:
-    """Input values where ``y`` changes sign, linearly interpolated.
-
-    Samples within 1e-9 of the series' peak (or of ``scale``, the size the series would
-    have if it moved at all, when larger) of zero are round-off, not sign: a stretch of
-    them (a parallelogram's translating coupler) yields at most one crossing, between
-    the significant samples on either side, and a series of round-off alone none.
-    """
-    n = len(y)
-    peak = max(float(np.max(np.abs(y))) if n else 0.0, scale)
-    sig = np.flatnonzero(np.abs(y) > 1e-9 * peak) if peak > 0 else np.array([], int)
-    out = []
-    if len(sig) < 2:
-        return out
-    a, b = sig[:-1], sig[1:]
-    if periodic:
-        a, b = np.append(a, sig[-1]), np.append(b, sig[0])
-    # only the pairs whose signs differ (a list of every pair held ~120 B a sample)
-    flip = np.flatnonzero(y[a] * y[b] < 0)
-    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    for i, k in zip(a[flip], b[flip], strict=True):
-        y0, y1 = y[i], y[k]
-        if y0 * y1 < 0:
-            x1 = x[k] if k > i else x[k] + period
-            v = x[i] + (x1 - x[i]) * y0 / (y0 - y1)
-            out.append(float(v - period if periodic and v > x[-1] + (x[1] - x[0]) / 2
-                             else v))
-    return out
+def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
+                 ) -> np.ndarray:
+    """``points`` input values (SI) from ``input_range[0]`` to ``input_range[1]``."""
+    x = np.linspace(*input_range, points)
+    return exact_degrees(x) if linkage.driver_is_revolute else x
 
 
 def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                 feasible: list | None = None, crossings: list | None = None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
 
-    * ``singular``: the loop Jacobian's determinant changes sign or its condition
-      number exceeds :data:`SINGULAR_CONDITION`: the output cannot be driven
+    * ``singular``: the loop Jacobian's determinant changes sign (located on the solver
+      by regula falsi, :func:`analytic.refine.sign_changes`) or its condition number
+      exceeds :data:`SINGULAR_CONDITION` at a sample: the output cannot be driven
       there (dead centre) or the linkage may switch branch (change point);
     * ``change_point``: a singular position where two branches cross, passed on the
       branch named in the detail (``crossings``, see :mod:`analytic.branches`);
     * ``limit``: a body's angular velocity or a slider's velocity changes sign: the
-      extreme (toggle) positions of rockers and the dead centres of sliders; and, for
+      extreme (toggle) positions of rockers and the dead centres of sliders, located
+      on the solver between the samples (:mod:`analytic.refine`, to 1e-12 rad or of
+      the size); and, for
       a sweep of a limited range (``feasible``), the input's own limit positions at
       the ends of the range, beyond which the loops cannot close (located to 1e-9);
     * ``min_transmission``: the least transmission angle of each dyad (folded into
-      0..90 deg) and its largest deviation from 90 deg.
+      0..90 deg) and its largest deviation from 90 deg, located on the solver
+      (:func:`analytic.refine.least_transmission`).
 
     Inputs are in the frame's units (deg or m); a full cycle's are wrapped into one
     turn from its first value.
@@ -153,7 +167,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     x = kin.value
     conv = np.degrees if rev else (lambda v: v)
     rows = []
-    for v in _crossings(x, kin.determinant, periodic):
+    for v in sign_changes(linkage, x, kin.determinant, periodic,
+                          lambda k: (k.determinant, np.full(k.n, np.nan))):
         rows.append(("singular", "loop Jacobian", float(conv(v)),
                      "determinant changes sign: dead centre or change point"))
     hi = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
@@ -161,9 +176,8 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         rows.append(("singular", "loop Jacobian", float(conv(x[i])),
                      f"condition number {kin.condition[i]:.3g}"))
     # rates at a singular sample are not determined by the input: no limits from them
-    regular = kin.condition < SINGULAR_CONDITION
-    xr = x[regular]
-    w_in = float(np.max(np.abs(kin.velocity))) if len(x) else 0.0
+    # (analytic.refine.turning_points: the regular samples bracket, the solver locates)
+    turns = turning_points(linkage, kin, periodic)
     size = size_of(topo)
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
@@ -172,16 +186,13 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
         # one row per rotation group (bodies of a group share omega)
         if any(topo.group_of[o] == topo.group_of[b] for o in range(b)):
             continue
-        for v in _crossings(xr, (kin.omega[:, b] * np.sign(kin.velocity))[regular], periodic,
-                            w_in * (1.0 if rev else 1.0 / size)):
+        for v in turns[("group", int(topo.group_of[b]))]:
             rows.append(("limit", name, float(conv(v)), "omega = 0 (extreme angle)"))
     for j in topo.prismatic:
         jn = topo.joint_names[j]
         if j == topo.driver_joint:
             continue
-        _, sd, _ = kin.slider(jn)
-        for v in _crossings(xr, (sd * np.sign(kin.velocity))[regular], periodic,
-                            w_in * (size if rev else 1.0)):
+        for v in turns[("slider", jn)]:
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
@@ -213,12 +224,10 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
                                  "the branch whose velocity is continuous)"))
-    for jn, tr in kin.transmission.items():
-        folded = np.minimum(tr, 180.0 - tr)
-        i = int(np.argmin(folded))
-        rows.append(("min_transmission", jn, float(conv(x[i])),
-                     f"least transmission angle {folded[i]:.3f} deg (raw {tr[i]:.3f} deg; "
-                     f"largest deviation from 90 deg: {90.0 - folded[i]:.3f} deg)"))
+    for jn, least, at, raw in least_transmission(linkage, kin, periodic):
+        rows.append(("min_transmission", jn, float(conv(at)),
+                     f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
+                     f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
     ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
     if periodic and rev and len(ev) and len(x):
         a = float(np.degrees(x[0]))
@@ -369,8 +378,8 @@ def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFr
     mech, topo = linkage.mech, linkage.topo
     rev = linkage.driver_is_revolute
     cols: dict[str, np.ndarray] = {
-        # degrees rounded to 1e-10 deg: 359 deg, not 358.99999999999994
-        "input": np.round(np.degrees(kin.value), 10) if rev else kin.value,
+        # the value solved at: radians(input) is the row's input (exact_degrees)
+        "input": input_degrees(kin.value) if rev else kin.value,
         "input_velocity": kin.velocity, "input_acceleration": kin.acceleration}
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
@@ -515,7 +524,7 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
     if values is not None:
         values, feas = np.asarray(values, float), linkage.feasible_ranges()
     elif input_range is not None:
-        values, feas = np.linspace(*input_range, points), linkage.feasible_ranges()
+        values, feas = range_values(linkage, input_range, points), linkage.feasible_ranges()
     else:
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")

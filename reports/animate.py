@@ -58,6 +58,9 @@ class Frames:
     engines: list[Poses] = field(default_factory=list)
     forces: dict | None = None    # joint -> (F, 2) N, by body_a on body_b
     revolute: bool = True
+    rates: np.ndarray | None = None          # (F,) prescribed rate, rad/s or m/s
+    accelerations: np.ndarray | None = None  # (F,) prescribed acceleration
+    convention: object = None     # analytic.input_display.InputConvention of the input
 
     @property
     def n(self) -> int:
@@ -65,45 +68,50 @@ class Frames:
 
 
 # ============================================================================ frames
-def frame_inputs(linkage, frames: int = FRAMES) -> tuple[np.ndarray, np.ndarray]:
-    """``(values, times)`` of the frames: a full turn from the reference value, or the
-    feasible range back and forth from it; times at the description's rate (an
-    accelerating driver: its prescribed law where it reaches the value, else the travel
-    at the reference rate)."""
+def frame_times(linkage, frames: int = FRAMES, tree=None) -> np.ndarray:
+    """Equal times (s, from t = 0) along the prescribed motion: one turn of a full-turn
+    input (its first, at the accelerating rate where it accelerates), else the
+    interval the engines run (:func:`sim_models.sampling.plan_samples`: until the input
+    nears a limit position, or has travelled its range).  A driver with neither rate
+    nor acceleration has no motion: one line, status 2."""
     from analytic.sweep import input_values
+    from sim_models import compile_linkage
+    from sim_models.sampling import plan_samples, travel_time
     d = linkage.mech.driver
-    v0 = d.value
-    vals, full, _ = input_values(linkage, 8)
-    if full:
-        values = v0 + 2 * math.pi * np.arange(frames) / frames
-    else:
-        lo, hi = float(vals[0]), float(vals[-1])
-        first, second = (hi, lo) if d.velocity >= 0 else (lo, hi)
-        legs = [abs(first - v0), abs(second - first), abs(v0 - second)]
-        total = sum(legs) or 1.0
-        counts = [max(2, round(frames * x / total)) for x in legs]
-        values = np.concatenate([
-            np.linspace(v0, first, counts[0], endpoint=False),
-            np.linspace(first, second, counts[1], endpoint=False),
-            np.linspace(second, v0, counts[2], endpoint=False)])
-    travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(values)))])
-    rate = abs(d.velocity) or 1.0
-    times = travel / rate
-    if d.acceleration != 0.0 and full:
-        from sim_models.sampling import time_of
-        t = np.array([time_of(d, float(v)) for v in values])
-        times = np.where(np.isfinite(t), t, times)
-    return values, times
+    if input_values(linkage, 2)[1]:
+        T = travel_time(d, 2 * math.pi)
+        if math.isfinite(T) and T > 0:
+            return T * np.arange(frames) / frames
+    plan = plan_samples(tree or compile_linkage(linkage.mech), 1, max(frames, 2))
+    return np.linspace(0.0, float(plan.t_end), frames)
 
 
-def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False) -> Frames:
-    """The analytic poses (and joint forces) at :func:`frame_inputs`, on the branch the
+def frame_inputs(linkage, frames: int = FRAMES, tree=None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """``(values, times)`` of the frames: :func:`frame_times` and the prescribed input
+    value (rad or m) there, ``value + v t + a t^2 / 2``, unwrapped."""
+    t = frame_times(linkage, frames, tree)
+    return prescribed(linkage, t)[0], t
+
+
+def prescribed(linkage, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The description's driver law at times ``t`` (s): value, rate, acceleration."""
+    d = linkage.mech.driver
+    t = np.asarray(t, float)
+    return (d.value + d.velocity * t + 0.5 * d.acceleration * t * t,
+            d.velocity + d.acceleration * t, np.full_like(t, d.acceleration))
+
+
+def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False,
+                    tree=None) -> Frames:
+    """The analytic poses (and joint forces) at :func:`frame_times` along the
+    prescribed motion (its rate and acceleration at each frame), on the branch the
     moving linkage follows from the reference assembly."""
+    from analytic.input_display import convention_of
     mech = linkage.mech
-    values, times = frame_inputs(linkage, frames)
-    d = mech.driver
-    kin = linkage.kinematics_along(values, np.full(len(values), d.velocity),
-                                   np.full(len(values), d.acceleration))
+    times = frame_times(linkage, frames, tree)
+    values, rate, acc = prescribed(linkage, times)
+    kin = linkage.kinematics_along(values, rate, acc)
     frc = None
     if forces:
         if not mech.has_mass:
@@ -113,18 +121,49 @@ def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False) -> Fram
         frc = {jt.name: np.asarray(f.joint_force[jt.name], float) for jt in mech.joints}
     return Frames(mech, values, times, Poses("analytic", np.asarray(kin.theta, float),
                                              np.asarray(kin.origin, float)),
-                  forces=frc, revolute=linkage.driver_is_revolute)
+                  forces=frc, revolute=linkage.driver_is_revolute, rates=rate,
+                  accelerations=acc, convention=convention_of(linkage))
 
 
-def engine_poses(run_, tree, values: np.ndarray, full: bool) -> Poses:
-    """The engine's body poses at the frames' input values: each frame takes the run's
-    sample at the same input (modulo a turn for a full-turn crank; within a tenth of
-    the frame spacing), NaN where the run has none."""
-    th, _, _, org = tree.propagate(run_.q, run_.qd, run_.qdd)[:4]
-    sv = np.asarray(run_.values, float)
-    ok = np.all(np.isfinite(run_.q), axis=1)
+def engine_pose_arrays(run_, tree) -> tuple[np.ndarray, np.ndarray]:
+    """``(theta (N, B), origin (N, B, 2))`` of an engine run's samples: from its tree
+    coordinates (:meth:`sim_models.tree.SimTree.propagate`) where it has them, else
+    the absolute poses it recorded (an engine in absolute coordinates, Exudyn); NaN
+    where it has neither."""
+    N, B = np.shape(run_.theta)
+    theta, origin = np.full((N, B), np.nan), np.full((N, B, 2), np.nan)
+    if run_.q is not None:
+        ok = np.all(np.isfinite(run_.q), axis=1)
+        if ok.any():
+            th, _, _, org = tree.propagate(run_.q[ok], run_.qd[ok], run_.qdd[ok])[:4]
+            theta[ok], origin[ok] = th, org
+    if run_.origin is not None:
+        absent = ~np.all(np.isfinite(theta), axis=1)
+        theta[absent] = np.asarray(run_.theta, float)[absent]
+        origin[absent] = np.asarray(run_.origin, float)[absent]
+    return theta, origin
+
+
+def engine_poses(run_, tree, values: np.ndarray, full: bool, times=None) -> Poses:
+    """The engine's body poses at the frames: with ``times`` (the frames' times, s),
+    the run's sample at the same time (within 1e-9 of the run's span: a run sampled at
+    the frames, :func:`engine_run`); else the sample at the same input value (modulo a
+    turn for a full-turn crank; within a tenth of the frame spacing).  NaN where the
+    run has none."""
+    th, org = engine_pose_arrays(run_, tree)
+    ok = np.all(np.isfinite(th), axis=1) & np.all(np.isfinite(org), axis=(1, 2))
     F, B = len(values), th.shape[1]
     theta, origin = np.full((F, B), np.nan), np.full((F, B, 2), np.nan)
+    if times is not None:
+        st = np.asarray(run_.times, float)
+        span = max(float(np.nanmax(st)) if np.isfinite(st).any() else 0.0, 1e-12)
+        for i, t in enumerate(np.asarray(times, float)):
+            dt = np.where(ok & np.isfinite(st), np.abs(st - t), np.inf)
+            k = int(np.argmin(dt))
+            if dt[k] <= 1e-9 * span:
+                theta[i], origin[i] = th[k], org[k]
+        return Poses(run_.engine, theta, origin)
+    sv = np.asarray(run_.values, float)
     spacing = np.min(np.abs(np.diff(values))) if len(values) > 1 else 1.0
     for i, v in enumerate(values):
         dv = sv - v
@@ -137,11 +176,16 @@ def engine_poses(run_, tree, values: np.ndarray, full: bool) -> Poses:
     return Poses(run_.engine, theta, origin)
 
 
-def engine_run(mech, tree, engine: str, frames: int):
-    """An engine run sampled at the frames' inputs (a full turn: one sample a frame)."""
+def engine_run(mech, tree, engine: str, frames: int, times=None):
+    """An engine run sampled at the frames: at their ``times`` (s, the prescribed
+    motion from t = 0: one sample a frame) when given, else at the verdict's plan
+    (``frames`` samples of the last of two turns)."""
     from sim_models.engines import run
     from sim_models.registry import get_engine
+    from sim_models.sampling import times_plan
     settings = get_engine(engine).settings({})
+    if times is not None:
+        return run(tree, engine, settings, plan=times_plan(tree, np.asarray(times, float)))
     return run(tree, engine, settings, revolutions=2, samples=frames)
 
 
@@ -274,10 +318,12 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
     body_art, joints, jtext = _bodies(ax, mech)
     eng_art = _engines(ax, fr, list(body_art))
     quiv = _force_arrows(ax, fr, size)
-    info = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", ha="left", fontsize=8,
-                   family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
-    ax.legend(fontsize=7, loc="upper right")
-    d = mech.driver
+    # under the axes, where it covers neither the linkage nor the legend
+    info = fig.text(0.02, 0.01, "", va="bottom", ha="left", fontsize=9,
+                    family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
+    ax.legend(fontsize=9, loc="upper right")
+    from analytic.input_display import InputConvention
+    conv = fr.convention or InputConvention(fr.revolute, fr.revolute)
 
     def draw(i: int):
         outl = body_outlines(mech, fr.analytic, i)
@@ -303,11 +349,7 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
             F = np.array([fr.forces[jt.name][i] for jt in mech.joints])
             quiv.set_offsets(xy)
             quiv.set_UVC(F[:, 0], F[:, 1])
-        v = fr.values[i]
-        val = f"{math.degrees(v) % 360:7.2f} deg" if fr.revolute else f"{v:.5g} m"
-        rate = f"{d.velocity:g} rad/s" if fr.revolute else f"{d.velocity:g} m/s"
-        info.set_text(f"input {d.joint} = {val}  ({rate})\nt = {fr.times[i]:.4f} s   "
-                      f"frame {i + 1}/{fr.n}")
+        info.set_text(info_text(fr, i, conv))
         return []
 
     labels = [txt for _, _, txt in body_art.values()] + list(jtext.values())
@@ -320,6 +362,20 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
     return Animator(fig, ax, draw, dynamic, fr.n, labels)
 
 
+def info_text(fr: Frames, i: int, conv) -> str:
+    """The text box of frame ``i``: the input (the one display convention), its
+    prescribed rate (and acceleration) there, the time along the motion."""
+    from analytic.input_display import input_text
+    d = fr.mech.driver
+    u = "rad/s" if fr.revolute else "m/s"
+    rate = fr.rates[i] if fr.rates is not None else d.velocity
+    acc = fr.accelerations[i] if fr.accelerations is not None else d.acceleration
+    line = f"input {d.joint} = {input_text(float(fr.values[i]), conv)}, {rate:.4g} {u}"
+    if acc:
+        line += f", {acc:.4g} {u[:-2]}/s^2"
+    return f"{line}\nt = {fr.times[i]:.4f} s   frame {i + 1}/{fr.n}"
+
+
 def _axes(fr: Frames, title: str, dpi: int):
     """``(fig, ax, size)``: equal axes around every frame's bodies, with room for the
     text box; ``size`` (m) the largest extent of the motion."""
@@ -329,9 +385,10 @@ def _axes(fr: Frames, title: str, dpi: int):
     lo, hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
     size = float(np.max(hi - lo)) or 1.0
     fig, ax = plots.plt.subplots(figsize=(6.4, 4.8), dpi=dpi)
+    fig.subplots_adjust(bottom=0.2)  # the frame's text box below the axes
     pad = 0.15 * size
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad - 0.05 * size, hi[1] + pad + 0.1 * size)  # room for the text
+    ax.set_ylim(lo[1] - pad - 0.05 * size, hi[1] + pad + 0.1 * size)  # room for the legend
     ax.set_aspect("equal")
     ax.grid(alpha=0.25)
     ax.set_xlabel("x (m)")
@@ -540,35 +597,42 @@ def offline_html(html: str) -> str:
 
 
 def cmd_animate(args) -> int:
-    from analytic import Linkage, load_case
+    from analytic import load_case
     from sim_models import compile_linkage
 
     from .plot_cmd import check_out
     if args.out is None:
         raise OutputError("option --out is required: F.gif, F.mp4 or F.html")
     check_out(args.out, FORMATS)
+    from .cli_paths import check_outputs
+    check_outputs([("--out", args.out)], [("the case file", args.case)])
     if Path(args.out).suffix.lower() == ".mp4":
         from matplotlib import animation
         if not animation.writers.is_available("ffmpeg"):
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
                               "write .gif or .html instead (or install ffmpeg)")
     mech = load_case(args.case)
-    # the compiled linkage (analytic solution + simulation tree) only when an engine runs
-    tree = compile_linkage(mech) if args.engine else None
-    fr = analytic_frames(tree.linkage if tree else Linkage(mech), args.frames, args.forces)
+    # the compiled linkage (analytic solution + simulation tree): the frames' times come
+    # from the engines' plan where the input does not turn fully
+    tree = compile_linkage(mech)
+    fr = analytic_frames(tree.linkage, args.frames, args.forces, tree)
     notes = []
     if args.engine:
         from .verdict_runs import engine_list
-        full = _full(tree.linkage)
         for e in engine_list(args.engine):
-            r = engine_run(mech, tree, e, args.frames)
+            from .progress import engine_progress
+            with engine_progress(f"{e}: {mech.name}, {fr.n} frames"):
+                r = engine_run(mech, tree, e, args.frames, times=fr.times)  # a frame a sample
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
-            poses = engine_poses(r, tree, fr.values, full)
-            missing = int(np.sum(~np.isfinite(poses.theta[:, 0])))
-            if missing:
-                notes.append(f"{e}: no sample at {missing} of {fr.n} frames (drawn where it "
-                             "has one)")
+            poses = engine_poses(r, tree, fr.values, False, times=fr.times)
+            missing = int(np.sum(~np.all(np.isfinite(poses.theta), axis=1)))
+            if missing == fr.n:
+                notes.append(f"{e}: not drawn: no pose at any frame ("
+                             + (r.reason or "the run recorded no body poses") + ")")
+            elif missing:
+                notes.append(f"{e}: no pose at {missing} of {fr.n} frames (drawn where it "
+                             "has one" + (f"; {r.reason}" if r.reason else "") + ")")
             fr.engines.append(poses)
     label = "analytic" + ("".join(f" + {e.label} (dashed)" for e in fr.engines))
     an = build_animation(fr, f"{mech.name}: {label}")
@@ -577,11 +641,6 @@ def cmd_animate(args) -> int:
         print("note:", n)
     print(f"wrote {args.out} ({fr.n} frames, {fr.times[-1]:.4g} s of motion)")
     return 0
-
-
-def _full(linkage) -> bool:
-    from analytic.sweep import input_values
-    return bool(input_values(linkage, 2)[1])
 
 
 def register(sub) -> None:

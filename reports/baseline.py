@@ -3,8 +3,9 @@
 A baseline file records, per (case, engine, quantity), the worst error relative to the
 quantity's peak over the cycle, where in the cycle it occurs, the tolerance, and what is
 needed to re-run the run exactly: the mechanism's source (a built-in case name, or a
-TOML file path relative to the baseline file, each with a SHA-256 of its content so a
-changed model is detected), the run request and the engine's settings object in full.
+TOML file path relative to the baseline file), with the parsed mechanism flattened to its
+SI values and their SHA-256 (:mod:`reports.model_identity`: a comment or CRLF is no
+change, a real one is named), the run request and the engine's settings object in full.
 It also records the versions the run was made with (engine, linkage-xval, Python,
 numpy, platform).  :func:`check` re-runs every recorded run and judges each quantity
 (:func:`judge`): above its tolerance, grown by more than ``factor`` over its baseline
@@ -19,8 +20,9 @@ keys sorted, two-space indent, one line per quantity, so that a diff shows what 
         {
           "case": "seed-four-bar",                 # the mechanism's name (a label)
           "engine": "mujoco",                      # a registry name
-          "model": {"builtin": "seed-four-bar", "sha256": "..."}
-                 | {"file": "linkages/four_bar.toml", "sha256": "..."},
+          "model": {"builtin": "seed-four-bar", "sha256": "...", "content": {...}}
+                 | {"file": "linkages/four_bar.toml", "sha256": "...",
+                    "content": {"bodies.coupler.mass": 0.6, ...}},   # one line
           "quantities": [
             {"at": 165.0, "at_unit": "deg", "error": 1.48e-08, "max_abs": ..., "peak": ...,
              "quantity": "B.force", "tolerance": 0.001},
@@ -91,14 +93,20 @@ class BaselineError(LinkageError):
 class ModelSource:
     """Where a run's mechanism comes from: ``kind`` "builtin" (``name`` a case name) or
     "file" (``name`` a path relative to the baseline file's folder, POSIX separators);
-    ``sha256`` of the description's bytes when recorded."""
+    ``sha256`` of the parsed mechanism's canonical content when recorded
+    (:func:`reports.model_identity.digest`; files recorded before that hold the SHA-256
+    of the file's bytes, still accepted); ``content`` the mechanism flattened
+    (:func:`reports.model_identity.content`), so a change can be named (None in older
+    files)."""
 
     kind: str
     name: str
     sha256: str
+    content: dict | None = field(default=None, compare=False)
 
     def as_json(self) -> dict:
-        return {self.kind: self.name, "sha256": self.sha256}
+        out = {self.kind: self.name, "sha256": self.sha256}
+        return out if self.content is None else {**out, "content": self.content}
 
     def path(self, base_dir: Path) -> Path:
         """The description file this source names now."""
@@ -212,7 +220,7 @@ def dumps(baseline: Baseline) -> str:
 def _dump(obj, level: int, key: str | None) -> str:
     pad, inner = "  " * level, "  " * (level + 1)
     if isinstance(obj, dict):
-        if key == "quantity-line":
+        if key in ("quantity-line", "content"):  # one line each
             return json.dumps(obj, sort_keys=True)
         if not obj:
             return "{}"
@@ -266,6 +274,9 @@ def _parse(doc, p: Path) -> Baseline:
         raise BaselineError(f"{where}: schema_version {ver!r} is not supported (this "
                             f"xval reads {SCHEMA_VERSION})")
     runs = _get(doc, "runs", list, where)
+    if not runs:  # a baseline that judges nothing must not pass
+        raise BaselineError(f"{where}: 'runs' is empty: a baseline with no runs judges "
+                            "nothing; record one with xval baseline record")
     out, seen = [], set()
     for i, r in enumerate(runs):
         rec = _parse_run(r, f"{where}: runs[{i}]")
@@ -298,12 +309,16 @@ def _parse_run(r, where: str) -> RunRecord:
     case = _get(r, "case", str, where)
     engine = _get(r, "engine", str, where)
     where = f"{where} ({case} / {engine})"
+    _known_engine(engine, where)
     model = _get(r, "model", dict, where)
     kinds = [k for k in ("builtin", "file") if k in model]
     if len(kinds) != 1:
         raise BaselineError(f"{where}: model needs exactly one of 'builtin' or 'file'")
+    content = model.get("content")
+    if content is not None and not isinstance(content, dict):
+        raise BaselineError(f"{where}: model: 'content' must be an object")
     src = ModelSource(kinds[0], _get(model, kinds[0], str, f"{where}: model"),
-                      _get(model, "sha256", str, f"{where}: model"))
+                      _get(model, "sha256", str, f"{where}: model"), content)
     request = _get(r, "request", dict, where)
     for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
                    ("max_speed_error", float), ("chords", str), ("mode", str)):
@@ -311,8 +326,10 @@ def _parse_run(r, where: str) -> RunRecord:
     if request["mode"] != "run":
         raise BaselineError(f"{where}: request mode {request['mode']!r}: only 'run' is "
                             "supported")
+    _request_in_range(request, where)
     settings = _get(r, "settings", dict, where)
     _get(settings, "fields", dict, f"{where}: settings")
+    _settings_in_range(engine, settings, where)
     vers = _get(r, "versions", dict, where)
     qs = []
     for j, q in enumerate(_get(r, "quantities", list, where)):
@@ -331,7 +348,100 @@ def _parse_run(r, where: str) -> RunRecord:
                                  _num(q.get("peak"))))
     if len({q.quantity for q in qs}) != len(qs):
         raise BaselineError(f"{where}: a quantity is recorded twice")
+    if not qs:  # nothing to judge: the run would pass whatever its errors
+        raise BaselineError(f"{where}: 'quantities' is empty: a run with no recorded "
+                            "quantity judges nothing; record it again")
     return RunRecord(case, engine, src, dict(request), settings, dict(vers), tuple(qs))
+
+
+def _known_engine(engine: str, where: str) -> None:
+    """A registered engine name (an engine whose library is missing is a failed run at
+    check time, not a bad file)."""
+    from sim_models.registry import engine_names
+    if engine not in engine_names():
+        raise BaselineError(f"{where}: 'engine' {engine!r} is not a known engine; engines: "
+                            f"{', '.join(engine_names())}")
+
+
+def _settings_in_range(engine: str, settings: dict, where: str) -> None:
+    """The recorded settings: the engine's class, every field present (a missing one
+    would silently run at today's default), typed as the class declares, and within its
+    range (the settings class checks it, as for ``--set``: one definition)."""
+    from sim_models.engine_settings import SettingsError
+    from sim_models.registry import get_engine
+    from sim_models.tree import SimModelError
+    try:
+        eng = get_engine(engine)
+    except (SimModelError, ImportError):  # its library is missing: a failed run, later
+        return
+    cls, fields = eng.settings_class, settings["fields"]
+    if settings.get("class", cls.__name__) != cls.__name__:
+        raise BaselineError(f"{where}: settings class {settings['class']!r} is not "
+                            f"{engine}'s ({cls.__name__})")
+    types = cls.field_types()
+    unknown = sorted(set(fields) - set(types))
+    if unknown:
+        raise BaselineError(f"{where}: settings field {unknown[0]!r}: {engine} has no "
+                            f"setting {unknown[0]!r} (settings: {', '.join(types)})")
+    missing = [k for k in types if k not in fields]
+    if missing:
+        raise BaselineError(f"{where}: settings field {missing[0]!r} is missing (it would "
+                            f"run at today's default {getattr(cls(), missing[0])!r}); "
+                            "record the baseline again")
+    for k, typ in types.items():
+        need = _json_type_problem(fields[k], typ)
+        if need:
+            raise BaselineError(f"{where}: settings field {k}={_json_value(fields[k])}: "
+                                f"must be {need}")
+    try:
+        cls.from_overrides(fields, eng.name)
+    except SettingsError as e:
+        raise BaselineError(f"{where}: settings field {e.key}={_json_value(e.value)}: "
+                            f"{e.problem}") from None
+
+
+def _json_type_problem(v, typ) -> str | None:
+    """What a JSON value of a settings field of type ``typ`` must be, when it is not."""
+    def number(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+    if typ is bool:
+        return None if isinstance(v, bool) else "true or false"
+    if typ is int:
+        return None if isinstance(v, int) and not isinstance(v, bool) else "a whole number"
+    if typ is float:
+        return None if number(v) else "a number"
+    if typ is str:
+        return None if isinstance(v, str) else "a string"
+    if isinstance(v, list) and all(number(x) for x in v):
+        return None
+    return "a list of numbers"
+
+
+#: The command-line option that takes each request value, for the message.
+_REQUEST_OPTIONS = {"revolutions": "--revolutions", "samples": "--samples"}
+
+
+def _request_in_range(request: dict, where: str) -> None:
+    """The request within the command line's ranges (:class:`sim_models.engine_run.
+    RunRequest` checks them: one definition): e.g. revolutions 1 to 1000, samples 2 to
+    3600, a finite loop-gap threshold."""
+    from sim_models.engine_run import RunRequest
+    from sim_models.engine_settings import SettingsError
+    keys = ("revolutions", "samples", "max_violation", "max_speed_error", "chords", "mode")
+    try:
+        RunRequest(**{k: request[k] for k in keys})
+    except SettingsError as e:
+        flag = _REQUEST_OPTIONS.get(e.key)
+        raise BaselineError(f"{where}: request {e.key}={_json_value(e.value)}: {e.problem}"
+                            + (f"; the range of {flag}" if flag else "")) from None
+
+
+def _json_value(v) -> str:
+    """``v`` as the file spells it (``true``, ``NaN``, ``"bogus"``)."""
+    try:
+        return json.dumps(v)
+    except (TypeError, ValueError):
+        return repr(v)
 
 
 def _num(v) -> float:
@@ -410,13 +520,15 @@ def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
     paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
     from analytic import load_case
-    from analytic.cases import case_names, case_path
+    from analytic.cases import case_names
+    from reports import model_identity as mid
     if model in case_names():
-        return ModelSource("builtin", model, file_sha256(case_path(model))), load_case(model)
+        mech = load_case(model)
+        return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech
     p = Path(model).resolve()
     mech = load_case(str(p))
     rel = Path(os.path.relpath(p, base_dir)).as_posix()
-    return ModelSource("file", rel, file_sha256(p)), mech
+    return ModelSource("file", rel, mid.digest(mech), mid.content(mech)), mech
 
 
 def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike,
@@ -451,6 +563,21 @@ def _record_run(mech, src, engine, settings, req, r, comps, tol) -> RunRecord:
                               float(c.max_abs), float(c.peak)) for c in comps)
     return RunRecord(mech.name, engine, src, dict(req), settings_json(engine, settings),
                      versions(engine), qs)
+
+
+def merge(old: Baseline, new: Baseline) -> tuple[Baseline, dict[str, int]]:
+    """``new``'s runs recorded into ``old``: a run of the same (model, engine) is
+    replaced, the others kept, new ones added.  Returns the merged baseline (``new``'s
+    path and time) and the counts ``{"updated", "kept", "added"}``."""
+    fresh = {r.key: r for r in new.runs}
+    runs, counts = [], {"updated": 0, "kept": 0, "added": 0}
+    for r in old.runs:
+        hit = fresh.pop(r.key, None)
+        runs.append(hit or r)
+        counts["updated" if hit else "kept"] += 1
+    runs += fresh.values()
+    counts["added"] = len(fresh)
+    return Baseline(tuple(runs), new.path, new.recorded), counts
 
 
 def record_problems(baseline: Baseline) -> list[str]:
@@ -519,8 +646,9 @@ def _revolute(mech) -> bool:
 @dataclass(frozen=True)
 class QuantityCheck:
     """One quantity against its baseline.  ``status``: "ok", "over-tolerance", "drift",
-    "not-finite", "missing" (recorded, no longer compared) or "new" (not recorded;
-    reported, not judged)."""
+    "not-finite", "missing" (recorded, no longer compared), "new" (not recorded;
+    reported, not judged), "improved" (the error shrank by more than the factor: the
+    baseline is loose, a warning) or "loose" (the same, failed: ``fail_loose``)."""
 
     quantity: str
     status: str
@@ -533,7 +661,7 @@ class QuantityCheck:
 
     @property
     def failed(self) -> bool:
-        return self.status not in ("ok", "new")
+        return self.status not in ("ok", "new", "improved")
 
     @property
     def ratio(self) -> float:
@@ -545,7 +673,8 @@ class QuantityCheck:
 
     def message(self) -> str:
         """One line naming the quantity, what happened, by how much and where."""
-        at = f" at {self.at:.6g} {self.at_unit}" if math.isfinite(self.at) else ""
+        from analytic.input_display import format_input
+        at = f" at {format_input(self.at, self.at_unit)}" if math.isfinite(self.at) else ""
         if self.status == "missing":
             return f"{self.quantity}: recorded (error {self.base:.3g} of peak) but no " \
                    "longer compared"
@@ -554,6 +683,9 @@ class QuantityCheck:
         if self.status == "not-finite":
             return f"{self.quantity}: error is not finite{at} (the run diverged or failed)"
         grew = f"{self.base:.3g} -> {self.error:.3g} of peak{at} ({_times(self.ratio)})"
+        if self.status in ("improved", "loose"):
+            return f"{self.quantity}: improved {grew}, more than the factor " \
+                   f"{self.factor:g}: the baseline is loose; re-record"
         if self.status == "over-tolerance":
             return f"{self.quantity}: error {self.error:.3g} of peak{at} exceeds its " \
                    f"tolerance {self.tolerance:g} (baseline {self.base:.3g}, {_times(self.ratio)})"
@@ -572,14 +704,19 @@ def _times(r: float) -> str:
     return f"{r:.3g}x" if r < 1e4 else f"{r:.2g}x"
 
 
-def judge(q: QuantityRecord, error: float, at: float, factor: float) -> QuantityCheck:
-    """The verdict of one quantity now (``error`` relative to peak) against its record."""
+def judge(q: QuantityRecord, error: float, at: float, factor: float,
+          fail_loose: bool = False) -> QuantityCheck:
+    """The verdict of one quantity now (``error`` relative to peak) against its record.
+    An error that shrank by more than ``factor`` (both floored at :data:`DRIFT_FLOOR`)
+    leaves the baseline loose: it would let the error grow back unnoticed."""
     if not math.isfinite(error):
         status = "not-finite"
     elif error > q.tolerance:
         status = "over-tolerance"
     elif error > factor * max(q.error, DRIFT_FLOOR):
         status = "drift"
+    elif q.error > factor * max(error, DRIFT_FLOOR):
+        status = "loose" if fail_loose else "improved"
     else:
         status = "ok"
     return QuantityCheck(q.quantity, status, error, q.error, at, q.at_unit, q.tolerance,
@@ -616,6 +753,10 @@ class RunCheck:
         done = [q for q in self.quantities if math.isfinite(q.error)]
         return max(done, key=lambda q: q.error, default=None)
 
+    def loose(self) -> list[QuantityCheck]:
+        """Quantities whose error shrank by more than the factor (warnings)."""
+        return [q for q in self.quantities if q.status == "improved"]
+
     def versions_changed(self) -> dict[str, tuple[str, str]]:
         return {k: (str(v), str(self.versions_now.get(k, "unknown")))
                 for k, v in self.record.versions.items()
@@ -630,27 +771,35 @@ def _severity(q: QuantityCheck) -> tuple:
 
 
 def check(baseline: Baseline, factor: float = DEFAULT_FACTOR, runner: Runner | None = None,
-          select: Callable[[RunRecord], bool] | None = None) -> list[RunCheck]:
+          select: Callable[[RunRecord], bool] | None = None, fail_loose: bool = False,
+          overrides: dict | None = None) -> list[RunCheck]:
     """Re-run every recorded run (those ``select`` keeps) and judge it (see the module
-    docstring).  Raises :class:`BaselineError` only for a file that cannot be applied
-    (e.g. settings the engine no longer accepts); everything about the runs themselves
-    is in the returned :class:`RunCheck`."""
+    docstring).  ``fail_loose``: an error that shrank by more than ``factor`` fails
+    (default: a warning); ``overrides``: engine name -> {setting: value} applied over
+    the recorded settings (``--set``; named in each run's settings text).  Raises
+    :class:`BaselineError` only for a file that cannot be applied (e.g. settings the
+    engine no longer accepts); everything about the runs themselves is in the returned
+    :class:`RunCheck`."""
     if not (factor > 1 and math.isfinite(factor)):
-        raise BaselineError(f"--factor must be a finite number above 1, got {factor!r}")
+        raise BaselineError(f"the drift factor must be a finite number above 1, got "
+                            f"{factor!r}")
     runner = runner or run_and_compare
-    return [check_run(rec, baseline, factor, runner) for rec in baseline.runs
-            if select is None or select(rec)]
+    return [check_run(rec, baseline, factor, runner, fail_loose, (overrides or {}).get(
+        rec.engine)) for rec in baseline.runs if select is None or select(rec)]
 
 
-def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner) -> RunCheck:
-    """One record: rebuild its mechanism and settings, run, judge."""
+def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
+              fail_loose: bool = False, overrides: dict | None = None) -> RunCheck:
+    """One record: rebuild its mechanism and settings (with ``overrides``), run, judge."""
     import time
     out = RunCheck(rec)
     mech = _mechanism_now(rec, baseline, out)
-    settings = _settings_now(rec, baseline, out)
+    settings = _settings_now(rec, baseline, out, overrides)
     if mech is None or settings is None:
         return out
-    out.settings_text = settings_line(rec.engine, settings)
+    out.settings_text = settings_line(rec.engine, settings) + (
+        " (changed for this check: " + " ".join(f"{k}={v}" for k, v in overrides.items())
+        + ")" if overrides else "")
     out.versions_now = versions(rec.engine)
     t0 = time.perf_counter()
     try:
@@ -669,7 +818,8 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner)
             out.quantities.append(QuantityCheck(q.quantity, "missing", math.nan, q.error,
                                                 math.nan, q.at_unit, q.tolerance, factor))
         else:
-            out.quantities.append(judge(q, float(c.normalised), float(c.at), factor))
+            out.quantities.append(judge(q, float(c.normalised), float(c.at), factor,
+                                        fail_loose))
     recorded = {q.quantity for q in rec.quantities}
     unit = "deg" if _revolute(mech) else "m"
     for c in comps:
@@ -688,19 +838,30 @@ def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
     if src.kind == "builtin" and src.name not in case_names():
         out.problems.append(f"the built-in case {src.name!r} no longer exists")
         return None
+    from reports import model_identity as mid
     p = src.path(baseline.base_dir)
     if not p.is_file():
         out.problems.append(f"the model {src.describe()} is gone (looked for {p})")
         return None
-    sha = file_sha256(p)
-    if sha != src.sha256:
+    try:
+        mech = load_case(src.name if src.kind == "builtin" else str(p))
+    except LinkageError as e:
+        out.problems.append(f"the model {src.describe()} changed since the baseline and "
+                            f"no longer loads: {e}")
+        return None
+    # identity by content: the parsed mechanism, not the bytes (a comment or CRLF is no
+    # change); a file recorded before content identity holds the bytes' SHA-256
+    if mid.digest(mech) != src.sha256 and file_sha256(p) != src.sha256:
+        what = mid.changes(src.content, mid.content(mech)) if src.content is not None \
+            else f"sha256 {src.sha256[:12]}... (recorded from the file's bytes)"
         out.problems.append(f"the model {src.describe()} changed since the baseline "
-                            f"(sha256 {src.sha256[:12]}... -> {sha[:12]}...); re-record "
-                            "the baseline if the change is intended")
-    return load_case(src.name if src.kind == "builtin" else str(p))
+                            f"(parsed mechanism): {what}; re-record the baseline if the "
+                            "change is intended")
+    return mech
 
 
-def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
+def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
+                  overrides: dict | None = None):
     from sim_models.registry import get_engine
     from sim_models.tree import SimModelError
     try:
@@ -709,6 +870,8 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
         out.problems.append(f"engine {rec.engine!r} is not available: {e}")
         return None
     s = settings_from_json(rec, str(baseline.path))
+    if overrides:  # --set over the recorded settings (SettingsError: status 2 upstream)
+        s = eng.settings_class.from_overrides({**s.as_dict(), **overrides}, eng.name)
     missing = sorted(set(s.as_dict()) - set(rec.settings["fields"]))
     if missing:
         out.notes.append(f"settings not in the baseline, run at {eng.name}'s defaults: "
@@ -719,6 +882,6 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
            "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
-           "judged", "load", "record", "record_command", "record_problems", "request_dict",
+           "judged", "load", "merge", "record", "record_command", "record_problems", "request_dict",
            "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
            "source_of", "versions"]

@@ -9,25 +9,26 @@ file that cannot be used (one line naming the file, entry and key).  ``record`` 
 
 from __future__ import annotations
 
-import argparse
 import math
+import os
 from collections import Counter
 
 from . import baseline as bl
 from . import ci_formats
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 # ============================================================================ record
 def cmd_record(args) -> int:
     from analytic.cases import case_names
-    from sim_models.registry import get_engine, split_overrides
+    from sim_models.registry import settings_from_options
+    check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
     engines = _engines(args.engine)
     models = []
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
-    per = split_overrides(args.set or (), engines)
-    settings = {e: get_engine(e).settings(per.get(e)) for e in engines}
+    settings = settings_from_options(engines, args.set or ())
     req = bl.request_dict(args.revolutions, args.samples)
     base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance)
@@ -35,7 +36,8 @@ def cmd_record(args) -> int:
     for r in base.runs:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
                 default=None)
-        worst = f"worst {w.quantity} {w.error:.3g} of peak at {w.at:.6g} {w.at_unit}" \
+        from analytic.input_display import format_input
+        worst = f"worst {w.quantity} {w.error:.3g} of peak at {format_input(w.at, w.at_unit)}" \
             if w else "nothing compared"
         print(f"{r.label}: {len(r.quantities)} quantities, {worst}")
     if problems:
@@ -44,8 +46,19 @@ def cmd_record(args) -> int:
         print(f"baseline not written: {len(problems)} quantities fail already "
               "(a baseline records a passing state)")
         return 1
+    counts = None
+    if not args.replace and os.path.exists(args.out):  # merge: nothing recorded is lost
+        try:
+            old = bl.load(args.out)
+        except bl.BaselineError as e:  # never overwrite what cannot be read back
+            raise bl.BaselineError(f"{e}; not overwritten (--replace writes a new "
+                                   "file)") from None
+        base, counts = bl.merge(old, base)
     path = bl.save(base)
-    print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})")
+    print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})"
+          + (f": {counts['updated']} updated, {counts['kept']} kept, {counts['added']} "
+             "added (--replace writes only the runs recorded now)" if counts else
+             " (replaced)" if args.replace and os.path.exists(args.out) else ""))
     return 0
 
 
@@ -58,7 +71,10 @@ def _engines(choice: list[str] | None) -> list[str]:
 
 # ============================================================================ check
 def cmd_check(args) -> int:
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the baseline", args.baseline)])
     base = bl.load(args.baseline)
+    overrides = _check_overrides(args.set, base)
     keep = None
     if args.case or args.engine:
         cases, engines = set(args.case or ()), set(args.engine or ())
@@ -66,16 +82,38 @@ def cmd_check(args) -> int:
         def keep(rec):
             return (not cases or rec.case in cases or rec.model.name in cases) and \
                 (not engines or rec.engine in engines)
-    checks = bl.check(base, args.factor, select=keep)
+    checks = bl.check(base, args.factor, select=keep, fail_loose=args.fail_loose,
+                      overrides=overrides)
     if keep is not None and not checks:
         raise bl.BaselineError(f"{args.baseline}: no recorded run matches --case/--engine")
     lines = report_lines(base, checks, args.factor)
+    if overrides:  # what --set changed, for a reader of the output
+        lines.insert(2, "settings changed for this check (--set): " + ", ".join(
+            f"{e}.{k}={v}" for e, kv in overrides.items() for k, v in kv.items()))
     print("\n".join(lines))
     if not all(c.passed for c in checks):
-        print(f"if the change is intended, record the baseline again: {bl.record_command(base)}")
+        sets = "".join(f" --set {e}.{k}={v}" for e, kv in overrides.items()
+                       for k, v in kv.items())  # record what was checked
+        print("if the change is intended, record the baseline again: "
+              f"{bl.record_command(base)}{sets}")
     ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
-                             ci_formats.from_baseline(checks), intro=lines[:2])
+                             ci_formats.from_baseline(checks, base.base_dir), intro=lines[:2],
+                             properties=_override_props(overrides), command="baseline")
     return 0 if all(c.passed for c in checks) else 1
+
+
+def _check_overrides(pairs, base: bl.Baseline) -> dict:
+    """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
+    (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
+    if not pairs:
+        return {}
+    from sim_models.registry import split_overrides
+    engines = list(dict.fromkeys(r.engine for r in base.runs))
+    return {e: v for e, v in split_overrides(pairs, engines).items() if v}
+
+
+def _override_props(overrides: dict) -> dict:
+    return {f"set.{e}.{k}": v for e, kv in overrides.items() for k, v in kv.items()}
 
 
 def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
@@ -104,6 +142,8 @@ def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
             out.append("        versions changed: " +
                        ", ".join(f"{k} {a} -> {b}" for k, (a, b) in ch.items()))
     for c in checks:
+        out += [f"warning: {c.record.label}: {q.message()}" for q in c.loose()]
+    for c in checks:
         out += [f"note: {c.record.label}: {q.message()}" for q in c.quantities
                 if q.status == "new"]
         out += [f"note: {c.record.label}: {n}" for n in c.notes]
@@ -126,17 +166,6 @@ def versions_line(checks) -> str:
 
 
 # ============================================================================ parser
-def _factor(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v > 1):
-        raise argparse.ArgumentTypeError(f"{text} is out of range: the factor must be a "
-                                         "finite number above 1")
-    return v
-
-
 _tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
                               why="an error relative to the quantity's peak")
 
@@ -165,10 +194,13 @@ def register(sub) -> None:
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
     r.add_argument("--tolerance", type=_tolerance, default=None,
                    help="relative to peak, recorded per quantity (default 1e-3)")
+    r.add_argument("--replace", action="store_true",
+                   help="replace an existing file (default: record these runs into it, "
+                        "keeping the others)")
     r.set_defaults(func=cmd_record)
     c = bsub.add_parser("check", help="re-run a baseline's runs and fail on drift")
     c.add_argument("baseline", metavar="BASELINE_JSON")
-    c.add_argument("--factor", type=_factor, default=bl.DEFAULT_FACTOR,
+    c.add_argument("--factor", type=opt.drift_factor, default=bl.DEFAULT_FACTOR,
                    help=f"largest allowed growth over the baseline (default "
                         f"{bl.DEFAULT_FACTOR:g}; errors below {bl.DRIFT_FLOOR:g} of peak "
                         "count as that floor)")
@@ -176,6 +208,12 @@ def register(sub) -> None:
                    help="check only this case (repeatable)")
     c.add_argument("--engine", action="append", metavar="ENGINE",
                    help="check only this engine (repeatable)")
+    c.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="run with this setting instead of the recorded one "
+                        "(ENGINE.KEY=VALUE for one engine only; named in the output)")
+    c.add_argument("--fail-loose", action="store_true",
+                   help="fail when an error shrank by more than the factor (the baseline "
+                        "is loose; default: a warning)")
     ci_formats.add_options(c)
     c.set_defaults(func=cmd_check)
 

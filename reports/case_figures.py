@@ -18,9 +18,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analytic.input_display import convention_of, input_text
+
 from .reference import (
     analytic_line,
     axis_of,
+    engine_slider_positions,
     family_of,
     line_breaks,
     reference_of,
@@ -82,7 +85,7 @@ def _index_in(line_u: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
-                  line=analytic_line, plan=None, extra=()) -> list[CurveFigure]:
+                  line=analytic_line, plan=None, extra=(), tree=None) -> list[CurveFigure]:
     """The body angle, omega, alpha, slider s'', drive effort and joint-force figures
     of the (case) ``label`` from its engine runs (``{engine: EngineRun}``, one plan).
     ``reference(run, linkage)`` gives each run's samples' reference (the verdict's) and
@@ -91,7 +94,9 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     with a run's ``times, values, driver_velocity, driver_acceleration, by_time,
     has_forces``: :func:`reports.plot_cmd.plan_samples_of`) places the analytic lines
     (``xval plot`` without engines).  ``extra``: figures drawn on request only,
-    ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions)."""
+    ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions;
+    the engines' own, from their tree coordinates, as markers when ``tree``, the
+    compiled :class:`sim_models.tree.SimTree`, is given)."""
     runs = {e: r for e, r in runs.items() if r is not None}
     basis = list(runs.values()) or ([plan] if plan is not None else [])
     if not basis:
@@ -145,10 +150,13 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
         out.append(fig("slider", "slider accelerations", "s'' (m/s^2)", curves))
     if lfrc is not None:
         out += [fig(*spec) for spec in _force_figures(linkage, lu, lfrc, runs, refs)]
-    if "slider_s" in extra and linkage.topo.prismatic:  # drawn only (engines: no markers)
-        curves = [Curve(linkage.topo.joint_names[j], lu,
-                        lkin.slider(linkage.topo.joint_names[j])[0], {})
-                  for j in linkage.topo.prismatic]
+    if "slider_s" in extra and linkage.topo.prismatic:  # not judged: drawn only
+        pos = {e: engine_slider_positions(r, tree) for e, r in runs.items()}
+        curves = []
+        for j in linkage.topo.prismatic:
+            jn = linkage.topo.joint_names[j]
+            mk = {e: (refs[e].u, pos[e][jn], refs[e].judged) for e in runs if jn in pos[e]}
+            curves.append(Curve(jn, lu, lkin.slider(jn)[0], mk))
         out.append(fig("slider_s", "slider positions", "s (m)", curves))
     if "transmission" in extra and lkin.transmission:
         curves = [Curve(f"at {k}", lu, np.asarray(v, float), {})
@@ -197,8 +205,8 @@ def _range_marks(r0, linkage, lu):
         feasible = (lo, hi)
     marks = []
     for kind, v in ev:
-        if rev and full:  # onto the plotted turn
-            v = covered[0] + (v - covered[0]) % 360.0
+        if rev and full:  # onto the plotted axis: a full turn wrapped to [0, 360) deg
+            v = v % 360.0
         marks.append((kind, float(v)))
     return marks, feasible, covered
 
@@ -254,12 +262,40 @@ def error_figure(label: str, runs: dict, comparisons: dict, linkage, tolerance: 
             twin = (f"transmission angle at {name} (deg)", np.asarray(tr)[keep][order])
         else:
             twin = ("loop Jacobian condition number (-)", kin.condition[keep][order])
+        conv = convention_of(linkage)
         panels[e] = {"x": x, "families": {f: fam[f] for f in FAMILIES if f in fam},
-                     "worst": (worst_q, float(wv[k]), float(ref.u[k])), "twin": twin}
+                     "worst": (worst_q, float(wv[k]), float(ref.u[k])), "twin": twin,
+                     # where, as the verdict table and JUnit say it (the one convention)
+                     "worst_input": input_text(float(r.values[k]), conv),
+                     "by_time": bool(r.by_time)}
     if not panels:
         return None
     return ErrorFigure("error", f"{label}: |engine - analytic| / peak, every judged quantity",
                        xl, panels, tolerance)
+
+
+def motion_text(linkage, times, units=None) -> str:
+    """One line saying how the input moves over the plotted samples, in the units of
+    the figures' axes (``units``: a :class:`reports.display_units.DisplayUnits`,
+    default deg and rad/s): the prescribed rate actually reached between the first and
+    last sample time ``times`` (s; NaN: unreached), and the description's law.  An
+    accelerating crank's plotted turn runs at 5.8 to 7.7 rad/s, not its reference 3."""
+    from .display_units import DisplayUnits
+    u = units or DisplayUnits()
+    d = linkage.mech.driver
+    kv, kw, ka = u.input_kinds(linkage.driver_is_revolute)
+    fv, fw = u.factor(kv), u.factor(kw)
+    uv, uw, ua = u.unit(kv), u.unit(kw), u.unit(ka)
+    law = (f"{d.value * fv:.4g} {uv}, {d.velocity * fw:.4g} {uw}"
+           + (f", {d.acceleration * u.factor(ka):.4g} {ua} at t = 0" if d.acceleration
+              else " (constant rate)"))
+    t = np.asarray(times, float)
+    t = t[np.isfinite(t)]
+    if not t.size or not d.acceleration:
+        return f"input {d.joint}: {law}"  # the rate reached is the reference rate
+    w0, w1 = (d.velocity + d.acceleration * np.array([t.min(), t.max()])) * fw
+    return (f"input {d.joint}: {w0:.4g} to {w1:.4g} {uw} over the plotted samples "
+            f"(t = {t.min():.4g} to {t.max():.4g} s); prescribed {law}")
 
 
 def render(fig) -> bytes:
@@ -303,4 +339,5 @@ def render_case(label: str, runs: dict, comparisons: dict, mech, tolerance: floa
 
 
 __all__ = ["Curve", "CurveFigure", "ErrorFigure", "FAMILIES", "case_figure_data",
+           "motion_text",
            "curve_figures", "error_figure", "linkage_figure", "render", "render_case"]

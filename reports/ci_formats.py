@@ -4,17 +4,24 @@ One :class:`CiCase` per (case, engine), built from ``xval compare``'s results
 (:func:`from_compare`) or from ``xval baseline check``'s (:func:`from_baseline`).
 
 JUnit XML (the Ant/Jenkins layout that Jenkins, GitLab, GitHub actions' test reporters,
-Azure Pipelines and CircleCI read)::
+Azure Pipelines and CircleCI read; valid against the Jenkins xunit plugin's
+``junit-10.xsd``, which allows ``file`` on ``testsuite`` but not on ``testcase``)::
 
     <testsuites name=... tests= failures= errors= time=>
-      <testsuite name=... tests= failures= errors= skipped="0" time= timestamp= hostname=>
-        <properties><property name="python" value="3.11.2"/>...</properties>
-        <testcase classname="xval.<engine>" name="<case>" time="<s>">
+      <testsuite name=... file="<model path>" tests= failures= errors= skipped="0" time=
+                 timestamp= hostname=>                   (one per model file)
+        <properties><property name="python" value="3.11.2"/>
+          <property name="linkage-xval" .../><property name="engine.mujoco" value=
+          "mujoco 3.3.7"/>...</properties>
+        <testcase classname="xval.<command>.<engine>" name="<case>" time="<s>">
           <failure message="<worst quantity, its error, where>" type="tolerance|drift|...">
             every quantity, the settings</failure>          (a failed verdict)
           <error message=... type="refused">...</error>      (the run could not be judged)
-          <system-out>settings and notes</system-out>
+          <system-out>worst error now, settings and notes</system-out>
         </testcase> ...
+
+``<command>`` is ``compare`` or ``baseline``, so the two commands' results uploaded from
+one job never share a test name (GitLab drops duplicates).
 
 ``time`` attributes are seconds with a decimal point (the schema's ``xs:decimal``: no
 exponent).  The Markdown summary is one table, worst first, for a CI job summary page.
@@ -59,15 +66,28 @@ class CiCase:
     settings: str = ""
     time: float = 0.0
     notes: tuple[str, ...] = field(default_factory=tuple)
+    file: str = ""           # the model file (path as given / relative to the cwd)
+    version: str = ""        # the engine's version, e.g. "mujoco 3.3.7"
+
+    def worst_line(self) -> str:
+        """The worst error now (for passing cases too), with its limit."""
+        if not self.quantity:
+            return "worst: nothing compared"
+        base = f", baseline {self.baseline:.3g}" if math.isfinite(self.baseline) else ""
+        return f"worst: {self.quantity} error {self.error:.3g} of peak" + \
+            (f" at {self.at}" if self.at else "") + f" (tolerance {self.tolerance:g}{base})"
 
 
 # ============================================================================ builders
 def _at(value: float, unit: str) -> str:
-    return f"{value:.6g} {unit}" if math.isfinite(value) else ""
+    from analytic.input_display import format_input  # the one input convention of every output
+    return format_input(value, unit)
 
 
-def from_compare(case: str, results, revolute: bool) -> list[CiCase]:
-    """``xval compare``'s ``(run, comparisons, ok, near_event)`` tuples."""
+def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiCase]:
+    """``xval compare``'s ``(run, comparisons, ok, near_event)`` tuples (``file``: the
+    model file, empty for a built-in case)."""
+    from .baseline import versions
     unit = "deg" if revolute else "m"
     out = []
     for r, comps, ok, near in results:
@@ -99,12 +119,15 @@ def from_compare(case: str, results, revolute: bool) -> list[CiCase]:
             at=_at(worst.at, unit) if worst else "",
             tolerance=worst.tolerance if worst else math.nan, kind=kind, message=msg,
             details="\n".join(lines), settings=f"{r.engine} {r.settings_text}",
-            time=float(r.wall), notes=tuple(r.notes)))
+            time=float(r.wall), notes=tuple(r.notes), file=file,
+            version=versions(r.engine)["engine"]))
     return out
 
 
-def from_baseline(checks) -> list[CiCase]:
-    """``xval baseline check``'s :class:`reports.baseline.RunCheck` list."""
+def from_baseline(checks, base_dir: Path | None = None) -> list[CiCase]:
+    """``xval baseline check``'s :class:`reports.baseline.RunCheck` list (``base_dir``:
+    the baseline file's folder, where recorded model paths start)."""
+    import os
     out = []
     for chk in checks:
         rec = chk.record
@@ -129,13 +152,20 @@ def from_baseline(checks) -> list[CiCase]:
         if chk.settings_text:
             lines.append(f"settings: {chk.settings_text}")
         lines += [f"note: {n}" for n in chk.notes]
+        loose = [q.message() for q in chk.loose()]
+        file = ""
+        if rec.model.kind == "file" and base_dir is not None:
+            p = os.path.normpath(base_dir / rec.model.name)
+            rel = os.path.relpath(p)
+            file = Path(p if rel.startswith("..") else rel).as_posix()
         out.append(CiCase(
             case=rec.case, engine=rec.engine, status=status,
             quantity=w.quantity if w else "", error=w.error if w else math.nan,
             at=_at(w.at, w.at_unit) if w else "", tolerance=w.tolerance if w else math.nan,
             baseline=w.base if w else math.nan, kind=kind, message="; ".join(parts),
             details="\n".join(lines), settings=chk.settings_text, time=chk.wall,
-            notes=tuple(chk.notes)))
+            notes=(*(f"warning: {m}" for m in loose), *chk.notes), file=file,
+            version=chk.versions_now.get("engine", rec.versions.get("engine", ""))))
     return out
 
 
@@ -149,36 +179,58 @@ def _problem_kind(problem: str) -> str:
 
 
 # ============================================================================ JUnit
-def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = None) -> str:
-    """The JUnit XML document (one ``testsuite`` holding one ``testcase`` per entry)."""
-    fails = sum(c.status == "fail" for c in cases)
-    errors = sum(c.status == "error" for c in cases)
-    total = sum(c.time for c in cases)
-    counts = {"tests": str(len(cases)), "failures": str(fails), "errors": str(errors),
-              "time": _secs(total)}
-    root = ET.Element("testsuites", {"name": suite, **counts})
-    ts = ET.SubElement(root, "testsuite", {
-        "name": suite, **counts, "skipped": "0",
-        "timestamp": _dt.datetime.now().replace(microsecond=0).isoformat(),
-        "hostname": socket.gethostname() or "localhost"})
-    props = ET.SubElement(ts, "properties")
-    for k, v in {"python": platform.python_version(), "platform": platform.platform(),
-                 **(properties or {})}.items():
-        ET.SubElement(props, "property", {"name": str(k), "value": str(v)})
-    for c in cases:
-        tc = ET.SubElement(ts, "testcase", {"classname": f"xval.{c.engine}", "name": c.case,
-                                            "time": _secs(c.time)})
-        if c.status in ("fail", "error"):
-            tag = "failure" if c.status == "fail" else "error"
-            el = ET.SubElement(tc, tag, {"message": _clean(c.message or c.kind),
-                                         "type": c.kind or tag})
-            el.text = _clean(c.details)
-        if c.settings or c.notes:
-            so = ET.SubElement(tc, "system-out")
-            so.text = _clean("\n".join([f"settings: {c.settings}",
-                                        *[f"note: {n}" for n in c.notes]]))
+def _counts(cases: Sequence[CiCase]) -> dict:
+    return {"tests": str(len(cases)), "failures": str(sum(c.status == "fail" for c in cases)),
+            "errors": str(sum(c.status == "error" for c in cases)),
+            "time": _secs(sum(c.time for c in cases))}
+
+
+def _tool_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("linkage-xval")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def junit_xml(suite: str, cases: Sequence[CiCase], properties: dict | None = None,
+              command: str = "compare") -> str:
+    """The JUnit XML document: one ``testsuite`` per model file (its ``file``
+    attribute), one ``testcase`` per entry, classname ``xval.<command>.<engine>``."""
+    suite = _clean(suite)  # a path or name may carry what XML cannot: every text cleaned
+    root = ET.Element("testsuites", {"name": suite, **_counts(cases)})
+    files = list(dict.fromkeys(c.file for c in cases)) or [""]
+    for f in files:
+        group = [c for c in cases if c.file == f]
+        attrs = {"name": f"{suite}: {f}" if f and len(files) > 1 else suite,
+                 **_counts(group), "skipped": "0",
+                 "timestamp": _dt.datetime.now().replace(microsecond=0).isoformat(),
+                 "hostname": socket.gethostname() or "localhost"}
+        ts = ET.SubElement(root, "testsuite", {**attrs, **({"file": _clean(f)} if f else {})})
+        engines = {f"engine.{c.engine}": c.version for c in group if c.version}
+        props = ET.SubElement(ts, "properties")
+        for k, v in {"linkage-xval": _tool_version(), **dict(sorted(engines.items())),
+                     "python": platform.python_version(), "platform": platform.platform(),
+                     **(properties or {})}.items():
+            ET.SubElement(props, "property", {"name": _clean(k), "value": _clean(v)})
+        for c in group:
+            _testcase(ts, c, command)
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, "unicode") + "\n"
+
+
+def _testcase(ts, c: CiCase, command: str) -> None:
+    tc = ET.SubElement(ts, "testcase", {"classname": _clean(f"xval.{command}.{c.engine}"),
+                                        "name": _clean(c.case), "time": _secs(c.time)})
+    if c.status in ("fail", "error"):
+        tag = "failure" if c.status == "fail" else "error"
+        el = ET.SubElement(tc, tag, {"message": _clean(c.message or c.kind),
+                                     "type": c.kind or tag})
+        el.text = _clean(c.details)
+    so = ET.SubElement(tc, "system-out")  # the current error, passing cases too
+    so.text = _clean("\n".join([c.worst_line(), *([f"settings: {c.settings}"]
+                                                  if c.settings else []),
+                                *[f"note: {n}" for n in c.notes]]))
 
 
 def _secs(t: float) -> str:
@@ -186,8 +238,10 @@ def _secs(t: float) -> str:
 
 
 def _clean(text: str) -> str:
-    """XML 1.0 forbids most control characters (an engine message might carry one)."""
-    return "".join(ch for ch in str(text) if ch in "\t\n\r" or ord(ch) >= 0x20)
+    """XML 1.0 forbids most control characters (an engine message might carry one), lone
+    surrogates (a file name's undecodable bytes) and U+FFFE/U+FFFF."""
+    return "".join(ch for ch in str(text) if ch in "\t\n\r" or (
+        ord(ch) >= 0x20 and not 0xD800 <= ord(ch) <= 0xDFFF and ch not in "\ufffe\uffff"))
 
 
 # ============================================================================ Markdown
@@ -249,10 +303,10 @@ def add_options(parser) -> None:
 
 
 def write_outputs(args, suite: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
-                  properties: dict | None = None) -> None:
+                  properties: dict | None = None, command: str = "compare") -> None:
     """Write what ``--junit`` / ``--summary`` ask for (nothing when neither is given)."""
     if getattr(args, "junit", None):
-        write_text(args.junit, junit_xml(suite, cases, properties), "JUnit file")
+        write_text(args.junit, junit_xml(suite, cases, properties, command), "JUnit file")
     if getattr(args, "summary", None):
         write_text(args.summary, markdown_summary(suite, cases, intro), "summary")
 
@@ -262,7 +316,10 @@ def write_compare_outputs(args, mech, results) -> None:
     if not (getattr(args, "junit", None) or getattr(args, "summary", None)):
         return
     from analytic.mechanism import Prismatic
-    cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic))
+    given = str(getattr(args, "case", "") or "")
+    file = Path(given).as_posix() if given.endswith(".toml") else ""  # not a built-in
+    cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic),
+                         file)
     write_outputs(args, f"xval compare {mech.name}", cases)
 
 

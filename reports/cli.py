@@ -138,16 +138,18 @@ def _print_tables(res: dict, units=None) -> None:
     for c in ("link", f"theta ({an})", f"omega ({sp})", "alpha (rad/s^2)"):
         t.add_column(c, justify="right")
     for n, d in res["bodies"].items():
-        t.add_row(n, text(d["angle_deg"], ".6f"), text(d["omega"], ".6f"),
-                  text(d["alpha"], ".6f"))
+        # angles to a fixed 1e-6 deg; rates at their own scale (a nano-scale linkage's
+        # omega is not 0.000000)
+        t.add_row(n, text(d["angle_deg"], ".6f"), text(d["omega"], ".7g"),
+                  text(d["alpha"], ".7g"))
     con.print(t)
     t = Table(title="Points (world frame)")
-    for c in ("point", f"x ({lu})", f"y ({lu})", "vx", "vy", f"|v| ({vu})", "ax", "ay",
-              f"|a| ({au})"):
+    for c in ("point", f"x ({lu})", f"y ({lu})", f"vx ({vu})", f"vy ({vu})", f"|v| ({vu})",
+              f"ax ({au})", f"ay ({au})", f"|a| ({au})"):
         t.add_column(c, justify="right")
     for n, d in res["points"].items():
         p, v, a = d["position"], d["velocity"], d["acceleration"]
-        t.add_row(n, text(p[0], ".6f"), text(p[1], ".6f"), text(v[0]), text(v[1]),
+        t.add_row(n, text(p[0], ".9g"), text(p[1], ".9g"), text(v[0]), text(v[1]),
                   text(math.hypot(*v)), text(a[0]), text(a[1]), text(math.hypot(*a)))
     con.print(t)
     if res["sliders"]:
@@ -155,7 +157,7 @@ def _print_tables(res: dict, units=None) -> None:
         for c in ("joint", f"s ({lu})", f"s' ({vu})", f"s'' ({au})"):
             t.add_column(c, justify="right")
         for n, d in res["sliders"].items():
-            t.add_row(n, text(d["s"], ".6f"), text(d["v"], ".6f"), text(d["a"], ".6f"))
+            t.add_row(n, text(d["s"], ".9g"), text(d["v"]), text(d["a"]))
         con.print(t)
     if res["drive"] is not None:
         t = Table(title="Joint forces (by body_a on body_b, world axes)")
@@ -176,10 +178,14 @@ def _print_tables(res: dict, units=None) -> None:
 
 
 def cmd_cases(args) -> int:
-    for n in case_names():
-        m = load_case(n)
-        first = m.description.strip().splitlines()[0] if m.description else ""
-        print(f"{n:24s} {first}")
+    from analytic.cases import hard_case_names
+    for title, names in (("built-in cases", case_names()),
+                         ("hard cases (numerical stability studies)", hard_case_names())):
+        print(f"{title}:")
+        for n in names:
+            m = load_case(n)
+            first = m.description.strip().splitlines()[0] if m.description else ""
+            print(f"  {n:24s} {first}")
     return 0
 
 
@@ -195,7 +201,9 @@ def cmd_solve(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from .cli_paths import check_outputs
     from .display_units import DisplayUnits, convert_frame
+    check_outputs([("--csv", args.csv)], [("the case file", args.case)])
     mech = load_case(args.case)
     streamed = bool(args.csv) and args.points > STREAM_POINTS  # written block by block
     opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints), streamed)
@@ -203,6 +211,7 @@ def cmd_sweep(args) -> int:
     kw = {"velocity": args.omega}
     if args.range is not None:
         rev = isinstance(mech.driver_joint, Revolute)
+        opt.check_input_range(args.range, rev)  # capped like --angle / --value
         if not (np.all(np.isfinite(args.range)) and args.range[1] > args.range[0]):
             raise LinkageError(f"option --range: {args.range[0]} {args.range[1]} must be two "
                                "finite numbers, the second larger")
@@ -299,8 +308,8 @@ def build_parser() -> argparse.ArgumentParser:
                    default="continuous",
                    help="branch taken at a change point: the one whose velocity is "
                         "continuous (default), or hold / switch the dyad signs")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP + "; the CSV's columns "
-                   "then name their units")
+    s.add_argument("--units", type=units_option, help=UNITS_HELP + " (each CSV column "
+                   "names its unit: 'crank.omega [rpm]')")
     s.set_defaults(func=cmd_sweep)
     _register_more(sub)
     return p

@@ -9,6 +9,7 @@ import json
 import sys
 
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 def cmd_models(args) -> int:
@@ -33,15 +34,19 @@ def cmd_compare(args) -> int:
     from reports.verdict_runs import engine_list, run_comparison, settings_for
     from sim_models import compile_linkage
     mech = load_case(args.case)
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
-    settings = settings_for(engines, list(args.set or ()) +
-                            ([f"mujoco.integrator={args.integrator}"] if args.integrator else []),
-                            {"timestep": args.timestep})
+    settings = settings_for(engines, list(args.set or ()),
+                            {"--timestep": ("timestep", args.timestep),
+                             "--integrator": ("integrator", args.integrator)})
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     out, all_ok = [], True
+    from reports.progress import engine_progress
     for eng in engines:
-        r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
-                                  args.samples)
+        with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
+            r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
+                                      args.samples)
         ok = r.ok and verdict(comps)
         all_ok &= ok
         out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
@@ -67,12 +72,16 @@ def _table(comps) -> list[list[str]]:
     """The compare table's cells: numbers to 3 figures; a quantity the run did not reach
     (a failed run's samples after it stopped) is "not measured", not the infinity that
     stands for it."""
+    from analytic.input_display import input_number
     rows = []
     for c in comps:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
             ["not measured"] * 2
-        rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], f"{c.at:.3g}",
-                     f"{c.tolerance:.3g}", str(c.passed)])
+        # the engines' own readings are reported, not judged (reports.compare.verdict)
+        judged = "not judged" if c.quantity.endswith("[engine]") else \
+            ("pass" if c.passed else "FAIL")
+        rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
+                     f"{c.tolerance:.3g}", judged])
     return rows
 
 
@@ -84,6 +93,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
 
     import pandas as pd
 
+    from analytic.input_display import format_input
     from reports.compare import step_note
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
 
@@ -109,9 +119,9 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
             print(df.to_string(index=False))
             if any(not c.measured for c in comps):
                 first = min(c.at for c in comps if not c.measured)
-                say(f"not measured: the engine has no values from the sample at {first:.6g} "
-                    f"{'deg' if revolute else 'm'} on (the run stopped there); the verdict is "
-                    "a failure")
+                say(f"not measured: the engine has no values from the sample at "
+                    f"{format_input(first, 'deg' if revolute else 'm')} on (the run stopped "
+                    "there); the verdict is a failure")
             if any(c.quantity.endswith("[engine]") for c in comps):
                 say("rows marked [engine] are the engine's own readings, reported but not "
                     "judged: PyBullet's jointReactionForces are known wrong for links with "

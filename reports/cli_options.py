@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 from analytic.errors import LinkageError
-from analytic.mechanism import MAX_ACCEL, MAX_ANGLE, MAX_LENGTH, MAX_RATE
+from analytic.mechanism import MAX_ACCEL, MAX_ANGLE, MAX_LENGTH, MAX_RATE, RANGE_ROUND_OFF
 
 
 class UsageError(LinkageError):
@@ -51,16 +51,19 @@ SWEEP_MEMORY_BUDGET = 4 * 2 ** 30
 #: (analytic/stream.py), so only time bounds it.
 MAX_STREAMED_SWEEP_POINTS = 1_000_000_000
 
-#: Engine samples per revolution: 0.1 deg apart at the ceiling.  The engine's step
-#: is shortened so that every sample falls on a step, so more samples make a run
-#: longer without showing anything between them that 3600 do not.
-MAX_SAMPLES = 3600
-#: Engine revolutions: the last one is compared; beyond 1000 a run measures only
-#: drift, which the report's long-run study covers.
-MAX_REVOLUTIONS = 1000
-#: Engine time step, s: below 1e-6 a revolution at the built-in cases' speeds takes
-#: ~1e5-1e6 steps per engine; above 0.1 s a crank at 15 rad/s turns 86 deg per step.
-MIN_TIMESTEP, MAX_TIMESTEP = 1e-6, 0.1
+#: Engine run ranges (samples, revolutions, time step) are defined once, in
+#: :mod:`sim_models.ranges`, and checked by the settings and the run request themselves;
+#: read lazily (module ``__getattr__``) so that ``xval solve`` imports no engine code.
+_SIM_RANGES = ("MAX_SAMPLES", "MAX_REVOLUTIONS", "MIN_TIMESTEP", "MAX_TIMESTEP")
+
+
+def __getattr__(name: str):
+    if name in _SIM_RANGES:
+        from sim_models import ranges
+        return getattr(ranges, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: Report worker processes: each holds both engines (a few hundred MB).
 MAX_WORKERS = 64
 
@@ -80,6 +83,11 @@ def int_range(lo: int, hi: int, why: str = ""):
     return parse
 
 
+def _shown(v: float) -> str:
+    """``v`` short (``1e+09``) unless that hides digits the user typed (``360000.001``)."""
+    return f"{v:g}" if float(f"{v:g}") == v else f"{v:.12g}"
+
+
 def finite_float(limit: float, unit: str, lo: float | None = None, why: str = "",
                  scale: float = 1.0):
     """An argparse type: a finite float with ``|x| <= limit`` (or ``lo <= x <= limit``).
@@ -93,11 +101,12 @@ def finite_float(limit: float, unit: str, lo: float | None = None, why: str = ""
         if not math.isfinite(v):
             raise argparse.ArgumentTypeError(f"{text} is not a finite number")
         si = v * scale
-        if (abs(si) <= limit) if lo is None else (lo <= si <= limit):
+        top = limit * (1 + RANGE_ROUND_OFF)  # the printed bound itself is accepted
+        if (abs(si) <= top) if lo is None else (lo <= si <= top):
             return v
         rng = (f"|x| <= {limit / scale:g} {unit}" if lo is None
                else f"{lo / scale:g} to {limit / scale:g} {unit}")
-        raise argparse.ArgumentTypeError(f"{v:g} is out of range: the accepted range is {rng}"
+        raise argparse.ArgumentTypeError(f"{_shown(v)} is out of range: the accepted range is {rng}"
                                          + (f" ({why})" if why else ""))
     return parse
 
@@ -109,13 +118,52 @@ rate = finite_float(MAX_RATE, "rad/s or m/s")
 accel = finite_float(MAX_ACCEL, "rad/s^2 or m/s^2")
 sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_POINTS} only "
                          "with --csv, written block by block")
-samples = int_range(2, MAX_SAMPLES, "0.1 deg apart at most; every sample falls on an "
-                                    "engine step")
-revolutions = int_range(1, MAX_REVOLUTIONS, "the last revolution is compared")
-timestep = finite_float(MAX_TIMESTEP, "s", lo=MIN_TIMESTEP,
-                        why="the step must be positive; the bounds keep a run between "
-                            "minutes and a few steps per revolution")
+
+
+def sim_range(name: str, whole: bool = False):
+    """An argparse type checked against ``sim_models.ranges.<name>`` (the range the
+    settings and run requests check too; imported when the option is given)."""
+    def parse(text: str):
+        from sim_models import ranges
+        try:
+            v = int(text) if whole else float(text)
+        except ValueError:
+            kind = "an integer" if whole else "a number"
+            raise argparse.ArgumentTypeError(f"{text!r} is not {kind}") from None
+        problem = getattr(ranges, name).problem(v)
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return v
+    return parse
+
+
+samples = sim_range("SAMPLES", whole=True)
+revolutions = sim_range("REVOLUTIONS", whole=True)
+timestep = sim_range("TIMESTEP")
 workers = int_range(1, MAX_WORKERS, "each worker is a process holding both engines")
+
+
+def drift_factor(text: str) -> float:
+    """An argparse type: a baseline drift factor, a finite number above 1 (an error may
+    grow by this factor over its baseline; 1 or less fails an unchanged run)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 1):
+        raise argparse.ArgumentTypeError(f"{text} is out of range: the drift factor must be a "
+                                         "finite number above 1")
+    return v
+
+
+def check_input_range(values, revolute: bool) -> None:
+    """``--range FROM TO``: each value within the input's range, as ``--angle`` (deg) or
+    ``--value`` (m) checks it; raises :class:`UsageError` naming the option."""
+    for v in values:
+        try:
+            (angle_deg if revolute else length_m)(repr(float(v)))
+        except argparse.ArgumentTypeError as e:
+            raise UsageError(f"argument --range: {e}") from None
 
 
 def check_sweep_points(points: int, n_elements: int, streamed: bool = False) -> None:
@@ -151,7 +199,8 @@ def _probe_dir(d: Path, what: str) -> None:
 
 
 def output_file(text: str) -> str:
-    """An argparse type: a file to (over)write, or ``-`` for standard output."""
+    """An argparse type: a file to (over)write, or ``-`` for standard output.  The
+    folders it is in are created when missing (the README's ``--out ci/base.json``)."""
     if text == "-":
         return text
     p = Path(text)
@@ -159,7 +208,11 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise argparse.ArgumentTypeError(f"folder {str(parent)!r} does not exist")
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise argparse.ArgumentTypeError(f"cannot create folder {str(parent)!r}: "
+                                             f"{e.strerror}") from None
     if p.exists() and not os.access(p, os.W_OK):
         raise argparse.ArgumentTypeError(f"file {text!r} is not writable")
     _probe_dir(parent, "a file")
@@ -194,12 +247,13 @@ def case_or_file(text: str) -> str:
     """An argparse type: a built-in case name, or a readable TOML file (returned as
     an absolute path, so that worker processes and file names do not depend on the
     current folder)."""
-    from analytic.cases import case_names
-    if text in case_names():
+    from analytic.cases import case_names, hard_case_names
+    if text in case_names() or text in hard_case_names():
         return text
     p = Path(text)
     if p.is_file():
         return str(p.resolve())
     if text.endswith(".toml") or os.sep in text:
         raise argparse.ArgumentTypeError(f"no such file {text!r}")
-    raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}")
+    raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}, "
+                                     f"hard cases {hard_case_names()}")

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from analytic.errors import LinkageError
+from analytic.input_display import convention_of, display_input, format_input, input_number
 from analytic.positions import size_of
 
 from .reference import MAX_CONDITION, analytic_reference, linkage_of
@@ -64,14 +65,16 @@ class Comparison:
         ``normalised`` are ``null`` where not measured, and ``measured`` says so."""
         d = json_safe(asdict(self))
         d["measured"] = self.measured
+        d["judged"] = not self.quantity.endswith("[engine]")  # an engine's own reading: no
         return d
 
     def __str__(self) -> str:
         verdict = "pass" if self.passed else "FAIL"
         if not self.measured:
-            return (f"{self.quantity}: not measured from {self.at:.6g} on (no finite engine "
-                    f"value there: the run stopped) {verdict}")
-        return (f"{self.quantity}: max error {self.max_abs:.3g} at {self.at:.6g} "
+            return (f"{self.quantity}: not measured from {input_number(self.at)} on (no finite "
+                    f"engine value there: the run stopped) {verdict}")
+        return (f"{self.quantity}: max error {self.max_abs:.3g} at "
+                f"{input_number(self.at)} "
                 f"({self.normalised:.3g} of peak {self.peak:.4g}; tolerance "
                 f"{self.tolerance:.1g}) {verdict}")
 
@@ -187,9 +190,9 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
                               f"(loop condition number above {max_condition:g}) or unreached")
         raise NothingToCompare(f"{run_.case} / {run_.engine}: no sample can be compared: "
                                f"{why}")
-    x = run_.values
-    # degrees in [0, 360): rounded first so that 360 - 1 ulp reads 0, not 5.7e-14
-    at = (np.mod(np.round(np.degrees(x), 9), 360.0) if lk.driver_is_revolute else x)[keep]
+    # the one display convention of an input (degrees in [0, 360) for a full turn, as
+    # the figures, tables and JUnit show it): reports.input_display
+    at = display_input(run_.values, convention_of(lk))[keep]
     out = []
     moving = [b for b, n in enumerate(run_.body_names) if n != mech.ground]
     # the mechanism's angular-acceleration scale: its largest body alpha, or, when every
@@ -287,16 +290,17 @@ def near_event(comparisons: list[Comparison], linkage) -> str | None:
     if linkage.driver_is_revolute:
         if ev.distance > NEAR_EVENT_DEG:
             return None
-        unit, where = "deg", f"{ev.input % 360.0:.5g} deg"
+        unit, where = "deg", format_input(display_input(math.radians(ev.input),
+                                                        convention_of(linkage)), "deg")
     else:
         x = res.frame["input"].to_numpy(float)
         stroke = float(np.nanmax(x) - np.nanmin(x)) if len(x) else 0.0
         if stroke <= 0 or ev.distance > NEAR_EVENT_STROKE * stroke:
             return None
-        unit, where = "m", f"{ev.input:.6g} m"
+        unit, where = "m", format_input(ev.input, "m")
     kind = {"limit": "limit position", "singular": "singular position",
             "change_point": "change point"}.get(ev.kind, ev.kind.replace("_", " "))
-    return (f"the worst error ({worst.quantity} at {worst.at:.5g} {unit}) is "
+    return (f"the worst error ({worst.quantity} at {format_input(worst.at, unit)}) is "
             f"{ev.distance:.3g} {unit} from the {kind} at {where} ({ev.detail}): "
             "the mechanism itself is singular or at a limit there, so a small engine offset "
             "is a large error")

@@ -14,8 +14,10 @@ Angular accelerations stay rad/s^2; forces N, torques and couples N m, power W
 (every header says so: :meth:`DisplayUnits.header`).
 
 Round-off noise: a value whose magnitude is below :data:`NOISE` of its quantity's
-scale (the largest magnitude of the same kind in the same table) is shown as 0, and a
-zero never carries a sign (:func:`snap`, :func:`text`).
+scale in its own row (:func:`row_scales`: the largest magnitude of the same kind in the
+same row, a turn for an angle; never a value of another row) is shown as 0, and a zero
+never carries a sign (:func:`snap`, :func:`text`).  One rule for ``xval solve`` and every
+row of ``xval sweep --csv``, in memory or streamed (:func:`snap_rows`).
 """
 
 from __future__ import annotations
@@ -192,102 +194,187 @@ def column_kind(col: str, revolute: bool) -> str:
     return {"x": "length", "y": "length", "s": "length", "vx": "velocity",
             "vy": "velocity", "v": "velocity", "ax": "acceleration", "ay": "acceleration",
             "a": "acceleration", "omega": "omega", "alpha": "alpha", "fx": "force",
-            "fy": "force", "normal": "force"}.get(last, "ratio")
+            "fy": "force", "normal": "force", "magnitude": "force"}.get(last, "ratio")
 
 
-def convert_frame(frame, units: DisplayUnits, revolute: bool, rename: bool | None = None):
-    """The sweep table in ``units`` with round-off noise snapped to 0 (per kind: the
-    scale is the kind's largest magnitude in the table).  Angle columns come in degrees
-    and leave in ``units.angle``.  With ``rename`` (default: when not the SI default),
-    each column name gets its unit: ``crank.omega [rpm]``, ``crank.angle [rad]``."""
+#: Columns that hold the input itself (the value solved at and its rates): shown exactly
+#: as solved, never snapped (a row's printed input reproduces the row).
+INPUT_COLUMNS = ("input", "input_velocity", "input_acceleration")
+#: Quantity kinds never snapped: diagnostics, codes and ratios are shown as computed.
+UNSNAPPED = ("residual", "status", "ratio")
+
+
+def row_scales(cols: dict, revolute: bool) -> dict[str, np.ndarray]:
+    """The round-off scale of each quantity kind, row by row (``(N,)`` each; SI, angles
+    in deg): what a row and a quantity justify, never another row's values.
+
+    * an angle: a turn (360 deg);
+    * a length, velocity, acceleration, angular rate or force: the largest finite
+      magnitude of that kind in the same row (the input's own value left out), and for
+      the rates at least what the row's motion implies with its largest coordinate ``L``
+      as lever: a velocity ``omega L``, an angular rate ``v / L``, an angular
+      acceleration ``omega^2`` and ``a / L``, an acceleration ``alpha L``;
+    * a moment (joint couple, drive torque): that, or the row's force scale times its
+      largest coordinate (the lever of the forces, m) when larger;
+    * the drive power: that, or the drive effort's scale times the input rate.
+
+    ``cols`` maps column names of the sweep table (:mod:`analytic.sweep`;
+    :func:`column_kind`) to arrays of the same length (one element: ``xval solve``)."""
+    kinds = {c: column_kind(c, revolute) for c in cols}
+    n = len(np.atleast_1d(next(iter(cols.values())))) if cols else 0
+
+    def peak(kind):
+        m = np.zeros(n)
+        for c, k in kinds.items():
+            if k == kind and c != "input":
+                a = np.abs(np.atleast_1d(np.asarray(cols[c], float)))
+                m = np.fmax(m, np.where(np.isfinite(a), a, 0.0))
+        return m
+    sc = {k: peak(k) for k in ("length", "velocity", "acceleration", "omega", "alpha",
+                               "force")}
+    # the row's motion sets the kinematic scales even where every value of a kind is
+    # round-off (a rod's alpha at a dead centre: 4e-12 rad/s^2 at 200 rad/s)
+    lever = np.where(sc["length"] > 0, sc["length"], np.inf)
+    sc["velocity"] = np.maximum(sc["velocity"], sc["omega"] * sc["length"])
+    sc["omega"] = np.maximum(sc["omega"], sc["velocity"] / lever)
+    sc["alpha"] = np.maximum.reduce([sc["alpha"], sc["omega"] ** 2,
+                                     sc["acceleration"] / lever])
+    sc["acceleration"] = np.maximum(sc["acceleration"], sc["alpha"] * sc["length"])
+    sc["angle"] = np.full(n, 360.0)
+    sc["moment"] = np.maximum(peak("moment"), sc["force"] * sc["length"])
+    rate = np.abs(np.atleast_1d(np.asarray(cols.get("input_velocity", 0.0), float)))
+    effort = sc["moment"] if revolute else sc["force"]
+    sc["power"] = np.maximum(peak("power"), effort * np.where(np.isfinite(rate), rate, 0.0))
+    return sc
+
+
+def snap_rows(cols: dict, revolute: bool) -> dict[str, np.ndarray]:
+    """``cols`` (SI, angles in deg; see :func:`row_scales`) with round-off noise set to
+    0: a value below :data:`NOISE` of its own row's scale of its kind.  The one rule of
+    ``xval solve`` and of the sweep table, in memory or streamed block by block (a row
+    is snapped from its own values only, so the block size changes no cell).  The
+    input columns, ratios, residuals and codes are left as computed (a zero loses its
+    sign)."""
+    scales = row_scales(cols, revolute)
+    out = {}
+    for c, v in cols.items():
+        k = column_kind(c, revolute)
+        if k == "status":
+            out[c] = v
+        elif c in INPUT_COLUMNS or k not in scales:
+            out[c] = np.asarray(v, float) + 0.0  # + 0.0: -0.0 -> 0.0
+        else:
+            out[c] = snap(np.atleast_1d(np.asarray(v, float)), scales[k])
+    return out
+
+
+def _angle_factor(units: DisplayUnits) -> float:
+    """deg -> ``units.angle``: exactly 1 for degrees, pi/180 for radians (the factor
+    :func:`numpy.radians` uses, so an input printed in rad is the value solved at)."""
+    return 1.0 if units.angle == "deg" else units.A * math.pi / 180.0
+
+
+def column_name(col: str, units: DisplayUnits, revolute: bool) -> str:
+    """The CSV name of a sweep-table column: the quantity, then its unit in brackets
+    (``crank.angle [deg]``, ``crank.omega [rad/s]``, ``O2.fx [N]``,
+    ``jacobian_condition [-]``), whatever the units; ``singular`` (a code) has none."""
+    kind = column_kind(col, revolute)
+    base = col.replace(".angle_deg", ".angle").replace("transmission_deg", "transmission")
+    return base if kind == "status" else f"{base} [{units.unit(kind)}]"
+
+
+def convert_frame(frame, units: DisplayUnits, revolute: bool):
+    """The sweep table in ``units``, round-off noise snapped to 0 row by row
+    (:func:`snap_rows`), each column named with its unit (:func:`column_name`).  Angle
+    columns come in degrees and leave in ``units.angle``."""
+    snapped = snap_rows({c: frame[c].to_numpy() for c in frame.columns}, revolute)
     out = frame.copy()
-    kinds = {c: column_kind(c, revolute) for c in frame.columns}
-    if rename is None:
-        rename = not units.is_si
-    for kind in set(kinds.values()) - {"residual", "status"}:
-        cols = [c for c, k in kinds.items() if k == kind]
-        f = units.factor(kind)
-        if kind == "angle":  # the table's angles are degrees
-            f = units.A * math.pi / 180.0
-        vals = {c: np.asarray(frame[c], float) * f for c in cols}
-        s = scale_of(*vals.values())
-        if kind == "angle":
-            s = max(s, 2 * math.pi * units.A)  # an angle's scale is a turn
-        for c in cols:
-            out[c] = snap(vals[c], s)
-    if rename:
-        def name(c):
-            base = c.replace(".angle_deg", ".angle").replace("transmission_deg",
-                                                              "transmission")
-            return base if kinds[c] == "status" else f"{base} [{units.unit(kinds[c])}]"
-        out.columns = [name(c) for c in frame.columns]
+    for c in frame.columns:
+        kind = column_kind(c, revolute)
+        if kind == "status":
+            continue
+        f = _angle_factor(units) if kind == "angle" else units.factor(kind)
+        out[c] = snapped[c] * f if f != 1.0 else snapped[c]
+    out.columns = [column_name(c, units, revolute) for c in frame.columns]
     return out
 
 
 # ============================================================================ solve result
+def _flatten(r: dict) -> dict:
+    """The quantities of an ``xval solve`` result under the sweep table's column names."""
+    cols = {"input_velocity": r["input"]["velocity"]}
+    for b, d in r["bodies"].items():
+        cols.update({f"{b}.angle_deg": d["angle_deg"], f"{b}.omega": d["omega"],
+                     f"{b}.alpha": d["alpha"]})
+    for p, d in r["points"].items():
+        for key, (cx, cy) in (("position", ("x", "y")), ("velocity", ("vx", "vy")),
+                              ("acceleration", ("ax", "ay"))):
+            cols[f"{p}.{cx}"], cols[f"{p}.{cy}"] = d[key]
+    for j, d in r["sliders"].items():
+        cols.update({f"{j}.{k}": d[k] for k in ("s", "v", "a")})
+    for j, d in r["joints"].items():
+        cols[f"{j}.fx"], cols[f"{j}.fy"] = d["force"]
+        cols[f"{j}.magnitude"] = d["magnitude"]
+        for k in ("normal", "moment"):
+            if k in d:
+                cols[f"{j}.{k}"] = d[k]
+    dr = r.get("drive")
+    if dr:
+        for k in ("torque", "force", "power"):
+            if k in dr:
+                cols[f"drive.{k}"] = dr[k]
+    for k, v in r.get("transmission_deg", {}).items():
+        cols[f"transmission_deg.{k}"] = v
+    return {k: np.array([v], float) for k, v in cols.items()}
+
+
 def convert_result(res: dict, units: DisplayUnits) -> dict:
     """The ``xval solve`` result dict (SI, angles in deg; see :mod:`reports.cli`) in
-    ``units``, noise snapped per kind (scale: the kind's largest magnitude in the
-    result; a couple's and torque's at least the largest force times the largest
-    coordinate), with a ``units`` entry when not the default.  Keys are unchanged
-    (``angle_deg`` holds the angle in ``units.angle``)."""
+    ``units``, round-off noise snapped by the sweep table's rule (:func:`snap_rows`:
+    the same numbers as the sweep's row at that input), with a ``units`` entry when
+    not the default.  Keys are unchanged (``angle_deg`` holds the angle in
+    ``units.angle``)."""
     import copy
     r = copy.deepcopy(res)
     inp = r["input"]
     rev = "angle_deg" in inp
-    degA = units.A * math.pi / 180.0
-    L = units.L
-    # input
+    s = {k: float(v[0]) for k, v in snap_rows(_flatten(res), rev).items()}
+    degA, L, W = _angle_factor(units), units.L, units.W
     if rev:
-        inp["angle_deg"] = snap(inp["angle_deg"] * degA, 2 * math.pi * units.A)
-        inp["velocity"] = inp["velocity"] * units.W + 0.0
+        inp["angle_deg"] = inp["angle_deg"] * degA + 0.0
+        inp["velocity"] = inp["velocity"] * W + 0.0
     else:
-        inp["s"] = inp["s"] * L
-        inp["velocity"] = inp["velocity"] * L
-        inp["acceleration"] = inp["acceleration"] * L
-    b = r["bodies"]
-    sw = scale_of([d["omega"] for d in b.values()]) * units.W
-    sa = scale_of([d["alpha"] for d in b.values()])
-    for d in b.values():
-        d["angle_deg"] = snap(d["angle_deg"] * degA, 2 * math.pi * units.A)
-        d["omega"] = snap(d["omega"] * units.W, sw)
-        d["alpha"] = snap(d["alpha"], sa)
-    pts, sl = r["points"], r["sliders"]
-    size = _size(pts)  # m, before conversion: the lever of a couple
-    for key, ks in (("position", "s"), ("velocity", "v"), ("acceleration", "a")):
-        sc = L * scale_of([d[key] for d in pts.values()], [d[ks] for d in sl.values()])
-        for d in pts.values():
-            d[key] = [snap(x * L, sc) for x in d[key]]
-        for d in sl.values():
-            d[ks] = snap(d[ks] * L, sc)
-    j = r["joints"]
-    sf = scale_of([d["force"] for d in j.values()],
-                  [d.get("normal", 0.0) for d in j.values()])
-    sm = max(scale_of([d["moment"] for d in j.values() if "moment" in d]), sf * size)
-    for d in j.values():
-        d["force"] = [snap(x, sf) for x in d["force"]]
-        d["magnitude"] = snap(d["magnitude"], sf)
-        if "normal" in d:
-            d["normal"] = snap(d["normal"], sf)
-        if "moment" in d:
-            d["moment"] = snap(d["moment"], sm)
+        inp["s"] = inp["s"] * L + 0.0
+        inp["velocity"] = inp["velocity"] * L + 0.0
+        inp["acceleration"] = inp["acceleration"] * L + 0.0
+    for b, d in r["bodies"].items():
+        d["angle_deg"] = s[f"{b}.angle_deg"] * degA
+        d["omega"] = s[f"{b}.omega"] * W
+        d["alpha"] = s[f"{b}.alpha"]
+    for p, d in r["points"].items():
+        d["position"] = [s[f"{p}.x"] * L, s[f"{p}.y"] * L]
+        d["velocity"] = [s[f"{p}.vx"] * L, s[f"{p}.vy"] * L]
+        d["acceleration"] = [s[f"{p}.ax"] * L, s[f"{p}.ay"] * L]
+    for j, d in r["sliders"].items():
+        for k in ("s", "v", "a"):
+            d[k] = s[f"{j}.{k}"] * L
+    for j, d in r["joints"].items():
+        d["force"] = [s[f"{j}.fx"], s[f"{j}.fy"]]
+        for k in ("magnitude", "normal", "moment"):
+            if k in d:
+                d[k] = s[f"{j}.{k}"]
     dr = r.get("drive")
     if dr:
-        eff = "torque" if "torque" in dr else "force"
-        se = max(abs(dr[eff]), sm if eff == "torque" else sf)
-        dr[eff] = snap(dr[eff], se)
-        dr["power"] = snap(dr["power"], max(abs(dr["power"]), se * abs(res["input"]["velocity"])))
+        for k in ("torque", "force", "power"):
+            if k in dr:
+                dr[k] = s[f"drive.{k}"]
     if "transmission_deg" in r:
-        r["transmission_deg"] = {k: v * degA for k, v in r["transmission_deg"].items()}
+        r["transmission_deg"] = {k: s[f"transmission_deg.{k}"] * degA
+                                 for k in r["transmission_deg"]}
     if not units.is_si:
         r["units"] = {"length": units.length, "angle": units.angle,
                       "angular_speed": units.speed, "note": units.header()}
     return r
-
-
-def _size(pts: dict) -> float:
-    """The largest coordinate magnitude among the points, m (a couple's lever scale)."""
-    return scale_of([d["position"] for d in pts.values()])
 
 
 # ============================================================================ figures
@@ -347,5 +434,6 @@ def convert_figure(fig, units: DisplayUnits):
 
 
 __all__ = ["ANGLES", "DisplayUnits", "KINDS", "LENGTHS", "NOISE", "SPEEDS", "UnitsError",
-           "column_kind", "convert_frame", "convert_result", "scale_of", "snap", "text",
+           "column_kind", "column_name", "convert_frame", "convert_result", "row_scales",
+           "scale_of", "snap", "snap_rows", "text",
            "units_option", "UNITS_HELP", "convert_figure", "FIGURE_KINDS"]

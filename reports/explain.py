@@ -15,6 +15,7 @@ from analytic import LinkageError, load_case
 from analytic.mechanism import Revolute
 
 from . import cli_options as opt
+from .cli_paths import check_outputs
 
 
 def register(sub) -> None:
@@ -54,6 +55,7 @@ def input_value(mech, angle: float | None, value: float | None) -> float | None:
 def cmd_explain(args) -> int:
     from .explain_doc import explain
     from .explain_render import render
+    check_outputs([("--out", args.out)], [("the case file", args.case)])
     mech = load_case(args.case)
     doc = explain(mech, input_value(mech, args.angle, args.value))
     out = Path(args.out) if args.out not in (None, "-") else None

@@ -21,7 +21,7 @@ from analytic.toml_io import LENGTH_UNITS
 
 from . import explain_sym as S
 from .explain_blocks import Document, Heading, Para, Table
-from .explain_kin import coupled_section, loop_sections, make_ctx
+from .explain_kin import coupled_section, loop_sections, make_ctx, scales
 from .explain_loops import build_polygons
 
 
@@ -99,14 +99,16 @@ def _results(ctx) -> list:
     """Every link's angle, omega and alpha and every slider, from the hand values."""
     lk, unit, L = ctx.lk, ctx.unit, ctx.L
     topo = lk.topo
+    sc = scales(ctx)
     rows = []
     for b in topo.order[1:]:
         g = topo.group_of[b]
         if g < 0:
             continue
         th = math.degrees(ctx.q[g] + topo.offset[b]) % 360.0
-        rows.append([f"{topo.body_names[b]} (link {ctx.polys.numbers[b]})", S.fmt(th),
-                     S.fmt(ctx.qd[g]), S.fmt(ctx.qdd[g])])
+        rows.append([f"{topo.body_names[b]} (link {ctx.polys.numbers[b]})",
+                     S.fmt(th, scale=360.0), S.fmt(ctx.qd[g], scale=sc["w"]),
+                     S.fmt(ctx.qdd[g], scale=sc["al"])])
     out = [Heading(2, "Results"),
            Table("links", "Links: the angle of each body's own x axis (deg), ω (rad/s), "
                  "α (rad/s²), from the hand method"
@@ -116,9 +118,13 @@ def _results(ctx) -> list:
     srows = []
     for j in topo.prismatic:
         i = topo.n_groups + topo.slider_index[j]
-        srows.append([topo.joint_names[j], f"{S.fmt(ctx.q[i] / L)} {unit} = {S.fmt(ctx.q[i])} m",
-                      f"{S.fmt(ctx.qd[i] / L)} {unit}/s = {S.fmt(ctx.qd[i])} m/s",
-                      f"{S.fmt(ctx.qdd[i] / L)} {unit}/s² = {S.fmt(ctx.qdd[i])} m/s²"])
+        s, v, a = ctx.q[i], ctx.qd[i], ctx.qdd[i]
+        srows.append([topo.joint_names[j],
+                      f"{S.fmt(s / L, scale=sc['r'] / L)} {unit} = {S.fmt(s, scale=sc['r'])} m",
+                      f"{S.fmt(v / L, scale=sc['v'] / L)} {unit}/s = "
+                      f"{S.fmt(v, scale=sc['v'])} m/s",
+                      f"{S.fmt(a / L, scale=sc['a'] / L)} {unit}/s² = "
+                      f"{S.fmt(a, scale=sc['a'])} m/s²"])
     if srows:
         out.append(Table("sliders", "Sliders: displacement s along the line from its origin "
                          "point, its velocity and acceleration, in the file's unit and in SI",

@@ -8,10 +8,14 @@ mu(theta_k)``, y up.  The linkage's bodies are drawn faintly underneath.
 
 from __future__ import annotations
 
+import html
 import math
+
+from analytic.positions import size_of
 
 from .explain_blocks import Figure
 from .explain_loops import angle, length
+from .explain_render import _tex_text
 
 COLOURS = ["#c0392b", "#2471a3", "#1e8449", "#7d3c98", "#b9770e", "#117a65", "#a04000",
            "#34495e"]
@@ -37,6 +41,7 @@ def _bodies(ctx):
     """Segments between the joint points of each moving body (file unit)."""
     kin, topo, mech = ctx.kin, ctx.lk.topo, ctx.mech
     segs = []
+    same = 1e-9 * size_of(topo) / ctx.L   # one point, to the solver's closure
     for b, body in enumerate(mech.bodies):
         if b == topo.ground:
             continue
@@ -45,7 +50,7 @@ def _bodies(ctx):
             if body.name in j.bodies:
                 pn = j.point_a if j.body_a == body.name else j.point_b
                 z = complex(kin.point_c(b, pn)[0][0]) / ctx.L
-                if all(abs(z - p) > 1e-12 for p in pts):
+                if all(abs(z - p) > same for p in pts):
                     pts.append(z)
         for i in range(len(pts) - 1):
             segs.append(((pts[i].real, pts[i].imag), (pts[i + 1].real, pts[i + 1].imag)))
@@ -64,7 +69,7 @@ def polygon_figure(ctx, loop, n: int) -> Figure:
 def _frame(geo, segs):
     xs = [p[0] for g in geo for p in (g[1], g[2])] + [p[0] for s in segs for p in s]
     ys = [p[1] for g in geo for p in (g[1], g[2])] + [p[1] for s in segs for p in s]
-    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9)
+    span = max(max(xs) - min(xs), max(ys) - min(ys)) or 1.0  # any size: lengths scale
     k = WIDTH / span
     return min(xs), max(ys), k, (max(xs) - min(xs)) * k, (max(ys) - min(ys)) * k
 
@@ -114,7 +119,8 @@ def _svg(geo, segs) -> str:
                    f'font-style="italic">r<tspan baseline-shift="sub" font-size="11">{lab}'
                    "</tspan></text>")
         out.append(f'<circle cx="{tx:.1f}" cy="{ty:.1f}" r="3" fill="#222"/>')
-        out.append(f'<text x="{tx - 14:.1f}" y="{ty + 18:.1f}" font-size="13">{tn}</text>')
+        out.append(f'<text x="{tx - 14:.1f}" y="{ty + 18:.1f}" font-size="13">'
+                   f'{html.escape(tn)}</text>')
     out.append("</svg>")
     return _clamp_text("\n".join(out), W, H)
 
@@ -133,7 +139,7 @@ def _clamp_text(svg: str, W: float, H: float) -> str:
 
 def _tikz(geo, segs) -> str:
     x0, y1, k, w, h = _frame(geo, segs)
-    s = 12.0 / max(w, h, 1e-9) * k  # about 12 cm across
+    s = 12.0 / (max(w, h) or 1.0) * k  # about 12 cm across
 
     def P(p):
         return f"({(p[0] - x0) * s:.3f},{(p[1] - y1) * s + h / k * s:.3f})"
@@ -150,6 +156,7 @@ def _tikz(geo, segs) -> str:
         if abs(r) * s > 1e-3:
             out.append(rf"\draw[->, very thick] {P(tail)} -- {P(tip)} node[midway, "
                        rf"above left] {{$r_{{{lab}}}$}};")
-        out.append(rf"\fill {P(tail)} circle (1.5pt) node[below left] {{{tn}}};")
+        out.append(rf"\fill {P(tail)} circle (1.5pt) node[below left] "
+                   f"{{{_tex_text(tn)}}};")
     out.append(r"\end{tikzpicture}")
     return "\n".join(out)

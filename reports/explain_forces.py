@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 
 from analytic.mechanism import Revolute
+from analytic.positions import size_of
 
 from . import explain_sym as S
 from .explain_blocks import Heading, Math, Para, Table
@@ -109,21 +110,30 @@ def _equations(ctx):
             torque += ld.torque + _cross(rP - rG, F)
             loads.append((ld, F, rP))
         consts = [ext.real - m * aG.real, ext.imag - m * aG.imag, torque - inertia * alpha]
+        # the magnitudes each constant is computed from: it is round-off only below these
+        cscale = [abs(m * g.real) + sum(abs(ld[1].real) for ld in loads) + abs(m * aG.real),
+                  abs(m * g.imag) + sum(abs(ld[1].imag) for ld in loads) + abs(m * aG.imag),
+                  sum(abs(ld[0].torque) + abs(ld[2] - rG) * abs(ld[1]) for ld in loads)
+                  + abs(inertia * alpha)]
         out.append((b, rows, consts, dict(m=m, I=inertia, aG=aG, vG=vG, alpha=alpha,
-                                          omega=omega, g=m * g, loads=loads)))
+                                          omega=omega, g=m * g, loads=loads, cscale=cscale)))
     return unk, out
 
 
-def _eq_expr(rows_k, const, unk, const_label):
+def _eq_expr(rows_k, const, unk, const_label, cscale: float, lscale: float):
+    """One equilibrium equation as printed: a coefficient or the constant is left out
+    only where it is round-off of the magnitudes it came from (``lscale`` for the
+    coefficients, a unit direction's components or a lever arm, m; ``cscale`` for the
+    constant), never by an absolute threshold that a small mechanism falls under."""
     terms = []
     for i, c in sorted(rows_k.items()):
-        if abs(c) < 1e-15:
+        if abs(c) <= S.ROUNDOFF * lscale:
             continue
         if abs(abs(c) - 1.0) < 1e-15:
             terms.append((1 if c > 0 else -1, unk[i][0]))
         else:
             terms.append((1 if c > 0 else -1, S.prod(S.num(abs(c), 6), unk[i][0])))
-    if abs(const) > 1e-12:
+    if abs(const) > S.ROUNDOFF * cscale:
         terms.append((1 if const > 0 else -1, S.num(abs(const), 6)))
     return S.signed_sum(terms)
 
@@ -148,15 +158,17 @@ def _body_blocks(ctx, b, rows, consts, info, unk):
                        S.prod(S.name("m", str(k)), S.name("a", f"G{k}")))
         e_num = S.Frac(S.prod(S.num(inertia), S.num(alpha)), S.prod(S.num(m), S.num(a_mag)))
         e_val = inertia * alpha / (m * a_mag)
-        out.append(Math([S.name("e", str(k)), e_sym, e_num], S.fmt(e_val), "m",
+        out.append(Math([S.name("e", str(k)), e_sym, e_num], S.fmt_of(e_val, e_num), "m",
                         S.text(e_num),
                         note="the resultant inertia force m a_G acts on a line offset by e "
                              "from G, so that its moment about G is the inertia moment "
                              "(the notes' inertia circle)"))
     out.append(Para(["Equilibrium with the inertia force and moment (moments about G"
                      f"{k}, counter-clockwise positive; forces in N, moments in N m):"]))
+    size = size_of(topo)
     for lab, kk in (("ΣF_x", 0), ("ΣF_y", 1), ("ΣM_G", 2)):
-        out.append(Math([_eq_expr(rows[kk], consts[kk], unk, lab), sp.Integer(0)],
+        out.append(Math([_eq_expr(rows[kk], consts[kk], unk, lab, info["cscale"][kk],
+                                  1.0 if kk < 2 else size), sp.Integer(0)],
                         note=lab))
     return out
 
@@ -199,8 +211,39 @@ def force_sections(ctx) -> list:
     return out
 
 
+def _body_power(ctx, b, info) -> tuple[list, float]:
+    """One link's share of the power balance: ``m a_G·v_G + I α ω`` less the power of
+    its gravity and loads, as ``(signed terms as printed, value W)``."""
+    kin = ctx.kin
+    m, inertia, w = info["m"], info["I"], info["omega"]
+    aG, vG = _snap(info["aG"]), _snap(info["vG"])
+    terms, total = [], 0.0
+    d = _dot_expr(aG, vG)
+    if m > 0 and d is not None:
+        terms.append((1, S.prod(S.num(m), d)))
+        total += m * (aG.real * vG.real + aG.imag * vG.imag)
+    if inertia > 0 and w != 0 and info["alpha"] != 0:
+        terms.append((1, S.prod(S.num(inertia), S.num(info["alpha"]), S.num(w))))
+        total += inertia * info["alpha"] * w
+    d = _dot_expr(info["g"], vG)
+    if d is not None:
+        terms.append((-1, d))
+        total -= info["g"].real * vG.real + info["g"].imag * vG.imag
+    for ld, F, _ in info["loads"]:
+        vP = _snap(complex(kin.point_c(b, ld.point)[1][0])) if ld.point else vG
+        d = _dot_expr(F, vP)
+        if d is not None:
+            terms.append((-1, d))
+            total -= F.real * vP.real + F.imag * vP.imag
+        if ld.torque and w:
+            terms.append((-1, S.prod(S.num(ld.torque), S.num(w))))
+            total -= ld.torque * w
+    return terms, total
+
+
 def _force_table(ctx, unk, x):
     mech, topo, nums = ctx.mech, ctx.lk.topo, ctx.polys.numbers
+    size = size_of(topo)
     frc = ctx.lk.forces(ctx.kin)
     rows = []
     for j, jt in enumerate(mech.joints):
@@ -209,14 +252,17 @@ def _force_table(ctx, unk, x):
         if isinstance(jt, Revolute):
             fx, fy = x[idx[0]], x[idx[1]]
             mx, my = frc.joint_force[jt.name][0]
-            rows.append([jt.name, f"F{a}{b}: {jt.body_a} on {jt.body_b}", S.fmt(fx), S.fmt(fy),
+            f = math.hypot(fx, fy)
+            rows.append([jt.name, f"F{a}{b}: {jt.body_a} on {jt.body_b}", S.fmt(fx, scale=f),
+                         S.fmt(fy, scale=f),
                          S.fmt(math.hypot(fx, fy)), S.fmt(math.hypot(mx, my)),
                          f"{abs(math.hypot(fx, fy) - math.hypot(mx, my)):.2g}"])
         else:
             nn, mm = x[idx[0]], x[idx[1]]
             sn = float(frc.normal[jt.name][0])
             rows.append([jt.name, f"N{a}{b}, M{a}{b}: {jt.guide} on {jt.slider}",
-                         f"N = {S.fmt(nn)}", f"M = {S.fmt(mm)} N m", S.fmt(abs(nn)),
+                         f"N = {S.fmt(nn)}", f"M = {S.fmt(mm, scale=abs(nn) * size)} N m",
+                         S.fmt(abs(nn)),
                          S.fmt(abs(sn)), f"{abs(abs(nn) - abs(sn)):.2g}"])
     return [Table("forces", "Joint forces (N), by the first link on the second, world axes; "
                   "the solver's tree-reduced method beside",
@@ -238,35 +284,24 @@ def _drive(ctx, unk, x, eqs):
     out = [Heading(3, "Motor torque and power" if rev else "Drive force and power"),
            Math([sym], S.fmt(eff), unit,
                 note=f"the matrix method gives {S.fmt(float(frc.effort[0]))} {unit}"),
-           Math([sp.Symbol("P"), S.prod(sym, rate), p_num], S.fmt(power), "W", S.text(p_num))]
-    terms, total = [], 0.0
-    for b, _, _, info in eqs:
-        m, inertia, w = info["m"], info["I"], info["omega"]
-        aG, vG = _snap(info["aG"]), _snap(info["vG"])
-        d = _dot_expr(aG, vG)
-        if m > 0 and d is not None:
-            terms.append((1, S.prod(S.num(m), d)))
-            total += m * (aG.real * vG.real + aG.imag * vG.imag)
-        if inertia > 0 and w != 0 and info["alpha"] != 0:
-            terms.append((1, S.prod(S.num(inertia), S.num(info["alpha"]), S.num(w))))
-            total += inertia * info["alpha"] * w
-        d = _dot_expr(info["g"], vG)
-        if d is not None:
-            terms.append((-1, d))
-            total -= info["g"].real * vG.real + info["g"].imag * vG.imag
-        for ld, F, _ in info["loads"]:
-            vP = _snap(complex(kin.point_c(b, ld.point)[1][0])) if ld.point else vG
-            d = _dot_expr(F, vP)
-            if d is not None:
-                terms.append((-1, d))
-                total -= F.real * vP.real + F.imag * vP.imag
-            if ld.torque and w:
-                terms.append((-1, S.prod(S.num(ld.torque), S.num(w))))
-                total -= ld.torque * w
-    bal = S.signed_sum(terms)
+           Math([sp.Symbol("P"), S.prod(sym, rate), p_num], S.fmt_of(power, p_num), "W",
+                S.text(p_num))]
+    # one line per link: a single sum over every link scrolled off any page
+    per_body = [(b, *_body_power(ctx, b, info)) for b, _, _, info in eqs]
+    # a link's round-off power (the crank at constant speed) is its printed 0 in the sum too
+    per_body = [(b, t, 0.0 if S.fmt_of(v, S.signed_sum(t)) == "0" else v)
+                for b, t, v in per_body if t]
+    total = sum(v for _, _, v in per_body)
+    names = [S.name("P", str(ctx.polys.numbers[b])) for b, _, _ in per_body]
+    nums = S.signed_sum([(1 if v >= 0 else -1, S.num(abs(v))) for _, _, v in per_body])
     out += [Para(["Check by the power balance: the input power equals the rate of change of "
                   "kinetic energy, Σ (m a_G·v_G + I α ω), less the power of the loads and of "
-                  "gravity, Σ F·v_P:"]),
-            Math([sp.Symbol("P"), bal], S.fmt(total), "W", S.text(bal),
+                  "gravity, Σ F·v_P; one term per moving link, each worked below:"]),
+            Math([sp.Symbol("P"), S.signed_sum([(1, n) for n in names]), nums],
+                 S.fmt_of(total, nums), "W", S.text(nums),
                  note=f"T ω − (this) = {power - total:.3g} W")]
+    for (b, terms, v), nm in zip(per_body, names, strict=True):
+        bal = S.signed_sum(terms)
+        out.append(Math([nm, bal], S.fmt_of(v, bal), "W", S.text(bal),
+                        note=f"link {ctx.polys.numbers[b]} ({ctx.lk.topo.body_names[b]})"))
     return out

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
+from analytic.positions import size_of
+
 from . import explain_sym as S
 from .explain_blocks import Heading, Math, Para, Table
 from .explain_draw import polygon_figure
@@ -121,16 +123,40 @@ def _cols(loop):
     return [S.r(v.label) for v in loop.vectors]
 
 
+def scales(ctx) -> dict[str, float]:
+    """The magnitudes the tables' values are computed from (SI): the mechanism's size,
+    and the velocity and acceleration scales that its largest rates give.  A value
+    below :data:`reports.explain_sym.ROUNDOFF` of its kind's scale is round-off of a
+    zero (a slider passing its origin, a rate at a dwell); anything larger is printed
+    at its own scale, however small the mechanism."""
+    kin, ng = ctx.kin, ctx.ng
+    size = size_of(ctx.lk.topo)
+    w, al = (float(np.max(np.abs(x[0, :ng]), initial=0.0)) for x in (kin.qd, kin.qdd))
+    sv, sa = (float(np.max(np.abs(x[0, ng:]), initial=0.0)) for x in (kin.qd, kin.qdd))
+    v = size * w + sv
+    a = size * (al + w * w) + sa + 2.0 * sv * w
+    return {"r": size, "v": v, "a": a, "w": v / size, "al": a / size, "deg": 360.0}
+
+
+def _fmt(ctx, x: float, kind: str, per_unit: bool = True) -> str:
+    """A table value of ``kind`` (see :func:`scales`); lengths and their rates in the
+    file's unit when ``per_unit``."""
+    sc = scales(ctx)[kind]
+    if per_unit and kind in ("r", "v", "a"):
+        sc /= ctx.L
+    return S.fmt(x, scale=sc)
+
+
 def _deg_cell(a: float) -> str:
-    s = S.fmt(a)
-    return s + (f" ({S.fmt(a - 360.0)})" if a > 180.0 else "")
+    s = S.fmt(a, scale=360.0)
+    return s + (f" ({S.fmt(a - 360.0, scale=360.0)})" if a > 180.0 else "")
 
 
 def _rate_cell(loop, v, vals, ctx, which):
     """thetadot / thetaddot of a vector's angle: 0 on the ground."""
     if v.group < 0:
         return "0"
-    return S.fmt(vals[loop.rate_label[v.group]])
+    return _fmt(ctx, vals[loop.rate_label[v.group]], which)
 
 
 # -- sections --------------------------------------------------------------------------------
@@ -187,7 +213,7 @@ def position_section(ctx: Ctx, loop: Loop, n: int) -> list:
     out.append(Table(f"position-{n}", f"Position table, loop {n} (lengths in {ctx.unit}, "
                      "angles in degrees; in brackets the same angle in (−180°, 180°])",
                      ["", "unit"] + _cols(loop),
-                     [[RR, ctx.unit] + [S.fmt(nn.r[v.label]) for v in loop.vectors],
+                     [[RR, ctx.unit] + [_fmt(ctx, nn.r[v.label], "r") for v in loop.vectors],
                       [TH, "deg"] + [_deg_cell(nn.theta[v.label]) for v in loop.vectors]]))
     notes = [f"θ{v.label} is the angle of the loop vector r{v.label}; the "
              f"{_body(ctx, v.body)}'s own x axis is at {S.fmt(_body_angle(ctx, v.body))}°"
@@ -277,7 +303,7 @@ def _solve_for(ctx, loop, terms, nn, what: str) -> list:
             Math([dotted, sp.Integer(0)],
                  note="under each term its dot product: μ(a)·μ(b) = σ(a)·σ(b) = cos(a − b), "
                       "μ(a)·σ(b) = sin(a − b), σ(a)·μ(b) = sin(b − a)"),
-            Math([el.x_sym, el.closed, el.substituted], S.fmt(el.value), unit,
+            Math([el.x_sym, el.closed, el.substituted], S.fmt_of(el.value, el.substituted), unit,
                  S.text(el.substituted)),
         ]
         store = ctx.qd if what == "velocity" else ctx.qdd
@@ -301,7 +327,8 @@ def velocity_section(ctx: Ctx, loop: Loop, n: int) -> list:
     nn = numbers(ctx, loop)
     out.append(Table(f"velocity-{n}", f"Velocity table, loop {n} (rates of lengths in "
                      f"{ctx.unit}/s, of angles in rad/s)", ["", "unit"] + _cols(loop),
-                     [[RDOT, f"{ctx.unit}/s"] + [S.fmt(nn.rdot[v.label]) for v in loop.vectors],
+                     [[RDOT, f"{ctx.unit}/s"] + [_fmt(ctx, nn.rdot[v.label], "v")
+                                                 for v in loop.vectors],
                       [THDOT, "rad/s"] + [_rate_cell(loop, v, nn.w, ctx, "w")
                                        for v in loop.vectors]]))
     return out
@@ -340,7 +367,7 @@ def acceleration_section(ctx: Ctx, loop: Loop, n: int) -> list:
     nn = numbers(ctx, loop)
     out.append(Table(f"acceleration-{n}", f"Acceleration table, loop {n} ("
                      f"lengths in {ctx.unit}/s², angles in rad/s²)", ["", "unit"] + _cols(loop),
-                     [[RDDOT, f"{ctx.unit}/s²"] + [S.fmt(nn.rddot[v.label])
+                     [[RDDOT, f"{ctx.unit}/s²"] + [_fmt(ctx, nn.rddot[v.label], "a")
                                                 for v in loop.vectors],
                       [THDDOT, "rad/s²"] + [_rate_cell(loop, v, nn.al, ctx, "al")
                                         for v in loop.vectors]]))
@@ -390,13 +417,17 @@ def matrix_section(ctx: Ctx, loop: Loop, n: int) -> list:
             pos_h = math.degrees(angle(v, ctx.q))
             pos_m = math.degrees(angle(v, kin.q[0]))
             unit_p, unit_v, unit_a = "deg", "rad/s", "rad/s²"
+            kinds = ("deg", "w", "al")
         else:
             pos_h, pos_m = ctx.q[u.q] * sc, kin.q[0, u.q] * sc
             unit_p, unit_v, unit_a = ctx.unit, f"{ctx.unit}/s", f"{ctx.unit}/s²"
-        for q_, h, m, un in ((nm[0], pos_h, pos_m, unit_p),
-                             (nm[1], ctx.qd[u.q] * sc, kin.qd[0, u.q] * sc, unit_v),
-                             (nm[2], ctx.qdd[u.q] * sc, kin.qdd[0, u.q] * sc, unit_a)):
-            rows.append([q_, un, S.fmt(h), S.fmt(m), f"{abs(h - m):.2g}"])
+            kinds = ("r", "v", "a")
+        for q_, h, m, un, kd in ((nm[0], pos_h, pos_m, unit_p, kinds[0]),
+                                 (nm[1], ctx.qd[u.q] * sc, kin.qd[0, u.q] * sc, unit_v,
+                                  kinds[1]),
+                                 (nm[2], ctx.qdd[u.q] * sc, kin.qdd[0, u.q] * sc, unit_a,
+                                  kinds[2])):
+            rows.append([q_, un, _fmt(ctx, h, kd), _fmt(ctx, m, kd), f"{abs(h - m):.2g}"])
     return [Heading(3, "Hand method beside the matrix method"),
             Para(["The solver writes all loops at once as ", MATRIX_V, " and ", MATRIX_A,
                   " (J the loop Jacobian, q the unknown angles and lengths, γ the velocity-"
@@ -429,15 +460,17 @@ def coupled_section(ctx: Ctx, loop: Loop, n: int) -> list:
     nn = numbers(ctx, loop)
     src = " (matrix method)"
     out += [Table(f"position-{n}", f"Position table, loop {n}{src}", ["", "unit"] + _cols(loop),
-                  [[RR, ctx.unit] + [S.fmt(nn.r[v.label]) for v in loop.vectors],
+                  [[RR, ctx.unit] + [_fmt(ctx, nn.r[v.label], "r") for v in loop.vectors],
                    [TH, "deg"] + [_deg_cell(nn.theta[v.label]) for v in loop.vectors]]),
             Table(f"velocity-{n}", f"Velocity table, loop {n}{src}", ["", "unit"] + _cols(loop),
-                  [[RDOT, f"{ctx.unit}/s"] + [S.fmt(nn.rdot[v.label]) for v in loop.vectors],
+                  [[RDOT, f"{ctx.unit}/s"] + [_fmt(ctx, nn.rdot[v.label], "v")
+                                                 for v in loop.vectors],
                    [THDOT, "rad/s"] + [_rate_cell(loop, v, nn.w, ctx, "w")
                                        for v in loop.vectors]]),
             Table(f"acceleration-{n}", f"Acceleration table, loop {n}{src}",
                   ["", "unit"] + _cols(loop),
-                  [[RDDOT, f"{ctx.unit}/s²"] + [S.fmt(nn.rddot[v.label]) for v in loop.vectors],
+                  [[RDDOT, f"{ctx.unit}/s²"] + [_fmt(ctx, nn.rddot[v.label], "a")
+                                                   for v in loop.vectors],
                    [THDDOT, "rad/s²"] + [_rate_cell(loop, v, nn.al, ctx, "al")
                                          for v in loop.vectors]])]
     return out

@@ -26,7 +26,7 @@ def _d(x):
 
 def _calc(expr, unit: str, note: str = "") -> Math:
     v = S.value(expr)
-    return Math([expr], S.fmt(v), unit, S.text(expr), note)
+    return Math([expr], S.fmt_of(v, expr), unit, S.text(expr), note)
 
 
 def _at(ctx, name: str, angle_deg: float, omega: float) -> bool:

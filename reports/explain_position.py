@@ -93,10 +93,12 @@ def _dvec(loop, unknown, r, th):
     blocks = [
         Math([S.name("D", "x"), S.Neg(_sum_sym(known, S.cos)), S.Neg(_sum_num(known, S.cos,
                                                                             r, th))],
-             S.fmt(dx), "", S.text(S.Neg(_sum_num(known, S.cos, r, th)))),
+             S.fmt_of(dx, S.Neg(_sum_num(known, S.cos, r, th))), "",
+             S.text(S.Neg(_sum_num(known, S.cos, r, th)))),
         Math([S.name("D", "y"), S.Neg(_sum_sym(known, S.sin)), S.Neg(_sum_num(known, S.sin,
                                                                             r, th))],
-             S.fmt(dy), "", S.text(S.Neg(_sum_num(known, S.sin, r, th)))),
+             S.fmt_of(dy, S.Neg(_sum_num(known, S.sin, r, th))), "",
+             S.text(S.Neg(_sum_num(known, S.sin, r, th)))),
     ]
     return dx, dy, blocks
 
@@ -137,20 +139,20 @@ def _two_angles(loop, va, vb, r, th, want):
               S.prod(S.r(b), S.MU(S.th(b))), " = D, with D = −(sum of the known vectors):"]),
         *blocks,
         Math([Dm, sp.sqrt(sp.Add(S.sq(Dx), S.sq(Dy), evaluate=False), evaluate=False), mag],
-             S.fmt(d), "", S.text(mag)),
-        Math([dl, S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt(delta), "deg",
+             S.fmt_of(d, mag), "", S.text(mag)),
+        Math([dl, S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt_of(delta, S.atan2(nDy, nDx)), "deg",
              S.text(S.atan2(nDy, nDx))),
         Para([f"r{a}, r{b} and D form a triangle; the law of cosines gives the angle between "
               f"D and r{a}:"]),
-        Math([S.th(a), S.signed_sum([(1, dl), (sgn, acos_sym)]), ta_num], S.fmt(
-            delta + sgn * gam), "deg", S.text(ta_num),
+        Math([S.th(a), S.signed_sum([(1, dl), (sgn, acos_sym)]), ta_num], S.fmt_of(
+            delta + sgn * gam, ta_num), "deg", S.text(ta_num),
              note=f"the sign {'+' if sgn > 0 else '−'} is the description's assembly; the "
                   f"other sign gives the other branch, θ{a} = {S.fmt(cands[1 - k])}°"),
         Math([S.th(b), S.atan2(sp.Add(Dy, sp.Mul(-1, S.r(a), S.sin(S.th(a)), evaluate=False),
                                       evaluate=False),
                                sp.Add(Dx, sp.Mul(-1, S.r(a), S.cos(S.th(a)), evaluate=False),
                                       evaluate=False)), tb_num],
-             S.fmt(tb_raw), "deg", S.text(tb_num),
+             S.fmt_of(tb_raw, tb_num), "deg", S.text(tb_num),
              note=f"= {S.fmt(tb)}° in [0°, 360°)" if abs(tb - tb_raw) > 1e-9 else ""),
     ]
     return blocks, {a: (ra, ta), b: (rb, tb)}
@@ -203,13 +205,13 @@ def _angle_and_length(loop, va, vs, r, th, want):
         Math([S.Dot(S.SIGMA(tsym), S.Bracket(eq)), sp.Integer(0)]),
         Math([S.signed_sum([(1, S.prod(S.r(v.label), S.sin(S.diff_angle(S.th(v.label), tsym))))
                             for v in allk]), sp.Integer(0)]),
-        Math([S.th(a), ta_sym, ta_num], S.fmt(ta_raw), "deg", S.text(ta_num),
+        Math([S.th(a), ta_sym, ta_num], S.fmt_of(ta_raw, ta_num), "deg", S.text(ta_num),
              note=(f"= {S.fmt(ta)}° in [0°, 360°)"
                    + (f", i.e. {S.fmt(ta - 360)}°" if ta > 180 else "")
                    + f"; the other root, θ{a} = {S.fmt(cands[1 - k])}°, is the other branch")),
         Para([f"Dot the loop equation with μ(θ{s}) (μ(θk)·μ(θ{s}) = cos(θk − θ{s})) for "
               f"r{s}:"]),
-        Math([S.r(s), cos_sym, cos_num], S.fmt(rs), "", S.text(cos_num)),
+        Math([S.r(s), cos_sym, cos_num], S.fmt_of(rs, cos_num), "", S.text(cos_num)),
     ]
     return blocks, {a: (r[a], ta), s: (rs, ts)}
 
@@ -232,10 +234,11 @@ def _polar(loop, vs, r, th, want):
               "polar form:"]),
         *blocks,
         Math([S.r(s), sp.sqrt(sp.Add(S.sq(Dx), S.sq(Dy), evaluate=False), evaluate=False),
-              mag], S.fmt(d), "", S.text(mag),
+              mag], S.fmt_of(d, mag), "", S.text(mag),
              note=f"taken negative, r{s} = {S.fmt(rs)}, with θ{s} turned by 180°: the "
                   "description's assembly" if flip else ""),
-        Math([S.th(s), S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt(raw), "deg",
+        Math([S.th(s), S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt_of(raw, S.atan2(nDy, nDx)),
+             "deg",
              S.text(S.atan2(nDy, nDx)),
              note=f"θ{s} = {S.fmt(ts)}° in [0°, 360°)" if abs(ts - raw) > 1e-9 else ""),
     ]
@@ -258,7 +261,7 @@ def _two_lengths(loop, va, vb, r, th):
                / math.sin((th[x] - to) * DEG))
         expr = S.Frac(num_num, den_num)
         blocks += [Para([f"Dot with σ(θ{other}) to remove r{other}:"]),
-                   Math([S.r(x), S.Frac(num_sym, den_sym), expr], S.fmt(val), "",
+                   Math([S.r(x), S.Frac(num_sym, den_sym), expr], S.fmt_of(val, expr), "",
                         S.text(expr))]
         out[x] = (val, th[x])
     return blocks, out

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import base64
 import html as _html
+import re
 from pathlib import Path
 
 from . import explain_sym as S
@@ -49,10 +50,30 @@ def _unit_tex(u: str) -> str:
     return r"\ \mathrm{{{}}}".format(u.replace("²", "^2").replace("deg", r"{}^\circ")) if u else ""
 
 
+def _sci(value: str) -> tuple[str, str | None]:
+    """A printed value split as mantissa and power of ten (``6.73338e-13`` ->
+    ``('6.73338', '-13')``; ``None`` without an exponent)."""
+    m, _, e = value.partition("e")
+    return (m, str(int(e))) if e else (value, None)
+
+
+def _value_tex(value: str) -> str:
+    m, e = _sci(value)
+    return m if e is None else rf"{m} \cdot 10^{{{e}}}"
+
+
+def _value_ml(value: str) -> str:
+    m, e = _sci(value)
+    if e is None:
+        return f"<mn>{m}</mn>"
+    return (f"<mn>{m}</mn><mo>\u22c5</mo><msup><mn>10</mn><mn>{e.replace('-', chr(0x2212))}"
+            "</mn></msup>")
+
+
 def _chain_tex(b: Math) -> str:
     parts = [S.latex(p) for p in b.parts]
     if b.value is not None:
-        v = b.value + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
+        v = _value_tex(b.value) + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
         parts.append(v)
     if len(parts) <= 2:
         return " = ".join(parts)
@@ -66,8 +87,16 @@ def _cell_md(c) -> str:
     return f"${S.latex(c)}$"
 
 
+def _numbers(doc: Document) -> dict[int, int]:
+    """Tables numbered in order (``Table 3``), as a reader refers to them; the key
+    (``variables1-1``) stays the anchor a link or a test finds the table by."""
+    tables = [b for b in doc.blocks if isinstance(b, Table)]
+    return {id(t): n for n, t in enumerate(tables, start=1)}
+
+
 def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain") -> str:
     out = [f"# {doc.title}", ""]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out += ["#" * b.level + " " + b.text, ""]
@@ -80,7 +109,7 @@ def to_markdown(doc: Document, figdir: Path | None = None, stem: str = "explain"
             if b.check is not None:
                 out += [f"`{_calc(b)}`", ""]
         elif isinstance(b, Table):
-            out += [f"*Table {b.key}: {b.caption}*", ""]
+            out += [f'<a id="{b.key}"></a>*Table {num[id(b)]}: {b.caption}*', ""]
             out.append("| " + " | ".join(_cell_md(c) for c in b.header) + " |")
             out.append("|" + "---|" * len(b.header))
             for row in b.rows:
@@ -122,13 +151,27 @@ def _ml(e, display: bool = False) -> str:
     return f'<math xmlns="http://www.w3.org/1998/Math/MathML"{d}>{S.mathml(e)}</math>'
 
 
-def _chain_ml(b: Math) -> str:
+def _chain_items(b: Math) -> list[str]:
     items = [S.mathml(p) for p in b.parts]
     if b.value is not None:
         unit = {"deg": "<mo>°</mo>"}.get(b.unit, f"<mspace width='0.3em'/><mtext>"
                                          f"{_html.escape(b.unit.replace('^2', '²'))}</mtext>"
                                          if b.unit else "")
-        items.append(f"<mrow><mn>{b.value}</mn>{unit}</mrow>")
+        items.append(f"<mrow>{_value_ml(b.value)}{unit}</mrow>")
+    return items
+
+
+def _chain_rows(b: Math) -> list[str]:
+    """The rows an equation is displayed in: one, or the first two parts and then one
+    per further part (as :func:`_chain_ml` lays them out)."""
+    items = _chain_items(b)
+    if len(items) <= 2:
+        return ["<mo>=</mo>".join(items)]
+    return [items[0] + "<mo>=</mo>" + it for it in items[1:]]  # the left column, each row
+
+
+def _chain_ml(b: Math) -> str:
+    items = _chain_items(b)
     head = '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">'
     if len(items) <= 2:
         return f"{head}<mrow>{'<mo>=</mo>'.join(items)}</mrow></math>"
@@ -141,24 +184,71 @@ def _chain_ml(b: Math) -> str:
     return f"{head}<mtable>{''.join(rows)}</mtable></math>"
 
 
+_SCRIPT_SCALE = 0.7   # MathML's scriptlevel 1 size (a sub- or superscript, an under-label)
+_GLYPH_EM = 0.55      # mean advance of a math glyph and its spacing, em (serif, measured)
+_EQ_EM = 52.0         # the equation column (62 em of the maths at 1.1 em in 1100 px), less
+                      # the estimate's error (up to 15 % short, measured in Chromium)
+
+
+def _ml_width(el) -> float:
+    """An estimate of a MathML element's width in glyphs: a fraction is as wide as its
+    wider part, scripts count at script size, everything else side by side."""
+    tag = el.tag
+    kids = list(el)
+    own = len((el.text or "").strip())
+    if tag == "mfrac":
+        return max((_ml_width(k) for k in kids), default=0.0)
+    if tag in ("msub", "msup", "msubsup"):
+        return _ml_width(kids[0]) + _SCRIPT_SCALE * sum(_ml_width(k) for k in kids[1:])
+    if tag in ("munder", "mover", "munderover"):
+        return max([_ml_width(kids[0])] + [_SCRIPT_SCALE * _ml_width(k) for k in kids[1:]])
+    if tag == "mtable":   # rows one under another
+        return max((_ml_width(k) for k in kids), default=0.0)
+    return own + sum(_ml_width(k) for k in kids)
+
+
+def _ml_tree(fragment: str):
+    """A MathML fragment as an element tree; SymPy's named entities (the invisible
+    times and function application, which take no width) dropped, others one glyph."""
+    import xml.etree.ElementTree as ET
+    text = re.sub(r"&(InvisibleTimes|ApplyFunction|it|af);", "", fragment)
+    return ET.fromstring("<r>" + re.sub(r"&[A-Za-z]+;", "x", text) + "</r>")
+
+
+def _fit(rows: list[str]) -> str:
+    """A style that shrinks a displayed equation to the column when its widest row
+    would be wider (as LaTeX's ``\\resizebox`` in the tex format; MathML has no line
+    breaking and the page no script), never below 60 %, where the text would be too
+    small to read: such an equation (a long acceleration elimination of a second loop)
+    scrolls in its own box."""
+    try:
+        width = max(_ml_width(_ml_tree(r)) for r in rows) * _GLYPH_EM
+    except SyntaxError:   # ElementTree's ParseError: estimate nothing, shrink nothing
+        return ""
+    if width <= _EQ_EM:
+        return ""
+    return f' style="font-size: {max(60, int(100 * _EQ_EM / width))}%"'
+
+
 def to_html(doc: Document) -> str:
     out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
            f"<title>{_html.escape(doc.title)}</title><style>{_CSS}</style></head><body>",
            f"<h1>{_html.escape(doc.title)}</h1>"]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out.append(f"<h{b.level}>{_html.escape(b.text)}</h{b.level}>")
         elif isinstance(b, Para):
             out.append("<p>" + _html_parts(b.parts) + "</p>")
         elif isinstance(b, Math):
-            out.append(f'<div class="eq">{_chain_ml(b)}</div>')
+            out.append(f'<div class="eq"{_fit(_chain_rows(b))}>{_chain_ml(b)}</div>')
             if b.note:
                 out.append(f'<p class="note">{_html_parts(b.note)}</p>')
             if b.check is not None:
                 out.append(f'<code class="calc">{_html.escape(_calc(b))}</code>')
         elif isinstance(b, Table):
-            out.append(f'<p class="caption">Table {b.key}: {_html.escape(b.caption)}</p>'
-                       f'<table id="{b.key}"><tr>'
+            out.append(f'<p class="caption">Table {num[id(b)]}: {_html.escape(b.caption)}'
+                       f'</p><table id="{b.key}"><tr>'
                        + "".join(f"<th>{_ml(c)}</th>" for c in b.header) + "</tr>")
             for row in b.rows:
                 out.append("<tr>" + "".join(f"<td>{_ml(c)}</td>" for c in row) + "</tr>")
@@ -201,6 +291,7 @@ def to_latex(doc: Document) -> str:
            r"\usepackage{amsmath,amssymb,graphicx}", r"\usepackage{tikz}",
            r"\usepackage[margin=2cm]{geometry}", r"\allowdisplaybreaks",
            r"\begin{document}", rf"\section*{{{_tex_text(doc.title)}}}"]
+    num = _numbers(doc)
     for b in doc.blocks:
         if isinstance(b, Heading):
             out.append({2: r"\subsection*{%s}", 3: r"\subsubsection*{%s}"}.get(
@@ -216,7 +307,7 @@ def to_latex(doc: Document) -> str:
             if b.check is not None:
                 out.append(r"{\footnotesize\texttt{" + _tex_text(_calc(b)) + "}}\n")
         elif isinstance(b, Table):
-            out.append(r"\begin{center}{\small\itshape Table " + _tex_text(b.key) + ": "
+            out.append(r"\begin{center}{\small\itshape Table " + str(num[id(b)]) + ": "
                        + _tex_text(b.caption) + r"}\\[2pt]")
             out.append(r"\begin{tabular}{" + "|c" * len(b.header) + "|}\\hline")
             out.append(" & ".join(_tex_cell(c) for c in b.header) + r"\\\hline")

@@ -90,16 +90,18 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     lk = tree.linkage
     runs, comps, notes = {}, {}, []
     if engines:
+        from .progress import engine_progress
         from .verdict_runs import run_comparison
         for e in engines:
-            r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
+            with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
+                r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
     names = [n for w in what for n in WHAT[w]]
     extra = tuple(n for n in ("transmission", "slider_s") if n in names)
     plan = None if runs else cycle_plan(lk, tree)
-    figs = curve_figures(mech.name, runs, lk, plan=plan, extra=extra)
+    figs = curve_figures(mech.name, runs, lk, plan=plan, extra=extra, tree=tree)
     by = {f.name: f for f in figs}
     chosen = [by[n] for n in names if n in by]
     for w in what:
@@ -114,7 +116,22 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     return chosen, err, runs, notes
 
 
-def draw(figs, err, units, title: str):
+def motion_line(mech, runs: dict, units) -> str:
+    """The header line of the input's motion over the plotted samples
+    (:func:`reports.case_figures.motion_text`): the runs' sample times, or those of
+    :func:`cycle_plan` without engines."""
+    from analytic import Linkage
+
+    from .case_figures import motion_text
+    lk = Linkage(mech)
+    if runs:
+        times = np.concatenate([np.asarray(r.times, float) for r in runs.values()])
+    else:
+        times = cycle_plan(lk).times
+    return motion_text(lk, times, units)
+
+
+def draw(figs, err, units, title: str, motion: str = ""):
     """One matplotlib figure: a panel per curve figure, then a row of error panels."""
     from . import plots
     from .display_units import convert_figure
@@ -135,8 +152,10 @@ def draw(figs, err, units, title: str):
             plots.draw_error_axes(ax, err, engine, p)
             axes.append(ax)
         axes[0].set_ylabel("|engine - analytic| / peak (-)")
-        axes[0].legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(0.0, -0.28), ncol=5)
-    fig.suptitle(f"{title}\n{units.header()}", fontsize=9)
+        axes[0].legend(fontsize=plots.LEGEND_PT, loc="upper left",
+                       bbox_to_anchor=(0.0, -0.28), ncol=5)
+    fig.suptitle(f"{title}\n{motion + chr(10) if motion else ''}{units.header()}",
+                 fontsize=plots.TITLE_PT)
     fig.tight_layout()
     return fig
 
@@ -166,6 +185,10 @@ def cmd_plot(args) -> int:
         if not ok and not args.out:
             raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
     mech = load_case(args.case)
+    from .cli_paths import check_outputs, safe_stem
+    # the default name is made safe from the description's (never '../x' or '/x')
+    out = args.out or (None if args.show else f"{safe_stem(mech.name)}-plot.png")
+    check_outputs([("--out" if args.out else "the figure", out)], [("the case file", args.case)])
     what = parse_what(args.what)
     units = DisplayUnits.parse(args.units)
     engines, settings = [], {}
@@ -177,7 +200,8 @@ def cmd_plot(args) -> int:
     figs, err, runs, notes = case_figures(mech, what, engines, settings, args.revolutions,
                                           args.samples, quiet)
     title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
-                                " (markers; errors in the last row)" if runs else ""))
+                                " (markers; errors in the last row)" if runs else
+                                "; no engine run (add --engine for markers)"))
     cannot_show = None
     if args.show:
         ok, why = has_display()
@@ -187,13 +211,13 @@ def cmd_plot(args) -> int:
             _interactive_backend()  # before the figure exists, so it gets a window
         except NoDisplay as e:
             cannot_show = e
-    fig = draw(figs, err, units, title)
-    out = args.out or (None if args.show else f"{mech.name}-plot.png")
+    fig = draw(figs, err, units, title, motion_line(mech, runs, units))
     for n in notes:
         print("note:", n)
     if out:
         try:
-            fig.savefig(out, dpi=110, bbox_inches="tight")
+            from .plots import DPI
+            fig.savefig(out, dpi=DPI, bbox_inches="tight")
         except OSError as e:
             raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
         print(f"wrote {out} ({len(figs)} panels{', with ' + ', '.join(runs) if runs else ''}; "

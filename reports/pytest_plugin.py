@@ -1,31 +1,24 @@
-"""pytest plugin: engine-against-analytic assertions and baseline checks in your own suite.
+"""The work behind linkage-xval's pytest plugin: engine-against-analytic assertions and
+baseline checks in your own suite.
 
-Installed with linkage-xval and registered through the ``pytest11`` entry point ``xval``
-(``pyproject.toml``), so every pytest run in that environment has it; with plugin
-autoloading off, load it with ``-p xval`` (or ``-p reports.pytest_plugin``)::
+The plugin itself (fixtures, options, marker, hooks) is the top-level module
+:mod:`xval_pytest_plugin`, registered through the ``pytest11`` entry point ``xval``
+(``pyproject.toml``); it imports this module on first use, so a pytest run that uses no
+xval fixture imports nothing of the tool.  With plugin autoloading off, load it with
+``-p xval``::
 
     def test_four_bar(xval):
         xval.assert_agrees("linkages/four_bar.toml", engine="mujoco", tolerance=1e-3)
 
-    def test_no_drift(xval):
-        xval.assert_baseline("tests/baselines/engines.json")      # every recorded run
+    def test_no_drift(xval_baseline):      # one test per run recorded in the ini's file
+        xval_baseline()
 
 A relative model or baseline path is relative to pytest's rootdir (the folder of your
 ``pytest.ini`` / ``pyproject.toml``); a name without ``.toml`` is a built-in case.
 
-Runs are cached for the session, keyed by the mechanism's content, the engine, the
-settings object and the run request: any number of assertions on one run cost one run
-(:func:`session_run`).  The project's own engine tests share this cache.
-
-Fixtures
---------
-``xval`` (session): :class:`Xval` -- :meth:`Xval.assert_agrees`, :meth:`Xval.compare`,
-:meth:`Xval.run`, :meth:`Xval.assert_baseline`.
-``xval_baseline`` (session): checks the baseline file named by the ini option
-``xval_baseline``: ``xval_baseline()`` or ``xval_baseline(case="six-bar", engine="mujoco")``.
-
-Parametrise one test per recorded run with :func:`baseline_params`.
-Option ``--xval-factor F`` sets the default drift factor (default 10).
+Runs are cached for the session (per xdist worker), keyed by the mechanism's content, the
+engine, the settings object and the run request: any number of assertions on one run cost
+one run (:func:`session_run`).  The project's own engine tests share this cache.
 """
 
 from __future__ import annotations
@@ -34,6 +27,7 @@ import hashlib
 import math
 import os
 import time
+import warnings
 from pathlib import Path
 
 import pytest
@@ -42,6 +36,12 @@ import pytest
 #: {"error": exception}: the session's runs.  Treat the cached runs as read-only.
 _CACHE: dict[tuple, dict] = {}
 _STATS = {"runs": 0, "hits": 0, "seconds": 0.0}
+#: What ``--xval-update`` rewrote this session (lines for the terminal summary).
+_UPDATES: list[str] = []
+
+
+class XvalLooseWarning(UserWarning):
+    """An error shrank by more than the drift factor: the baseline no longer guards it."""
 
 
 # ============================================================================ the cache
@@ -168,9 +168,12 @@ def disagreement(label: str, run_, comps, tolerance: float, settings_text: str) 
 class Xval:
     """The ``xval`` fixture.  Paths are relative to ``root`` (pytest's rootdir)."""
 
-    def __init__(self, root: Path, factor: float):
+    def __init__(self, root: Path, factor: float, update: bool = False,
+                 fail_loose: bool = False):
         self.root = Path(root)
         self.factor = factor
+        self.update = update          # --xval-update: rewrite what changed
+        self.fail_loose = fail_loose  # --xval-fail-loose
 
     # -- models -----------------------------------------------------------------
     def resolve(self, model) -> Path | str:
@@ -241,83 +244,217 @@ class Xval:
                                           settings_line(engine, run_.settings)))
 
     # -- baselines ------------------------------------------------------------------
-    def check_baseline(self, baseline, *, case: str | None = None, engine: str | None = None,
-                       factor: float | None = None):
-        """``(Baseline, [RunCheck])`` of the recorded runs (those of ``case`` / ``engine``)."""
-        from reports import baseline as bl
+    def path(self, baseline) -> Path:
         p = Path(baseline)
-        base = bl.load(p if p.is_absolute() else self.root / p)
+        return p if p.is_absolute() else self.root / p
+
+    def check_baseline(self, baseline, *, case: str | None = None, engine: str | None = None,
+                       factor: float | None = None, settings=None, key=None):
+        """``(Baseline, [RunCheck])`` of the recorded runs (those of ``case`` / ``engine``,
+        or the one run ``key``); ``settings``: overrides of the recorded settings."""
+        from reports import baseline as bl
+        base = bl.load(self.path(baseline))
+        model = self.resolve(case) if case is not None else None
 
         def keep(rec):
-            return (case is None or case in (rec.case, rec.model.name)) and \
+            same = case is None or case in (rec.case, rec.model.name) or (
+                isinstance(model, Path) and rec.model.kind == "file"
+                and rec.model.path(base.base_dir).resolve() == model.resolve())
+            return (key is None or rec.key == tuple(key)) and same and \
                 (engine is None or rec.engine == engine)
-        checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep)
+        checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep,
+                          fail_loose=self.fail_loose,
+                          overrides=_overrides(settings, [r.engine for r in base.runs]))
         if not checks:
             raise KeyError(f"{baseline}: no recorded run of case={case!r} engine={engine!r}")
         return base, checks
 
     def assert_baseline(self, baseline, *, case: str | None = None,
-                        engine: str | None = None, factor: float | None = None):
+                        engine: str | None = None, factor: float | None = None,
+                        settings=None, key=None):
         """Re-run the baseline's runs (cached) and fail on drift beyond ``factor``, a
-        quantity over its tolerance, or a run, quantity or model gone or changed."""
+        quantity over its tolerance, or a run, quantity or model gone or changed.  The
+        failure's first line is the worst quantity, its growth and where.  A loose
+        baseline (an error shrank by more than the factor) warns, or fails with
+        ``--xval-fail-loose``.  With ``--xval-update`` the changed runs are recorded
+        again instead (and a missing file is created when ``case`` and ``engine`` name
+        the run), and the summary says so."""
         __tracebackhide__ = True
-        from reports.baseline_cli import report_lines
-        base, checks = self.check_baseline(baseline, case=case, engine=engine,
-                                           factor=factor)
+        from reports import baseline as bl
+        path = self.path(baseline)
+        if not path.exists():
+            return self._missing(path, case, engine, settings)
+        try:
+            base, checks = self.check_baseline(baseline, case=case, engine=engine,
+                                               factor=factor, settings=settings, key=key)
+        except bl.BaselineError as e:  # an unusable file: one line, no traceback
+            pytest.fail(f"xval: error: {e}", pytrace=False)
+        except KeyError as e:  # no such run recorded: as a missing file, for that run
+            return self._missing(path, case, engine, settings, e.args[0])
+        changed = [c for c in checks if not c.passed or c.loose()]
+        if self.update and changed:
+            self._rewrite(base, changed, settings)
+            return checks
+        for c in checks:
+            for q in c.loose():
+                warnings.warn(XvalLooseWarning(f"xval: {c.record.label}: {q.message()} "
+                                               "(pytest --xval-update)"), stacklevel=2)
         if all(c.passed for c in checks):
             return checks
-        from reports.baseline import record_command
-        lines = report_lines(base, checks, factor or self.factor)
-        keep = [ln for ln in lines if not ln.startswith("pass ")]
-        keep.append("if the change is intended, record the baseline again (from "
-                    f"{self.root}): {record_command(base, self.root)}")
-        raise AssertionError("\n".join(keep))
+        raise AssertionError(failure_text(base, checks, factor or self.factor, self.root))
+
+    def _missing(self, path: Path, case, engine, settings, what: str = ""):
+        """A baseline file, or the run of ``case`` in ``engine``, not recorded yet:
+        fail with the command that records it, or record it (``--xval-update``)."""
+        __tracebackhide__ = True
+        rel = os.path.relpath(path, self.root)
+        what = what or f"no baseline file {rel} (under {self.root})"
+        if case is None or engine is None:
+            pytest.fail(f"xval: error: {what}; create it with: xval baseline record "
+                        f"CASES_OR_FILES --engine ENGINE --out {rel}", pytrace=False)
+        model = self.resolve(case)
+        model_arg = os.path.relpath(model, self.root) if isinstance(model, Path) else model
+        cmd = f"xval baseline record {model_arg} --engine {engine} --out {rel}"
+        if not self.update:
+            pytest.fail(f"xval: error: {what}; create it with pytest --xval-update, or: "
+                        f"{cmd}", pytrace=False)
+        self._record(path, str(model), engine, settings, None, None,
+                     "added" if path.exists() else "created")
+        return []
+
+    def _record(self, path: Path, model: str, engine: str, settings, request, tolerance,
+                why: str) -> None:
+        """Record one run through the session cache and merge it into ``path``."""
+        __tracebackhide__ = True
+        from reports import baseline as bl
+        s = _settings_of(engine, settings)
+        new = bl.record([model], [engine], path, {engine: s}, request, tolerance,
+                        runner=cached_runner)
+        problems = bl.record_problems(new)
+        if problems:
+            raise AssertionError(f"--xval-update: {problems[0]} (a baseline records a "
+                                 "passing state; not written)")
+        label = new.runs[0].label
+        if path.exists():
+            new, _ = bl.merge(bl.load(path), new)
+        bl.save(new)
+        _UPDATES.append(f"xval --xval-update: {label} in {os.path.relpath(path, self.root)}:"
+                        f" {why}")
+
+    def _rewrite(self, base, changed, settings) -> None:
+        """``--xval-update``: record the changed runs again, as they were recorded (model,
+        engine, settings with ``settings`` over them, request, tolerance)."""
+        from reports import baseline as bl
+        for c in changed:
+            rec = c.record
+            model = rec.model.name if rec.model.kind == "builtin" else \
+                str(rec.model.path(base.base_dir))
+            s = bl.settings_from_json(rec, str(base.path))
+            ov = _overrides(settings, [rec.engine]).get(rec.engine)
+            if ov:
+                s = type(s).from_overrides({**s.as_dict(), **ov}, rec.engine)
+            tol = rec.quantities[0].tolerance if rec.quantities else None
+            why = c.problems[0] if c.problems else (c.failures() or c.loose())[0].message()
+            self._record(base.path, model, rec.engine, s, rec.request, tol,
+                         f"rewrote ({why})")
 
 
-def baseline_params(path) -> list:
-    """``pytest.param((case, engine), id="case/engine")`` for every run recorded in a
-    baseline file: ``@pytest.mark.parametrize("case, engine", baseline_params(P))``."""
-    from reports.baseline import load
-    return [pytest.param(r.case, r.engine, id=f"{r.case}/{r.engine}") for r in load(path).runs]
+def _overrides(settings, engines) -> dict:
+    """``settings`` ({key: value}, applied to every engine that has the key) as
+    per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
+    if not settings:
+        return {}
+    from reports.baseline import _fmt_value
+    from sim_models.registry import split_overrides
+    pairs = [f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()]
+    return {e: v for e, v in split_overrides(pairs, list(dict.fromkeys(engines))).items()
+            if v}
 
 
-# ============================================================================ pytest hooks
-def pytest_addoption(parser) -> None:
-    group = parser.getgroup("xval", "linkage-xval engine checks")
-    group.addoption("--xval-factor", type=float, default=None,
-                    help="default drift factor of xval baseline assertions (default 10)")
-    parser.addini("xval_baseline", "baseline file checked by the xval_baseline fixture "
-                  "(relative to the rootdir)", default="")
+def failure_text(base, checks, factor: float, root: Path) -> str:
+    """An ``assert_baseline`` failure: first line the worst failing quantity (its growth,
+    the factor and where) or the run's problem, then the check's report of the failed
+    runs, then how to record them again."""
+    from reports.baseline import Baseline, record_command
+    from reports.baseline_cli import report_lines
+    failed = [c for c in checks if not c.passed]
+    worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
+    first = worst.problems[0] if worst.problems else worst.failures()[0].message()
+    lines = report_lines(base, checks, factor)
+    keep = [ln for ln in lines if not ln.startswith("pass ")]
+    again = Baseline(tuple(c.record for c in failed), base.path, base.recorded)
+    return "\n".join([f"{worst.record.label}: {first}", *keep,
+                      "if the change is intended, record again: pytest --xval-update, or "
+                      f"(from {root}): {record_command(again, root)}"])
 
 
-@pytest.fixture(scope="session")
-def xval(pytestconfig) -> Xval:
-    """Engine-against-analytic assertions with a session-wide run cache."""
+def _sev(c) -> tuple:
+    from reports.baseline import _severity
+    f = c.failures()
+    return _severity(f[0]) if f else (0, 0.0)
+
+
+def make_xval(config) -> Xval:
+    """The ``xval`` fixture's object for a pytest config (its rootdir and options)."""
     from reports.baseline import DEFAULT_FACTOR
-    factor = pytestconfig.getoption("--xval-factor") or DEFAULT_FACTOR
-    return Xval(pytestconfig.rootpath, factor)
+    return Xval(config.rootpath, config.getoption("--xval-factor") or DEFAULT_FACTOR,
+                update=config.getoption("--xval-update"),
+                fail_loose=config.getoption("--xval-fail-loose"))
 
 
-@pytest.fixture(scope="session")
-def xval_baseline(xval, pytestconfig):
-    """``xval_baseline(case=None, engine=None)`` asserts the ini option ``xval_baseline``'s
-    baseline file (all its runs, or those of one case / engine)."""
-    path = pytestconfig.getini("xval_baseline")
+def run_params(path, root: Path) -> list:
+    """The ``xval_baseline`` fixture's parameters: one per recorded run (id
+    ``case/engine``), or one carrying why the file cannot be used."""
+    from reports import baseline as bl
+    p = Path(path) if Path(path).is_absolute() else Path(root) / path
+    if not p.exists():
+        return [pytest.param(("error", f"xval: error: no baseline file {path} (ini option "
+                             f"xval_baseline, under {root}); create it with: xval baseline "
+                             f"record CASES_OR_FILES --engine ENGINE --out {path}"),
+                             id="xval_baseline")]
+    try:
+        base = bl.load(p)
+    except bl.BaselineError as e:
+        return [pytest.param(("error", f"xval: error: {e}"), id="xval_baseline")]
+    return [pytest.param(("run", r.key), id=f"{r.case}/{r.engine}") for r in base.runs]
 
-    def check(case: str | None = None, engine: str | None = None, factor=None):
+
+def baseline_checker(xval: Xval, path: str, param):
+    """``xval_baseline(case=None, engine=None, factor=None, settings=None)``: checks
+    ``path`` (the ini option): the parametrised run, or the runs of ``case``/``engine``."""
+    def check(case: str | None = None, engine: str | None = None, factor=None,
+              settings=None):
         __tracebackhide__ = True
         if not path:
             raise pytest.UsageError("xval_baseline: set the ini option xval_baseline = "
                                     "path/to/baseline.json")
-        return xval.assert_baseline(path, case=case, engine=engine, factor=factor)
+        key = None
+        if param is not None:
+            if param[0] == "error":
+                pytest.fail(param[1], pytrace=False)
+            if case is None and engine is None:
+                key = param[1]
+        return xval.assert_baseline(path, case=case, engine=engine, factor=factor,
+                                    settings=settings, key=key)
     return check
 
 
-def pytest_terminal_summary(terminalreporter) -> None:
-    if _STATS["runs"]:
-        terminalreporter.write_line(
-            f"xval: {_STATS['runs']} engine runs ({_STATS['seconds']:.1f} s), "
-            f"{_STATS['hits']} served from the session cache")
+def update_lines() -> list[str]:
+    return list(_UPDATES)
 
 
-__all__ = ["Xval", "baseline_params", "cached_runner", "disagreement", "session_run"]
+def baseline_params(path, root: Path | None = None) -> list:
+    """``pytest.param(case, engine, id="case/engine")`` for every run recorded in a
+    baseline file (relative to ``root``, pytest's rootdir;
+    :func:`xval_pytest_plugin.baseline_params` passes it):
+    ``@pytest.mark.parametrize("case, engine", baseline_params(P))``."""
+    from reports.baseline import load
+    p = Path(path)
+    if root is not None and not p.is_absolute():
+        p = Path(root) / p
+    return [pytest.param(r.case, r.engine, id=f"{r.case}/{r.engine}") for r in load(p).runs]
+
+
+__all__ = ["Xval", "XvalLooseWarning", "baseline_checker", "baseline_params", "cached_runner",
+           "disagreement", "failure_text", "make_xval", "run_params", "session_run",
+           "update_lines"]

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from analytic import Revolute, load_case
+from analytic.input_display import input_number
 
 ROOT = Path(__file__).resolve().parents[1]
 PLOT = "pareto-seed-slider-crank.png"
@@ -33,11 +33,11 @@ def verdict_block(run: Path) -> str:
              "| case | engine | verdict | worst quantity | worst error / peak | at |",
              "|---|---|---|---|---|---|"]
     for _, r in s.iterrows():
-        at = float(r["at (deg or m)"])
-        if isinstance(load_case(r.case).driver_joint, Revolute):
-            at = round(at, 6) % 360.0  # deg; 360 - 1 ulp reads 0
+        # the verdict's "at" is already in the one input convention (deg in [0, 360)
+        # for a full turn: analytic.input_display); shown with the same digits
+        at = input_number(float(r["at (deg or m)"]))
         lines.append(f"| {r.case} | {r.engine} | {r.verdict} | {r['worst quantity']} | "
-                     f"{r['worst error / peak']:.2g} | {at:.4g} |")
+                     f"{r['worst error / peak']:.2g} | {at} |")
     return "\n".join(lines)
 
 

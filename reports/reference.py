@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analytic.input_display import convention_of, display_input
+
 #: Points of the dense analytic line per plotted span (the samples are added to them).
 LINE_POINTS = 361
 
@@ -94,12 +96,16 @@ def analytic_reference(run_, reference=None):
 
 
 def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
-    """The plotted axis of a run's samples and its label with units."""
+    """The plotted axis of a run's samples and its label with units: time (s) for a
+    run sampled by time, else the input in the one display convention of
+    :mod:`analytic.input_display` (a full turn in degrees wrapped to [0, 360), as the
+    verdict's ``at``)."""
     if run_.by_time:
         return np.asarray(run_.times, float), "time (s)"
+    u = display_input(run_.values, convention_of(linkage))
     if linkage.driver_is_revolute:
-        return np.degrees(run_.values), "input angle (deg)"
-    return np.asarray(run_.values, float), "input (m)"
+        return u, "input angle (deg)"
+    return u, "input (m)"
 
 
 def reference_of(run_, reference=None) -> Reference:
@@ -128,11 +134,14 @@ def _line_inputs(runs, linkage, points: int):
     if r0.by_time:
         u = t
     else:
-        full = linkage.driver_is_revolute and np.ptp(r0.values) > math.pi
-        if full:  # the sampled turn's values: one turn from the first sample value
+        conv = convention_of(linkage)
+        if conv.full_turn:  # the sampled turn's values: one turn from the first sample
             v0 = float(np.min(r0.values))
             value = v0 + np.mod(value - v0, 2 * math.pi)
-        u = np.degrees(value) if linkage.driver_is_revolute else value
+        # the axis: the input as every table and title shows it (a full turn wrapped to
+        # [0, 360) deg); a turn that does not start at 0 is drawn in two stretches
+        # (line_breaks), each sample on the stretch of its own time
+        u = display_input(value, conv)
     # the samples themselves, exactly as the reference has them
     us, tt, vals, vels, accs = [u], [t], [value], [vel], [acc]
     for r in runs:
@@ -174,6 +183,39 @@ def line_breaks(runs, linkage, points: int = LINE_POINTS) -> np.ndarray:
     t = inputs[1]
     step = (np.max(t) - np.min(t)) / max(points - 1, 1)
     return np.flatnonzero(np.abs(np.diff(t)) > 3 * step) + 1 if step > 0 else np.zeros(0, int)
+
+
+def engine_slider_positions(run_, tree) -> dict[str, np.ndarray]:
+    """Each prismatic joint's displacement ``s`` (m, (N,)) in the engine at the run's
+    samples, from its tree coordinates (:meth:`sim_models.tree.SimTree.propagate`): the
+    slider point's distance along the line from the guide's origin point, as
+    :meth:`analytic.Kinematics.slider` measures it.  Empty when the run kept no tree
+    coordinates; NaN where the engine has no sample."""
+    from analytic.mechanism import Prismatic
+    if getattr(run_, "q", None) is None or tree is None:
+        return {}
+    q = np.asarray(run_.q, float)
+    ok = np.all(np.isfinite(q), axis=1)
+    th, _, _, org = tree.propagate(np.nan_to_num(q), np.zeros_like(q), np.zeros_like(q))[:4]
+    mech = tree.mech
+    names = [b.name for b in mech.bodies]
+
+    def world(b: int, local) -> np.ndarray:
+        c, s = np.cos(th[:, b]), np.sin(th[:, b])
+        x, y = float(local[0]), float(local[1])
+        return org[:, b] + np.stack([c * x - s * y, s * x + c * y], axis=1)
+
+    out = {}
+    for jt in mech.joints:
+        if not isinstance(jt, Prismatic):
+            continue
+        g, s_ = names.index(jt.guide), names.index(jt.slider)
+        o = world(g, mech.bodies[g].points[jt.origin])
+        p = world(s_, mech.bodies[s_].points[jt.point])
+        ang = th[:, g] + jt.direction
+        s = (p[:, 0] - o[:, 0]) * np.cos(ang) + (p[:, 1] - o[:, 1]) * np.sin(ang)
+        out[jt.name] = np.where(ok, s, np.nan)
+    return out
 
 
 def family_of(quantity: str) -> str:
@@ -227,5 +269,5 @@ def wrap_deg(d):
 
 
 __all__ = ["LINE_POINTS", "Reference", "analytic_line", "analytic_reference", "axis_of",
-           "line_breaks",
+           "line_breaks", "engine_slider_positions",
            "family_of", "reference_of", "sample_errors", "wrap_deg"]

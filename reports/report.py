@@ -42,7 +42,9 @@ from .report_tables import (  # noqa: F401 - re-exported
 )
 from .scheduler import PriorityExecutor
 
-DEFAULT_OUT = Path(__file__).parent / "out"
+#: Where a report goes without --out: under the current folder (in the checkout, the
+#: git-ignored reports/out/; never inside an installed package's folder).
+DEFAULT_OUT = Path("reports") / "out"
 #: Cases of the speed-against-error grid when no --cases are given.
 GRID_CASES = {True: ("seed-slider-crank",),
               False: ("seed-four-bar", "seed-slider-crank", "near-toggle-four-bar")}

@@ -113,7 +113,11 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
     meta["wall_seconds"] = round(time.perf_counter() - ph.t0, 1)
     _card(doc, summary, cases, engines, meta, cfg)
     _verdict_section(doc, verdicts, summary, runs, revolute, cfg)
-    _cases_section(doc, cases, mechs, figures)
+    times = {}  # each case's sample times (one plan per case: every engine's is the same)
+    for r in runs:
+        if r["run"] is not None:
+            times.setdefault(r["case"], r["run"].times)
+    _cases_section(doc, cases, mechs, figures, times)
     seeds = seed_comparison(runs, engines)
     if len(seeds):
         doc.h(1, "Seed comparison (course notes)")
@@ -196,7 +200,7 @@ def _verdict_section(doc, verdicts, summary, runs, revolute, cfg):
                   "engine settings of the verdict runs", wide=("settings",), fold=None)
 
 
-def _cases_section(doc, cases, mechs, figures):
+def _cases_section(doc, cases, mechs, figures, times=None):
     doc.h(1, "Cases")
     doc.p("For each case: the linkage, then each quantity over the sampled input range "
           "(lines: the analytic solution along the motion the engines were driven at; "
@@ -208,10 +212,11 @@ def _cases_section(doc, cases, mechs, figures):
     for label, _ in cases:
         doc.h(2, label)
         m = mechs[label]
-        d = m.driver
-        unit = "rad/s" if input_unit(m) == "deg" else "m/s"
-        doc.p(f"input {d.joint}: starts at {d.value:.4g} {'rad' if unit == 'rad/s' else 'm'}, "
-              f"rate {d.velocity:g} {unit}, acceleration {d.acceleration:g} {unit}/s.")
+        # in the figures' units (deg), with the rate reached over the plotted samples
+        from analytic import Linkage
+
+        from .case_figures import motion_text
+        doc.p(motion_text(Linkage(m), (times or {}).get(label, [])) + ".")
         figs = figures.get(label, {})
         if "error" in figs and isinstance(figs["error"], str):
             doc.p(f"figures failed: {figs['error']}")

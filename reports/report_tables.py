@@ -12,6 +12,8 @@ import math
 import numpy as np
 import pandas as pd
 
+from analytic.input_display import format_input
+
 # The notes' own figures (REFERENCE.md) for the seed comparison: (label, notes,
 # SolidWorks in the notes, why the notes differ from the exact value)
 SEED_ROWS = {
@@ -62,12 +64,22 @@ def verdict_table(results: list[dict]) -> pd.DataFrame:
             continue
         df = comparison_frame(r, res["comparisons"]).assign(case=res["case"])
         if not r.ok:
-            at = math.degrees(r.fail_value) if r.fail_value is not None else np.nan
+            at = failed_at(r)
             df = pd.concat([pd.DataFrame([_failed_run_row(res["case"], res["engine"],
                                                           r.reason, at, r.settings_text)]),
                             df])
         frames.append(df)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+
+def failed_at(run_) -> float:
+    """Where a failed run stopped, in the one display convention of an input (deg, a
+    full turn wrapped to [0, 360), or m: :mod:`analytic.input_display`); NaN if unknown."""
+    from analytic import Linkage
+    from analytic.input_display import convention_of, display_input
+    if run_.fail_value is None or not math.isfinite(run_.fail_value):
+        return np.nan
+    return display_input(run_.fail_value, convention_of(Linkage(run_.mechanism)))
 
 
 def input_unit(mech) -> str:
@@ -92,7 +104,7 @@ def summary_table(verdicts: pd.DataFrame, units: dict[str, str] | None = None
                      "worst error / peak": float(worst["normalised"]) if worst is not None
                      else np.nan,
                      "at (deg or m)": at,
-                     "at (input)": f"{at:.4g} {unit}".strip() if np.isfinite(at) else "",
+                     "at (input)": format_input(at, unit).strip(),
                      "tolerance": float(worst["tolerance"]) if worst is not None else np.nan,
                      "note": "" if g["run_ok"].all() else str(g["run_reason"].iloc[0])})
     return pd.DataFrame(rows)
@@ -131,7 +143,7 @@ def instantaneous_floors(results: list[dict], units: dict[str, str] | None = Non
             continue
         w = max(judged, key=lambda c: c.normalised)
         rows.append({"case": res["case"], "variant": variant, "floor (-)": w.normalised,
-                     "worst quantity": w.quantity, "at (input)": f"{w.at:.4g} {unit}"})
+                     "worst quantity": w.quantity, "at (input)": format_input(w.at, unit)})
     return pd.DataFrame(rows)
 
 
@@ -193,13 +205,13 @@ def verdicts_for_reading(verdicts: pd.DataFrame, revolute: dict[str, bool]) -> p
         "case": v["case"], "engine": v["engine"], "quantity": v["quantity"], "unit": unit,
         "max |error| (unit)": v["max_abs"], "peak (unit)": v["peak"],
         "error / peak (-)": v["normalised"], "tolerance (-)": v["tolerance"],
-        "at input": [f"{a:.4g} {u}" if np.isfinite(a) else "" for a, u in
+        "at input": [format_input(a, u) for a, u in
                      zip(v["at"].astype(float), at_unit, strict=True)],
         "verdict": ["pass" if p else ("not judged" if r else "FAIL")
                     for p, r in zip(v["passed"], v["engine_reading"], strict=True)],
         "run finished": v["run_ok"], "why the run stopped": v["run_reason"]})
 
 
-__all__ = ["SEED_ROWS", "input_unit", "instantaneous_floors", "quantity_unit",
+__all__ = ["SEED_ROWS", "failed_at", "input_unit", "instantaneous_floors", "quantity_unit",
            "seed_comparison", "summary_for_reading", "summary_table", "verdict_table",
            "verdicts_for_reading"]

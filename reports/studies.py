@@ -102,7 +102,6 @@ from .change_point import (  # noqa: F401 - re-exported: the change-point study
 from .study_runs import (  # noqa: F401 - re-exported: the studies' engine runs
     HARD_CASES_DIR,
     Trace,
-    case_source,
     hard_case_names,
     load,
     make_settings,
@@ -535,7 +534,7 @@ def hard_cases(quick: bool, pool=None) -> dict:
       omega2 = 200 rad/s, errors per engine and setting, and the error over the crank
       angle;
     * ``near_toggle`` (DataFrame), ``near_toggle_plot`` (PNG): the near-toggle four-bar
-      (``reports/hard_cases/near-toggle-four-bar.toml``) and the seed four-bar at the
+      (``analytic/cases/hard/near-toggle-four-bar.toml``) and the seed four-bar at the
       same settings, with the transmission angle's extreme;
     * ``change_point`` (DataFrame), ``change_point_plot`` (PNG): the parallelogram
       (``parallelogram-four-bar.toml``) through its singular positions; the branch each

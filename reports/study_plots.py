@@ -10,7 +10,18 @@ import math
 
 import numpy as np
 
-from .plots import ENGINE_STYLE, _png, plt
+from .plots import (
+    ENGINE_STYLE,
+    LABEL_PT,
+    LEGEND_PT,
+    LOG_FLOOR,
+    NOTE_PT,
+    TITLE_PT,
+    _png,
+    declutter,
+    floor_note,
+    plt,
+)
 
 _MARKERS = {"Euler": "s", "implicitfast": "^", "implicit": "v", "RK4": "o"}
 #: Colours of the settings families: blues for MuJoCo, oranges/reds for PyBullet.
@@ -42,7 +53,8 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
     revolution (at ``analytic_points`` samples, the engines' count) as a vertical line.
     Only the Pareto-optimal points are labelled, alternately above and below.
     """
-    fig, ax = plt.subplots(figsize=(7.2, 4.6))
+    fig, ax = plt.subplots(figsize=(8.4, 5.2))
+    labels = []
     grid = grid.assign(integrator=grid["integrator"].fillna("").astype(str),
                        family=grid["family"].fillna("").astype(str),
                        ok=grid["ok"].astype(bool))
@@ -70,9 +82,10 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
             ax.step(t[idx], e[idx], where="post", color=st.get("color", "k"), lw=0.9,
                     alpha=0.7)
             for n, i in enumerate(idx):
-                ax.annotate(g["label"].iloc[i], (t[i], e[i]), fontsize=6, alpha=0.9,
-                            xytext=(4, 5 if n % 2 == 0 else -9), textcoords="offset points",
-                            color=st.get("color", "k"))
+                labels.append(ax.annotate(
+                    g["label"].iloc[i], (t[i], e[i]), fontsize=LABEL_PT - 1, alpha=0.9,
+                    xytext=(4, 5 if n % 2 == 0 else -11), textcoords="offset points",
+                    color=st.get("color", "k")))
     ymax = max(1.0, float(np.nanmax(ok["error"])) if len(ok) else 1.0)
     if len(bad):
         tb = bad["seconds_per_rev"].to_numpy(float)
@@ -80,23 +93,31 @@ def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
         if np.isfinite(tb).any():
             ax.loglog(tb, np.full(len(tb), 2 * ymax), "x", color="red", ms=5,
                       label=f"failed / diverged ({len(bad)})")
+    tol_text = []
     for tol in _TOLERANCES:
         ax.axhline(tol, color="grey", lw=0.6, ls=":")
-        ax.annotate(f"tolerance {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"),
-                    xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
-                    fontsize=6.5, color="0.35")
+        tol_text.append(ax.annotate(
+            f"tolerance {tol:g}", (1.0, tol), xycoords=("axes fraction", "data"),
+            xytext=(-2, 2), textcoords="offset points", ha="right", va="bottom",
+            fontsize=LABEL_PT - 1, color="0.35"))
     if analytic_time:
         ax.axvline(analytic_time, color="black", lw=0.9)
         what = f"{analytic_points} samples" if analytic_points else "one revolution"
         ax.annotate(f"analytic solver\n({what})", (analytic_time, 1.0),
                     xycoords=("data", "axes fraction"), xytext=(3, -3),
-                    textcoords="offset points", fontsize=6.5, va="top", ha="left")
+                    textcoords="offset points", fontsize=LABEL_PT - 1, va="top", ha="left")
     ax.set_xlabel("wall-clock time per simulated revolution (s, log)")
     ax.set_ylabel("largest error / peak, accelerations and forces (-, log)")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+    ax.legend(fontsize=LEGEND_PT, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               borderaxespad=0)
+    fig.tight_layout()
+    hidden = declutter(ax, labels, avoid=tol_text)
+    if hidden:
+        ax.text(0.01, 0.01, f"{hidden} frontier labels left out where they would overlap "
+                "(the table lists every setting)", transform=ax.transAxes,
+                fontsize=NOTE_PT, color="0.35")
     return _png(fig)
 
 
@@ -113,13 +134,14 @@ def branch_plot(x_deg, analytic: dict[str, np.ndarray], engines: dict[str, np.nd
         st = ENGINE_STYLE.get(eng, {})
         ax.plot(x_deg, y, markers[k % len(markers)], ms=3, mfc="none",
                 color=st.get("color"), label=name)
-    for s in singular:
-        ax.axvline(s, color="red", lw=0.7, alpha=0.6)
+    for k, s in enumerate(singular):
+        ax.axvline(s, color="red", lw=0.7, alpha=0.6,
+                   label="change point (singular position)" if k == 0 else None)
     ax.set_xlabel("input angle, unwrapped (deg)")
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=TITLE_PT)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    ax.legend(fontsize=LEGEND_PT, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return _png(fig)
 
 
@@ -127,7 +149,7 @@ def long_run_plot(frame, title: str) -> bytes:
     """Long-run diagnostics per revolution (:func:`reports.studies.hard_cases`): four
     panels (loop violation, crank-speed deviation and phase drift, energy and power
     balance, acceleration and drive-effort error), one colour per engine."""
-    fig, axes = plt.subplots(2, 2, figsize=(9.0, 5.6), sharex=True)
+    fig, axes = plt.subplots(2, 2, figsize=(10.0, 6.4), sharex=True)
     panels = [
         (axes[0, 0], [("loop_violation", "-")], "max loop gap / size"),
         (axes[0, 1], [("speed_deviation", "-"), ("phase_drift", "--")],
@@ -137,21 +159,25 @@ def long_run_plot(frame, title: str) -> bytes:
         (axes[1, 1], [("alpha_error", "-"), ("effort_error", "--")],
          "alpha error (-), effort error (--)\n/ peak"),
     ]
+    drawn: dict = {}
     for engine, g in frame.groupby("engine"):
         st = ENGINE_STYLE.get(engine, {})
         for ax, cols, ylabel in panels:
             for col, ls in cols:
                 if col in g:
-                    y = np.maximum(np.abs(g[col].to_numpy(float)), 1e-18)
+                    raw = g[col].to_numpy(float)
+                    drawn.setdefault(id(ax), []).append(raw)
+                    y = np.maximum(np.abs(raw), LOG_FLOOR)
                     ax.semilogy(g["revolution"], y, ls, color=st.get("color"), lw=0.9,
                                 label=f"{engine} {col}")
-            ax.set_ylabel(ylabel, fontsize=7)
+            ax.set_ylabel(ylabel, fontsize=LABEL_PT - 1)
     for ax, _, _ in panels:
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=LEGEND_PT - 1, loc="best")
+        floor_note(ax, drawn.get(id(ax), []))  # exact zeros drawn at the floor, said so
     for ax in axes[1]:
         ax.set_xlabel("revolution")
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(title, fontsize=TITLE_PT)
     fig.tight_layout()
     return _png(fig)
 

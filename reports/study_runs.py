@@ -12,37 +12,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from analytic import Mechanism, load_case
-from analytic.cases import case_names
+from analytic.cases import HARD_CASES_DIR, hard_case_names
 from analytic.sweep import input_values
-
-HARD_CASES_DIR = Path(__file__).parent / "hard_cases"
-
-
-def case_source(case: str) -> str:
-    """What :func:`analytic.load_case` needs for ``case``: a built-in name, the name of a
-    hard case in :data:`HARD_CASES_DIR` (``near-toggle-four-bar``,
-    ``parallelogram-four-bar``) or a path to a mechanism TOML file."""
-    s = str(case)
-    if s in case_names():
-        return s
-    p = HARD_CASES_DIR / f"{s}.toml"
-    if p.is_file():
-        return str(p)
-    return s
-
-
-def hard_case_names() -> list[str]:
-    return sorted(p.stem for p in HARD_CASES_DIR.glob("*.toml"))
 
 
 def load(case: str) -> Mechanism:
-    return load_case(case_source(case))
+    """A built-in or hard case by name, or a TOML file (:func:`analytic.load_case`)."""
+    return load_case(case)
 
 
 # ============================================================================ settings
@@ -169,5 +150,5 @@ def trace_diagnostics(tree, tr: Trace, analytic: bool = True) -> pd.DataFrame:
     return pd.DataFrame(cols)
 
 
-__all__ = ["HARD_CASES_DIR", "Trace", "case_source", "hard_case_names", "load", "make_settings",
+__all__ = ["HARD_CASES_DIR", "Trace", "hard_case_names", "load", "make_settings",
            "revolution_time", "trace", "trace_diagnostics"]

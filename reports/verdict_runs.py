@@ -25,20 +25,14 @@ def engine_list(choice: str, mode: str = "run") -> list[str]:
 
 
 def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
-                 common: Mapping[str, object] | None = None) -> dict:
-    """Each engine's settings: its recommended defaults, then ``common`` (typed
-    overrides such as ``timestep``, applied where the engine has the field), then the
-    ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``."""
-    from sim_models.registry import get_engine, split_overrides
-    per = split_overrides(pairs, engines)
-    out = {}
-    for e in engines:
-        eng = get_engine(e)
-        fields = eng.settings_class.field_types()
-        over = {k: v for k, v in (common or {}).items() if v is not None and k in fields}
-        over.update(per.get(e, {}))
-        out[e] = eng.settings(over)
-    return out
+                 options: Mapping[str, tuple[str, object]] | None = None) -> dict:
+    """Each engine's settings: its recommended defaults, then the option flags
+    ``options`` (``{"--timestep": ("timestep", 1e-4)}``, applied where the engine has the
+    field), then the ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``; every
+    value within the settings' ranges, a flag and a ``--set`` of the same setting
+    refused (:func:`sim_models.registry.settings_from_options`)."""
+    from sim_models.registry import settings_from_options
+    return settings_from_options(engines, pairs, options)
 
 
 def run_comparison(tree, engine: str, settings=None, mode: str = "run",

@@ -21,6 +21,8 @@ Writing an engine
    speed-against-error grid, the worst error).  Field types are ``float``, ``int``,
    ``bool``, ``str`` or ``tuple[float, ...]`` so :meth:`EngineSettings.from_overrides`
    can build it from ``key=value`` strings (``xval compare --set steps_per_rev=1008``).
+   Give every field its accepted range in ``RANGES`` (:mod:`sim_models.ranges`): the
+   dataclass checks it on construction, for every door (``--set``, flags, baselines).
    Override :meth:`EngineSettings.max_step` when the step is not given as ``timestep``
    (e.g. by steps per revolution).
 2. **Session**: subclass :class:`Session` and implement
@@ -167,7 +169,7 @@ def finish(session: Session, plan: Plan, rec: Recorder, request: RunRequest,
         by_time=plan.by_time, notes=tuple(session.notes),
         drive_effort_engine=rec.effort_engine if readings else None,
         joint_force_engine=rec.force_engine if readings else None,
-        q=rec.q, qd=rec.qd, qdd=rec.qdd, extra=ex)
+        q=rec.q, qd=rec.qd, qdd=rec.qdd, extra=ex, origin=rec.origin)
 
 
 # ============================================================================ session

@@ -3,14 +3,14 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic import Mechanism, Revolute
+from analytic import Mechanism
 
-from .engine_settings import EngineSettings
+from . import ranges
+from .engine_settings import EngineSettings, SettingsError
 from .sampling import Plan
 from .tree import SimTree
 
@@ -47,6 +47,7 @@ class Recorder:
         self.q = np.full((N, nt), nan)
         self.qd = np.full((N, nt), nan)
         self.qdd = np.full((N, nt), nan)
+        self.origin = np.full((N, B, 2), nan)  # body-frame origins, world (animations)
 
     def put_motion(self, rows, t: float, q, qd, qdd):
         """Fill the motion of ``rows`` from tree coordinates (SimTree conventions) at
@@ -78,6 +79,7 @@ class Recorder:
         if len(i):
             self.theta[i], self.omega[i], self.alpha[i] = th[k], om[k], al[k]
             self.q[i], self.qd[i], self.qdd[i] = q[k], qd[k], qdd[k]
+            self.origin[i] = org[k]
             self.measured[i] = st.driver_value(q[k, st.driver_tree])
             self.viol[i] = gap[k]
             self.speed[i] = (rate - vel)[k]
@@ -100,6 +102,7 @@ class Recorder:
         for i in np.atleast_1d(rows):
             self.theta[i], self.omega[i], self.alpha[i] = theta, omega, alpha
             self.slider_acc[i] = slider_acc
+            self.origin[i] = origin
             self.measured[i] = driver_value
             self.viol[i] = gap
             self.speed[i] = driver_rate - float(vel)
@@ -117,6 +120,7 @@ class Recorder:
         self.theta[i], self.omega[i] = th, np.asarray(omega, float)[k]
         self.alpha[i] = np.asarray(alpha, float)[k]
         self.slider_acc[i] = np.asarray(slider_acc, float)[k]
+        self.origin[i] = np.asarray(origin, float)[k]
         self.measured[i] = np.asarray(driver_value, float)[k]
         self.viol[i] = loop_gaps(st, th, np.asarray(origin, float)[k])
         self.speed[i] = np.asarray(driver_rate, float)[k] - vel
@@ -164,7 +168,8 @@ class Recorder:
     def _arrays(self) -> tuple:
         return (self.theta, self.omega, self.alpha, self.slider_acc, self.effort,
                 self.force, self.normal, self.moment, self.viol, self.speed,
-                self.effort_engine, self.force_engine, self.q, self.qd, self.qdd)
+                self.effort_engine, self.force_engine, self.q, self.qd, self.qdd,
+                self.origin)
 
     def fail(self, t_stop: float, reason: str) -> tuple[str, float]:
         """End a run at ``t_stop``: samples at or after it become NaN.  Returns the
@@ -210,9 +215,10 @@ def scatter_index(rows) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fmt_value(tree: SimTree, v: float) -> str:
-    if isinstance(tree.mech.driver_joint, Revolute):
-        return f"{math.degrees(v):.4g} deg"
-    return f"{v:.6g} m"
+    """A driver value (rad or m) in the one display convention of an input
+    (:mod:`analytic.input_display`: a full turn wrapped to [0, 360) deg)."""
+    from analytic.input_display import convention_of, input_text
+    return input_text(v, convention_of(tree.linkage))
 
 
 # ============================================================================ result
@@ -227,6 +233,23 @@ class RunRequest:
     max_speed_error: float = 1e-2
     chords: str = "moving"
     mode: str = "run"               # "run" or "instantaneous"
+
+    def __post_init__(self):
+        """Every value within :mod:`sim_models.ranges` (the command line's ranges):
+        :class:`~sim_models.engine_settings.SettingsError` naming the key otherwise."""
+        for key, rng in self.ranges().items():
+            value = getattr(self, key)
+            problem = rng.problem(value)
+            if problem:
+                raise SettingsError(f"run request {key}={value!r}: {problem}", key, value,
+                                    problem)
+
+    def ranges(self) -> dict:
+        """The accepted range of each field (samples: states in the instantaneous mode)."""
+        return {"mode": ranges.MODES, "revolutions": ranges.REVOLUTIONS,
+                "samples": ranges.STATES if self.mode == "instantaneous" else ranges.SAMPLES,
+                "max_violation": ranges.MAX_VIOLATION,
+                "max_speed_error": ranges.MAX_SPEED_ERROR, "chords": ranges.CHORDS}
 
 
 @dataclass(frozen=True)
@@ -279,6 +302,7 @@ class EngineRun:
     qd: np.ndarray | None = None
     qdd: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
+    origin: np.ndarray | None = None  # (N, B, 2) m, body-frame origins (any engine)
 
     @property
     def n(self) -> int:

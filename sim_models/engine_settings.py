@@ -8,7 +8,9 @@ import math
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
+from . import ranges
 from .tree import SimModelError
 
 
@@ -20,7 +22,16 @@ class EngineRefusal(SimModelError):
 
 
 class SettingsError(SimModelError):
-    """A setting key or value is not accepted (names the engine, key and value)."""
+    """A setting key or value is not accepted (names the engine, key and value).
+
+    ``key``, ``value`` and ``problem`` (why, with the accepted range) are kept apart so
+    that each door can say it in the user's own terms (``--set mujoco.iterations=-5:
+    ...``, ``argument --timestep: ...``, a baseline file's run and key)."""
+
+    def __init__(self, message: str, key: str | None = None, value=None,
+                 problem: str | None = None):
+        super().__init__(message)
+        self.key, self.value, self.problem = key, value, problem or message
 
 
 # ============================================================================ settings
@@ -33,6 +44,51 @@ class EngineSettings:
     """
 
     timestep: float = 1e-3
+
+    #: The accepted range of each field (:mod:`sim_models.ranges`): a
+    #: :class:`~sim_models.ranges.Range`, a :class:`~sim_models.ranges.Choice`, or a
+    #: tuple of ranges for a tuple field.  Subclasses extend it (``{**EngineSettings.
+    #: RANGES, ...}``); every field must have one (:meth:`validate`).
+    RANGES: ClassVar[Mapping[str, object]] = {"timestep": ranges.TIMESTEP}
+    #: The registry name, for messages (``engine 'mujoco' setting ...``).
+    engine_name: ClassVar[str] = ""
+
+    def __post_init__(self):
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise :class:`SettingsError` for the first field outside its range
+        (:attr:`RANGES`), then for the cross-field rules of :meth:`extra_problem`."""
+        who = getattr(type(self), "engine_name", "") or type(self).__name__
+        for f in dataclasses.fields(self):
+            rng = self.RANGES.get(f.name)
+            if rng is None:
+                raise SettingsError(f"{type(self).__name__}.{f.name} has no accepted range "
+                                    "(add it to RANGES)", f.name)
+            value = getattr(self, f.name)
+            problem = ranges.first_problem(rng, value)
+            if problem:
+                raise SettingsError(f"engine {who!r} setting {f.name}={_fmt_setting(value)}: "
+                                    f"{problem}", f.name, value, problem)
+        bad = self.extra_problem()
+        if bad:
+            key, problem = bad
+            value = getattr(self, key)
+            raise SettingsError(f"engine {who!r} setting {key}={_fmt_setting(value)}: "
+                                f"{problem}", key, value, problem)
+
+    def extra_problem(self) -> tuple[str, str] | None:
+        """``(key, why)`` for a rule that one range per field cannot say (e.g. two signs
+        that must agree); ``None`` when there is none."""
+        return None
+
+    @classmethod
+    def ranges_text(cls) -> dict[str, str]:
+        """Each field's accepted range in words (for the README and ``--help``)."""
+        out = {}
+        for k, r in cls.RANGES.items():
+            out[k] = "; ".join(x.text() for x in r) if isinstance(r, tuple) else r.text()
+        return out
 
     # -- construction ----------------------------------------------------------
     @classmethod
@@ -60,8 +116,8 @@ class EngineSettings:
         kw = {}
         for key, raw in overrides.items():
             if key not in types:
-                raise SettingsError(f"engine {who!r} has no setting {key!r}; settings: "
-                                    f"{', '.join(sorted(types))}")
+                problem = f"no setting {key!r}; settings: {', '.join(sorted(types))}"
+                raise SettingsError(f"engine {who!r} has {problem}", key, raw, problem)
             kw[key] = _convert(who, key, raw, types[key], getattr(self, key))
         return dataclasses.replace(self, **kw)
 
@@ -123,7 +179,7 @@ def _convert(who: str, key: str, raw, typ, current):
             return f
         return str(raw)
     except (TypeError, ValueError) as e:
-        raise SettingsError(f"{where}: {e}") from None
+        raise SettingsError(f"{where}: {e}", key, raw, str(e)) from None
 
 
 __all__ = ["EngineRefusal", "EngineSettings", "SettingsError"]

@@ -77,12 +77,14 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         A ready sampling plan (e.g. equal times over a long run); default
         :func:`plan_samples`.
 
-    Raises :class:`EngineRefusal` when the engine cannot run this motion; a diverging
+    Raises :class:`EngineRefusal` when the engine cannot run this motion and
+    :class:`SettingsError` for a request outside :mod:`sim_models.ranges`; a diverging
     simulation is a run with ``ok = False``, never an exception.
     """
-    tree = compile_linkage(mech, chords=chords)
+    # the request first: a value out of range is refused before anything is built
     request = RunRequest(revolutions, samples, max_violation, max_speed_error,
-                         tree.chords_mode, "run")
+                         mech.chords_mode if isinstance(mech, SimTree) else chords, "run")
+    tree = compile_linkage(mech, chords=chords)
     plan = plan or plan_samples(tree, revolutions, samples)
     with open_session(tree, engine, settings) as session:
         return drive(session, plan, request)

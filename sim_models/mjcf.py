@@ -36,13 +36,17 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from analytic import Mechanism
 
-from .engine_base import EngineSettings, SettingsError
+from . import ranges
+from .engine_base import EngineRefusal, EngineSettings
+from .model_numbers import snap
 from .tree import SimModelError, SimTree
 
 #: Oldest MuJoCo accepted: before 3.7.0 connect/weld constraints lacked the
@@ -84,6 +88,11 @@ def direct_solref(tau: float) -> tuple[float, float]:
 #: Near-hard impedance: 0.9999 is MuJoCo's cap (ENGINE_NOTES.md).
 HARD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
+
+#: MuJoCo clamps the impedance d to [mjMINIMP, mjMAXIMP] = [0.0001, 0.9999]: a value
+#: outside it would be changed silently.  dmin and dmax may come in either order (the
+#: impedance is dmin + y (dmax - dmin), y from 0 to 1 over the width).
+_IMPEDANCE = dict(lo=1e-4, hi=0.9999, why="MuJoCo clamps the impedance to [0.0001, 0.9999]")
 
 #: Scene variants of :attr:`MujocoSettings.scene` (built by :mod:`sim_models.mujoco_scene`).
 SCENES = ("minimal", "contacts", "contacts-same-plane", "contacts-no-excludes",
@@ -155,16 +164,50 @@ class MujocoSettings(EngineSettings):
     invweight_scale: float = 1e-3
     scene: str = "minimal"
 
-    def __post_init__(self):
-        if str(self.integrator).lower() not in _INTEGRATORS:
-            raise SettingsError(f"engine 'mujoco' setting integrator={self.integrator!r}: use "
-                                "one of RK4, implicitfast, implicit, Euler")
-        if self.scene not in SCENES:
-            raise SettingsError(f"engine 'mujoco' setting scene={self.scene!r}: use one of "
-                                f"{', '.join(SCENES)}")
-        if not (self.timestep > 0 and math.isfinite(self.timestep)):
-            raise SettingsError(f"engine 'mujoco' setting timestep={self.timestep!r}: needs a "
-                                "positive finite step, s")
+    engine_name: ClassVar[str] = "mujoco"
+    RANGES: ClassVar[Mapping[str, object]] = {
+        "timestep": ranges.TIMESTEP,
+        "integrator": ranges.Choice(("RK4", "implicitfast", "implicit", "Euler"), fold=True),
+        # signs checked together in extra_problem (standard or direct form)
+        "solref": (ranges.Range(name="timeconst or -stiffness"),
+                   ranges.Range(name="dampratio or -damping")),
+        "solimp": (ranges.Range(**_IMPEDANCE, name="dmin"),
+                   ranges.Range(**_IMPEDANCE, name="dmax"),
+                   ranges.Range(0, lo_open=True, unit="m", name="width",
+                                why="the violation over which the impedance goes from "
+                                    "dmin to dmax"),
+                   ranges.Range(0, 1, lo_open=True, hi_open=True, name="midpoint",
+                                why="MuJoCo divides by midpoint and 1 - midpoint"),
+                   ranges.Range(1, name="power", why="MuJoCo's impedance sigmoid needs "
+                                "power >= 1")),
+        "iterations": ranges.Range(1, 1000, whole=True,
+                                   why="the solver stops at its tolerance first; 1000 "
+                                       "caps the cost of a step that does not converge"),
+        "tolerance": ranges.Range(0, 1, why="the solver's relative improvement to stop "
+                                  "at; 0: never stop early"),
+        "armature": ranges.Range(0, 1e12, lo_open=True, unit="kg m^2 or kg",
+                                 why="the drive: 0 or below drives nothing; above 1e12 "
+                                     "the mechanism's own inertia falls below the "
+                                     "driven joint's round-off"),
+        "diagexact": ranges.FLAG,
+        "invweight_scale": ranges.Range(0, lo_open=True,
+                                        why="a factor on MuJoCo's inverse weights; 0 or "
+                                            "below leaves the constraint regulariser "
+                                            "R <= 0"),
+        "scene": ranges.Choice(SCENES),
+    }
+
+    def extra_problem(self) -> tuple[str, str] | None:
+        """solref: MuJoCo's standard form ``(timeconst, dampratio)``, both above 0, or
+        the direct form ``(-stiffness, -damping)``, stiffness above 0 and damping >= 0
+        (a mixed pair is a negative damping or stiffness: the loop gap grows).  MuJoCo
+        raises a standard time constant below 2 x timestep to that value (the studies
+        use it so, on purpose)."""
+        a, b = self.solref
+        if (a > 0 and b > 0) or (a < 0 and b <= 0):
+            return None
+        return "solref", ("use (timeconst, dampratio), both above 0, or the direct form "
+                          "(-stiffness, -damping), stiffness above 0 and damping at least 0")
 
     def describe(self) -> str:
         scene = "" if self.scene == "minimal" else f", scene={self.scene}"
@@ -242,11 +285,13 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     for tj in st.joints:
         c = tj.child
         parent = specs[tj.parent]
-        body = parent.add_body(name=names[c], pos=[tj.rel_pos[0], tj.rel_pos[1], 0.0],
-                               quat=_quat_z(tj.rel_angle))
+        # round-off of an exact zero made 0, so the written MJCF is the same on any CPU
+        body = parent.add_body(name=names[c], pos=[snap(tj.rel_pos[0], st.size),
+                                                   snap(tj.rel_pos[1], st.size), 0.0],
+                               quat=_quat_z(snap(tj.rel_angle)))
         body.explicitinertial = True
         body.mass = float(st.mass[c])
-        body.ipos = [float(st.com[c][0]), float(st.com[c][1]), 0.0]
+        body.ipos = [snap(st.com[c][0], st.size), snap(st.com[c][1], st.size), 0.0]
         inertia = float(st.inertia[c])
         body.inertia = [0.6 * inertia, 0.6 * inertia, inertia]
         if tj.kind == "hinge":
@@ -293,10 +338,27 @@ def compile_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     return compile_spec(build_mjcf(mech, settings, tree), settings)
 
 
-def compile_spec(spec, settings: MujocoSettings | None = None):
+def compile_refusal(e: ValueError, mech: Mechanism) -> EngineRefusal:
+    """MuJoCo's compiler refused the model of ``mech``: one line, with its size."""
+    reason = str(e).replace("Error:", "").split("\n")[0].strip()
+    size = max((math.dist(p, q) for b in mech.bodies for p in b.points.values()
+                for q in b.points.values()), default=0.0)
+    # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m; the
+    # reason says which limit (micro-four-bar.toml: masses of 2e-7 kg, I 1.7e-16 kg m^2)
+    why = ("; its compiler rejects a moving body's mass or inertia below mjMINVAL (1e-15)"
+           if "mjMINVAL" in reason else
+           "; its compiler rejects the geometry of links shorter than about 1e-6 m")
+    return EngineRefusal(f"mechanism {mech.name!r} (size {size:.3g} m): MuJoCo cannot "
+                         f"compile its model ({reason}){why}")
+
+
+def compile_spec(spec, settings: MujocoSettings | None = None, mech: Mechanism | None = None):
     """Compile an ``MjSpec``; return ``(model, warnings)`` with MuJoCo's warning texts.
 
-    With ``settings``, its ``invweight_scale`` is applied to the compiled model.
+    With ``settings``, its ``invweight_scale`` is applied to the compiled model.  With
+    ``mech``, a model MuJoCo's compiler rejects is an :class:`EngineRefusal` naming the
+    mechanism and its size (:func:`compile_refusal`), the one line ``compare`` and
+    ``models`` both print.
     """
     mujoco = require_mujoco()
     msgs: list[str] = []
@@ -305,7 +367,12 @@ def compile_spec(spec, settings: MujocoSettings | None = None):
     try:
         with warnings.catch_warnings(record=True) as w:
             warnings.simplefilter("always")
-            model = spec.compile()
+            try:
+                model = spec.compile()
+            except ValueError as e:
+                if mech is None:
+                    raise
+                raise compile_refusal(e, mech) from None
         msgs.extend(str(x.message) for x in w)
     finally:
         mujoco.set_mju_user_warning(old)

@@ -20,7 +20,8 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from analytic import case_names, load_case
+from analytic import Mechanism, case_names, load_case
+from analytic.errors import OutputError
 
 from .mjcf import MujocoSettings
 from .urdf import build_urdf
@@ -36,6 +37,11 @@ def model_texts(case: str) -> dict[str, str]:
     an actuator and the assembled state as keyframe ``assembled``."""
     mech = load_case(case)
     name = case if case in case_names() else Path(case).stem
+    return mechanism_model_texts(mech, name)
+
+
+def mechanism_model_texts(mech: Mechanism, name: str) -> dict[str, str]:
+    """File name -> text of the generated models of ``mech``, files named ``name.*``."""
     xml = viewer_xml(mech, MujocoSettings())
     urdf, closures = build_urdf(mech)
     return {f"{name}.xml": xml, f"{name}.urdf": urdf,
@@ -49,7 +55,13 @@ def write_models(out: str | Path = MODELS_DIR, cases: list[str] | None = None) -
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for case in cases or case_names():
-        for name, text in model_texts(case).items():
+        texts = model_texts(case)
+        for name in texts:
+            if Path(case).is_file() and (out / name).exists() and \
+                    (out / name).samefile(case):
+                raise OutputError(f"--out {str(out)!r}: the model file {name!r} would "
+                                  f"overwrite the case file {case!r}; give another folder")
+        for name, text in texts.items():
             p = out / name
             p.write_text(text)
             paths.append(p)

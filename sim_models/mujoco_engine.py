@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from .engine_base import HUGE, EngineRefusal, Recorder, Session, check_raw_state
+from .engine_base import HUGE, Recorder, Session, check_raw_state
 from .mjcf import SCENES, MujocoSettings, build_mjcf, compile_spec, require_mujoco
 from .mujoco_scene import apply_scene
 from .tree import SimTree
@@ -60,16 +60,8 @@ class MujocoSession(Session):
         mujoco, st, s = self.mj, self.tree, self.settings
         spec = build_mjcf(st.mech, s, tree=st)
         apply_scene(spec, st, s.scene)
-        try:
-            self.model, warnings = compile_spec(spec, s)
-        except ValueError as e:  # MuJoCo's compiler refuses the model: one line, typed
-            reason = str(e).replace("Error:", "").split("\n")[0].strip()
-            size = max((math.dist(p, q) for b in st.mech.bodies for p in b.points.values()
-                        for q in b.points.values()), default=0.0)
-            # measured: the seed four-bar compiles scaled to a 1e-6 m crank, not to 1e-7 m
-            raise EngineRefusal(f"mechanism {st.mech.name!r} (size {size:.3g} m): MuJoCo cannot "
-                                f"compile its model ({reason}); its compiler rejects the "
-                                "geometry of links shorter than about 1e-6 m") from None
+        # a model MuJoCo's compiler rejects: EngineRefusal, one line (mjcf.compile_refusal)
+        self.model, warnings = compile_spec(spec, s, st.mech)
         self.notes.extend(warnings)
         m = self.model
         self.data = mujoco.MjData(m)

@@ -40,16 +40,18 @@ import contextlib
 import math
 import os
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
+from . import ranges
 from .engine_base import (
     EngineRefusal,
     EngineSettings,
     Recorder,
     Session,
-    SettingsError,
 )
 from .newton_euler import reconstruct
 from .tree import SimModelError, SimTree
@@ -105,10 +107,27 @@ class PybulletSettings(EngineSettings):
     midpoint_velocity: bool = True
     preroll_steps: int = 20
 
-    def __post_init__(self):
-        if not (self.timestep > 0 and math.isfinite(self.timestep)):
-            raise SettingsError(f"engine 'pybullet' setting timestep={self.timestep!r}: needs "
-                                "a positive finite step, s")
+    engine_name: ClassVar[str] = "pybullet"
+    RANGES: ClassVar[Mapping[str, object]] = {
+        "timestep": ranges.TIMESTEP,
+        "solver_iterations": ranges.Range(1, 1000, whole=True,
+                                          why="constraint solver sweeps a step; 1000 caps "
+                                              "the cost of a step"),
+        "residual_threshold": ranges.Range(0, why="a residual norm; 0 or tiny: never stop "
+                                           "early"),
+        "erp": ranges.Range(0, 1, why="the fraction of the loop error corrected per step; "
+                            "above 1 overcorrects"),
+        "motor_force": ranges.Range(0, lo_open=True, unit="N m or N",
+                                    why="the drive's largest effort; 0 or below drives "
+                                        "nothing"),
+        "max_joint_velocity": ranges.Range(0, lo_open=True, unit="rad/s or m/s",
+                                           why="PyBullet clamps every joint's speed to it"),
+        "average_impulses": ranges.FLAG,
+        "midpoint_velocity": ranges.FLAG,
+        "preroll_steps": ranges.Range(0, 10000, whole=True,
+                                      why="steps before t = 0 from the analytic state; "
+                                          "0: none"),
+    }
 
     def describe(self) -> str:
         return (f"PyBullet dt<={self.timestep:g} s, iterations={self.solver_iterations}, "

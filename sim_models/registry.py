@@ -108,10 +108,17 @@ def split_overrides(pairs, engines) -> dict[str, dict[str, str]]:
     """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (``--set``) -> per-engine overrides.
 
     A plain key goes to every engine in ``engines`` that has that setting and must be
-    known to at least one; ``ENGINE.KEY`` goes to that engine only.  Raises
-    :class:`~sim_models.engine_base.SettingsError` naming the bad item."""
+    known to at least one; ``ENGINE.KEY`` goes to that engine only, and wins over a plain
+    ``KEY`` whatever their order.  The same key given twice with different values is
+    refused.  Raises :class:`~sim_models.engine_base.SettingsError` naming the bad item."""
+    return _split(pairs, engines)[0]
+
+
+def _split(pairs, engines) -> tuple[dict[str, dict[str, str]], dict[tuple[str, str], str]]:
+    """:func:`split_overrides` and, per ``(engine, key)``, the ``--set`` item it came from."""
     from .engine_base import SettingsError
     out: dict[str, dict[str, str]] = {e: {} for e in engines}
+    origin: dict[tuple[str, str], str] = {}
     for item in pairs or ():
         if "=" not in item:
             raise SettingsError(f"--set {item!r}: use KEY=VALUE or ENGINE.KEY=VALUE")
@@ -126,16 +133,69 @@ def split_overrides(pairs, engines) -> dict[str, dict[str, str]]:
         hits = []
         for e in ([target] if target else list(out)):
             fields = get_engine(e).settings_class.field_types()
-            if key in fields:
-                out[e][key] = value
-                hits.append(e)
+            if key not in fields:
+                continue
+            hits.append(e)
+            before = origin.get((e, key))
+            if before is not None:
+                specific_before = "." in before.split("=", 1)[0]
+                if specific_before == bool(target) and out[e][key] != value:
+                    raise SettingsError(f"--set {before} and --set {item} both set {e}'s "
+                                        f"{key}; give one")
+                if specific_before and not target:
+                    continue  # ENGINE.KEY wins over a plain KEY
+            out[e][key] = value
+            origin[(e, key)] = item
         if not hits:
             known = sorted({k for e in out for k in get_engine(e).settings_class.field_types()})
             raise SettingsError(f"--set {item!r}: no engine here has a setting {key!r}; "
                                 f"settings: {', '.join(known)}")
+    return out, origin
+
+
+def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, object]]
+                          | None = None) -> dict[str, EngineSettings]:
+    """Each engine's settings from the command line: its recommended defaults, the
+    option flags ``options`` (``{"--timestep": ("timestep", 1e-4)}``; a ``None`` value
+    is an option not given; applied where the engine has the field) and the ``--set``
+    items ``pairs``.  One door for every source: each value passes the settings
+    class's ranges (:mod:`sim_models.ranges`), and the error names what the user typed
+    (``--set mujoco.iterations=-5: ...``, ``argument --timestep: ...``).  A flag and a
+    ``--set`` item for the same setting are refused (no silent precedence)."""
+    from .engine_base import SettingsError
+    per, origin = _split(pairs, engines)
+    for flag, (key, value) in (options or {}).items():
+        if value is not None and not any(key in get_engine(e).settings_class.field_types()
+                                         for e in engines):
+            raise SettingsError(f"argument {flag}: no engine run here has a setting {key!r} "
+                                f"(engines: {', '.join(engines)})")
+    out = {}
+    for e in engines:
+        eng = get_engine(e)
+        fields = eng.settings_class.field_types()
+        over: dict[str, object] = {}
+        said: dict[str, str] = {}
+        for flag, (key, value) in (options or {}).items():
+            if value is None or key not in fields:
+                continue
+            if (e, key) in origin:
+                raise SettingsError(f"{flag} {value} and --set {origin[(e, key)]} both set "
+                                    f"{e}'s {key}; give one")
+            over[key] = value
+            said[key] = f"argument {flag}"
+        over.update(per.get(e, {}))
+        said.update({k: f"--set {origin[(e, k)]}" for k in per.get(e, {})})
+        try:
+            out[e] = eng.settings(over)
+        except SettingsError as err:
+            if err.key in said:
+                raise SettingsError(f"{said[err.key]}: {err.problem}", err.key, err.value,
+                                    err.problem) from None
+            raise
     return out
 
 
 __all__ = ["BUILTIN", "Engine", "EngineEntry", "UnknownEngineError", "available_engines",
            "engine_names",
-           "get_engine", "make_settings", "register_engine", "split_overrides"]
+           "get_engine", "make_settings", "register_engine", "settings_from_options",
+           "split_overrides"]

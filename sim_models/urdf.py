@@ -37,6 +37,7 @@ import numpy as np
 
 from analytic import Mechanism
 
+from .model_numbers import model_number, model_value
 from .tree import SimTree, _rot
 
 
@@ -56,11 +57,8 @@ class Closure:
 
 
 def _f(x: float) -> str:
-    return repr(float(x))
-
-
-def _xyz(v) -> str:
-    return " ".join(_f(x) for x in v)
+    """A quantity that is never round-off of a zero (mass, inertia, box size)."""
+    return model_number(x, 0.0)
 
 
 def link_offsets(st: SimTree) -> dict[int, np.ndarray]:
@@ -79,6 +77,13 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
     robot = ET.Element("robot", name=mech.name)
     width = 0.01 * st.size
 
+    def xyz(v) -> str:  # a position, m: round-off relative to the mechanism's size
+        return " ".join(model_number(x, st.size) for x in v)
+
+    def rpy(yaw: float) -> str:  # a rotation about z, rad
+        return f"0 0 {model_number(yaw)}"
+
+
     def link(b: int):
         lk = ET.SubElement(robot, "link", name=names[b])
         o = off[b]
@@ -90,11 +95,15 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
         else:
             c = st.com[b] - o
             ine = ET.SubElement(lk, "inertial")
-            ET.SubElement(ine, "origin", xyz=_xyz((c[0], c[1], 0.0)), rpy="0 0 0")
+            ET.SubElement(ine, "origin", xyz=xyz((c[0], c[1], 0.0)), rpy="0 0 0")
             ET.SubElement(ine, "mass", value=_f(st.mass[b]))
-            inertia = float(st.inertia[b])
-            ET.SubElement(ine, "inertia", ixx=_f(inertia / 2), ixy="0", ixz="0",
-                          iyy=_f(inertia / 2), iyz="0", izz=_f(inertia))
+            # a lamina: ixx + iyy = izz exactly.  izz is written as twice the rounded
+            # ixx (exact in binary): rounded on its own it could exceed ixx + iyy, and
+            # PyBullet then does not use the file's inertia (measured: joint forces off
+            # by 20% of peak on the seed four-bar with izz rounded separately)
+            half = _f(float(st.inertia[b]) / 2)
+            ET.SubElement(ine, "inertia", ixx=half, ixy="0", ixz="0", iyy=half, iyz="0",
+                          izz=repr(2.0 * float(half)))
         pts = [np.asarray(p, float) - o for p in mech.bodies[b].points.values()]
         for p, q in zip(pts[:-1], pts[1:], strict=True):
             L = float(np.hypot(*(q - p)))
@@ -102,10 +111,10 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
                 continue
             m = (p + q) / 2
             vis = ET.SubElement(lk, "visual")
-            ET.SubElement(vis, "origin", xyz=_xyz((m[0], m[1], 0.0)),
-                          rpy=_xyz((0.0, 0.0, math.atan2(q[1] - p[1], q[0] - p[0]))))
+            ET.SubElement(vis, "origin", xyz=xyz((m[0], m[1], 0.0)),
+                          rpy=rpy(math.atan2(q[1] - p[1], q[0] - p[0])))
             geo = ET.SubElement(vis, "geometry")
-            ET.SubElement(geo, "box", size=_xyz((L, width, width)))
+            ET.SubElement(geo, "box", size=" ".join(_f(x) for x in (L, width, width)))
 
     link(st.ground)
     for tj in st.joints:
@@ -118,14 +127,14 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
         rel = _rot(st.theta_ref[p]).T @ (Pc - Pp)
         kind = "continuous" if tj.kind == "hinge" else "prismatic"
         j = ET.SubElement(robot, "joint", name=tj.name, type=kind)
-        ET.SubElement(j, "origin", xyz=_xyz((rel[0], rel[1], 0.0)),
-                      rpy=_xyz((0.0, 0.0, tj.rel_angle)))
+        ET.SubElement(j, "origin", xyz=xyz((rel[0], rel[1], 0.0)),
+                      rpy=rpy(tj.rel_angle))
         ET.SubElement(j, "parent", link=names[p])
         ET.SubElement(j, "child", link=names[c])
         if tj.kind == "hinge":
             ET.SubElement(j, "axis", xyz="0 0 1")
         else:
-            ET.SubElement(j, "axis", xyz=_xyz((tj.axis_child[0], tj.axis_child[1], 0.0)))
+            ET.SubElement(j, "axis", xyz=" ".join(model_number(x) for x in (*tj.axis_child, 0.0)))
             ET.SubElement(j, "limit", lower="1", upper="-1", effort="1e30", velocity="1e30")
         ET.SubElement(j, "dynamics", damping="0", friction="0")
     ET.indent(robot)
@@ -136,6 +145,6 @@ def build_urdf(mech: Mechanism, tree: SimTree | None = None) -> tuple[str, list[
         pa = ch.point_a - (st.com[ch.body_a] if ch.body_a != st.ground else 0.0)
         pb = ch.point_b - (st.com[ch.body_b] if ch.body_b != st.ground else 0.0)
         closures.append(Closure(ch.name, names[ch.body_a], names[ch.body_b],
-                                (float(pa[0]), float(pa[1]), 0.0),
-                                (float(pb[0]), float(pb[1]), 0.0)))
+                                (model_value(pa[0], st.size), model_value(pa[1], st.size), 0.0),
+                                (model_value(pb[0], st.size), model_value(pb[1], st.size), 0.0)))
     return text, closures

@@ -40,7 +40,8 @@ import numpy as np
 
 from analytic import Mechanism
 
-from .mjcf import MujocoSettings, build_mjcf, require_mujoco
+from .mjcf import MujocoSettings, build_mjcf, compile_spec, require_mujoco
+from .model_numbers import model_value
 from .tree import SimTree
 
 #: Time constant of the rate servo, s: a viewer started at rest reaches the prescribed
@@ -72,15 +73,17 @@ def viewer_spec(mech: Mechanism, settings: MujocoSettings | None = None,
     bias = np.zeros(10)
     bias[0] = A * sigma * d.acceleration + k * w
     bias[2] = -k
-    act.gainprm = gain
-    act.biasprm = bias
+    act.gainprm = [model_value(x, 0.0) for x in gain]  # digits a CPU cannot change
+    act.biasprm = [model_value(x, 0.0) for x in bias]
     act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE if k else mujoco.mjtLimited.mjLIMITED_FALSE
     if k:
         act.ctrlrange = [-abs(d.velocity), abs(d.velocity)]
     act.forcelimited = mujoco.mjtLimited.mjLIMITED_FALSE
     limit_driver(spec, st, spec.joint(dj.name))
     qpos, qvel = assembled_state(spec, st)
-    spec.add_key(name="assembled", time=0.0, qpos=list(qpos), qvel=list(qvel),
+    vscale = float(np.max(np.abs(qvel), initial=0.0))
+    qvel = [model_value(x, vscale) for x in qvel]
+    spec.add_key(name="assembled", time=0.0, qpos=list(qpos), qvel=qvel,
                  ctrl=[0.0])
     return spec
 
@@ -88,7 +91,7 @@ def viewer_spec(mech: Mechanism, settings: MujocoSettings | None = None,
 def assembled_state(spec, st: SimTree) -> tuple[np.ndarray, np.ndarray]:
     """``qpos, qvel`` of the compiled model at the analytic assembled state with the
     prescribed rate (tree coordinates of :meth:`SimTree.coords` at the reference)."""
-    m = spec.compile()
+    m, _ = compile_spec(spec, None, st.mech)  # refused in one line, as compare refuses
     _, qd, _ = st.coords(st.kin_ref)
     qpos = np.array(m.qpos0, float)
     qvel = np.zeros(m.nv)

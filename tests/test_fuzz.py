@@ -259,7 +259,7 @@ def said_unbounded(header, row) -> bool:
     bad = [h for h, c in zip(header, row, strict=True)
            if c == "" or c.lower() in ("nan", "inf", "-inf")]
     return bool(bad) and "singular" in header and row[header.index("singular")] == "2" \
-        and all(h.endswith((".fx", ".fy", ".moment")) for h in bad)
+        and all(h.endswith((".fx [N]", ".fy [N]", ".moment [N m]")) for h in bad)
 
 
 def check_one(kind, shape, kw, values, sweep, path, tally):
@@ -279,7 +279,7 @@ def check_one(kind, shape, kw, values, sweep, path, tally):
     if out is None:
         return
     rows = [r.split(",") for r in out.splitlines()]
-    cond = rows[0].index("jacobian_condition")
+    cond = rows[0].index("jacobian_condition [-]")
     for r in rows[1:]:
         if said_unbounded(rows[0], r):
             tally.c["sweep: unbounded joint forces at a change point, said"] += 1
@@ -387,7 +387,7 @@ def test_sweep_sample_on_a_change_point_is_finite(fast_folder):
     rows = [r.split(",") for r in out.splitlines()]
     cells = [c for r in rows[1:] if not said_unbounded(rows[0], r) for c in r]
     assert not [c for c in cells if c == "" or c.lower() in ("nan", "inf", "-inf")]
-    torque = rows[0].index("drive.torque")
+    torque = rows[0].index("drive.torque [N m]")
     assert all(math.isfinite(float(r[torque])) for r in rows[1:])
     assert "is unbounded there" in err and "singular = 2" in err
 

@@ -130,7 +130,7 @@ def test_stephenson_limited_sweep_cli(capsys, tmp_path):
                           "--csv", str(csv))
     assert code == 0, err
     import pandas as pd
-    x = pd.read_csv(csv)["input"]
+    x = pd.read_csv(csv)["input [deg]"]
     assert x.min() == pytest.approx(ISSUE_RANGE[0], abs=1e-3)
     assert x.max() == pytest.approx(ISSUE_RANGE[1], abs=1e-3)
     lims = [float(m) for m in re.findall(r"limit\s+G2\s+(-?\d+\.\d+)", out)]

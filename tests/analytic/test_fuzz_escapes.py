@@ -25,7 +25,7 @@ from analytic.cases import load_case
 from analytic.tolerances import FINITE_DIFFERENCE, LOOP_RESIDUAL, SINGULAR_CONDITION
 from tests.conftest import four_bar, slider_crank
 
-PARA = "reports/hard_cases/parallelogram-four-bar.toml"
+PARA = "analytic/cases/hard/parallelogram-four-bar.toml"
 G = 9.81
 
 

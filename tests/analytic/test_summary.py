@@ -65,7 +65,7 @@ def test_sweep_cli_summary_and_options(capsys, tmp_path):
     assert main(["sweep", "seed-four-bar", "--csv", str(csv)]) == 0
     out = capsys.readouterr().out
     df = pd.read_csv(csv)
-    assert df["input"].iloc[0] == 0.0 and df["input"].iloc[-1] == 359.0
+    assert df["input [deg]"].iloc[0] == 0.0 and df["input [deg]"].iloc[-1] == 359.0
     assert "input 0 to 359 deg (one full turn); reference value 60 deg" in out
     assert "least 49.458 deg" in out and "largest deviation from 90 deg 40.542 deg" in out
     assert "swing" in out and "time ratio" in out
@@ -75,8 +75,8 @@ def test_sweep_cli_summary_and_options(capsys, tmp_path):
                  "--points", "5", "--csv", str(csv)]) == 0
     capsys.readouterr()
     df = pd.read_csv(csv)
-    np.testing.assert_allclose(df["input"], [10, 20, 30, 40, 50])
-    assert (df["input_velocity"] == -3.0).all()
+    np.testing.assert_allclose(df["input [deg]"], [10, 20, 30, 40, 50])
+    assert (df["input_velocity [rad/s]"] == -3.0).all()
     assert main(["sweep", "seed-four-bar", "--range", "50", "10"]) == 2
     assert "--range" in capsys.readouterr().err
 

@@ -23,7 +23,7 @@ from analytic.cases import case_path
 from reports.cli import main
 
 SEED = case_path("seed-four-bar").read_text()
-HARD = Path(__file__).resolve().parents[2] / "reports" / "hard_cases"
+HARD = Path(__file__).resolve().parents[2] / "analytic" / "cases" / "hard"
 # the seed four-bar at 1e-8 scale (a 4 nm linkage; the file is in mm)
 NANOMETRE = SEED
 for _k in ("400", "100", "300", "250", "310", "230", "50", "150", "125"):
@@ -237,8 +237,8 @@ ARGV_ROWS = [
      r"argument --points: 1000000000 is out of range: the accepted range is 2 to 1000000"),
     ("points-float", ["sweep", "seed-four-bar", "--points", "3.5"],
      r"argument --points: '3\.5' is not an integer"),
-    ("csv-missing-folder", ["sweep", "seed-four-bar", "--csv", "{tmp}/nodir/f.csv"],
-     r"argument --csv: folder '.*nodir' does not exist"),
+    ("csv-folder-under-a-file", ["sweep", "seed-four-bar", "--csv", "{loops}/nodir/f.csv"],
+     r"argument --csv: cannot create folder '.*nodir': Not a directory"),
     ("csv-is-folder", ["sweep", "seed-four-bar", "--csv", "{tmp}"],
      r"argument --csv: '.*' is a folder; give a file name"),
     ("csv-read-only-folder", ["sweep", "seed-four-bar", "--csv", "{ro}/f.csv"],
@@ -388,7 +388,7 @@ def test_pipe_into_head_keeps_the_first_lines():
     r = _xval("xval sweep seed-four-bar --points 50000 --csv - | head -2")
     assert r.stderr == "", r.stderr
     lines = r.stdout.splitlines()
-    assert lines[0].startswith("input,") and len(lines) == 3  # two CSV lines, then rc
+    assert lines[0].startswith("input [deg],") and len(lines) == 3  # two CSV lines, then rc
     assert lines[-1] in ("rc=141", "rc=0")
 
 
@@ -399,7 +399,7 @@ def test_csv_to_standard_output(capsys):
     cap = capsys.readouterr()
     assert code == 0 and not Path("-").exists()
     rows = cap.out.splitlines()
-    assert rows[0].startswith("input,") and len(rows) == 13
+    assert rows[0].startswith("input [deg],") and len(rows) == 13
     assert "seed-slider-crank: 12 points" in cap.err
 
 

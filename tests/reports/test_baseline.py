@@ -136,6 +136,53 @@ def test_an_error_divided_by_100_fails_naming_quantity_and_factor(mujoco_baselin
     assert "**FAIL**" in md and f"`{picked['quantity']}`" in md and "100x" in md
 
 
+def test_a_large_improvement_says_the_baseline_is_loose(mujoco_baseline, tmp_path, capsys):
+    """A recorded error 100x the current one (the baseline no longer guards it): a
+    warning line and status 0 by default; status 1 with --fail-loose."""
+    picked = {}
+
+    def edit(doc):
+        q = _worst(_run(doc, "quick-return"))
+        assert q["error"] > bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR and q["error"] * 100 < 1e-3
+        picked.update(q)
+        q["error"] *= 100
+    edited = _edited(mujoco_baseline, tmp_path / "loose.json", edit)
+    args = ["baseline", "check", str(edited), "--case", "quick-return"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    [warn] = [ln for ln in out.splitlines() if ln.startswith("warning: ")]
+    assert warn.startswith(f"warning: quick-return / mujoco: {picked['quantity']}: improved ")
+    assert "(0.01x), more than the factor 10: the baseline is loose; re-record" in warn, warn
+    assert main([*args, "--fail-loose"]) == 1
+    out = capsys.readouterr().out
+    assert f"FAIL  quick-return / mujoco: {picked['quantity']}: improved " in out
+    # an improvement within the factor, or one below the floor, is not loose
+    rec = bl.QuantityRecord("x.alpha", 9e-7, 0.0, "deg", 1e-3, 0.0, 1.0)
+    assert bl.judge(rec, 1e-9, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    rec = bl.QuantityRecord("x.alpha", 2e-5, 0.0, "deg", 1e-3, 0.0, 1.0)
+    assert bl.judge(rec, 3e-6, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR).status == "improved"
+    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR, fail_loose=True).failed
+
+
+def test_check_under_other_settings_names_them(mujoco_baseline, tmp_path, capsys):
+    """``--set`` runs the recorded runs with another setting; the output says which, and
+    the run's settings line shows it; an unknown key is one line, status 2."""
+    junit = tmp_path / "s.xml"
+    code = main(["baseline", "check", str(mujoco_baseline), "--case", "seed-four-bar",
+                 "--set", "mujoco.timestep=0.0002", "--junit", str(junit)])
+    out = capsys.readouterr().out
+    assert code in (0, 1), out
+    assert "settings changed for this check (--set): mujoco.timestep=0.0002" in \
+        out.splitlines()[2], out
+    props = {p.get("name"): p.get("value") for p in ET.parse(junit).getroot().iter("property")}
+    assert props["set.mujoco.timestep"] == "0.0002"
+    assert "timestep=0.0002" in ET.parse(junit).getroot().find(".//system-out").text
+    assert main(["baseline", "check", str(mujoco_baseline), "--set", "no_such=1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("xval: error: ") and "no_such" in err and "\n" not in err
+
+
 def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
     """An error below the floor divided by 100 is not drift (1e-8 -> 1e-10 is round-off
     territory: the limit is factor x floor); the same error set to 0 is not either."""
@@ -213,6 +260,69 @@ def test_a_model_file_is_stored_relative_and_a_change_is_detected(tmp_path):
     assert not chk.passed and "is gone" in chk.problems[0]
 
 
+def test_model_identity_is_the_parsed_mechanism_not_the_bytes(tmp_path):
+    """A comment line or CRLF line endings are no change (the parsed mechanism is the
+    same, though the bytes differ: the old byte hash failed here); a changed mass is,
+    and the problem names the body, the field and both values."""
+    model = tmp_path / "four.toml"
+    text = Path(case_path("seed-four-bar")).read_text()
+    model.write_text(text)
+    out = tmp_path / "b.json"
+    bl.save(bl.record([str(model)], ["mujoco"], out, request=bl.request_dict(samples=12),
+                      runner=cached_runner))
+    recorded = json.loads(out.read_text())["runs"][0]["model"]
+    assert recorded["content"]["bodies.coupler.mass"] == 0.6
+    for same in ("# a comment the user added\n" + text, text.replace("\n", "\r\n")):
+        model.write_bytes(same.encode())
+        assert bl.file_sha256(model) != bl.file_sha256(case_path("seed-four-bar"))
+        (chk,) = bl.check(bl.load(out), runner=cached_runner)
+        assert chk.passed, chk.problems
+    model.write_text(text.replace("mass = 0.6", "mass = 0.61", 1))
+    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    assert not chk.passed
+    assert "changed since the baseline (parsed mechanism): bodies.coupler.mass 0.6 -> " \
+           "0.61" in chk.problems[0], chk.problems
+
+
+def test_model_identity_names_removed_and_added_items():
+    from dataclasses import replace
+
+    from analytic import load_case
+    from reports import model_identity as mid
+    mech = load_case("seed-four-bar")
+    before = mid.content(mech)
+    after = mid.content(replace(mech, gravity=(0.0, -9.81)))
+    assert mid.changes(before, after).startswith("gravity [0.0, 0.0] -> [0.0, -9.81]")
+    assert mid.digest(mech) == mid.digest(load_case("seed-four-bar"))
+    assert mid.digest(mech) != mid.digest(replace(mech, gravity=(0.0, -9.81)))
+    gone = {k: v for k, v in before.items() if not k.startswith("bodies.rocker.")}
+    assert "bodies.rocker.mass removed (was " in mid.changes(before, gone, limit=10)
+
+
+def test_recording_a_subset_merges_and_replace_replaces(tmp_path, capsys):
+    """Issue 22: recording one case into a file of two kept the other run (it was
+    silently replaced by the one); counts are printed; --replace writes only the new."""
+    out = tmp_path / "b.json"
+    common = ["--engine", "mujoco", "--samples", "12", "--out", str(out)]
+
+    def runs():
+        return sorted(r["case"] for r in json.loads(out.read_text())["runs"])
+    assert main(["baseline", "record", "seed-four-bar", "quick-return", *common]) == 0
+    assert runs() == ["quick-return", "seed-four-bar"]
+    before = _run(json.loads(out.read_text()), "quick-return")
+    assert main(["baseline", "record", "seed-four-bar", *common]) == 0
+    assert "wrote 2 runs" in capsys.readouterr().out.split("\n")[-2]
+    assert runs() == ["quick-return", "seed-four-bar"]
+    assert _run(json.loads(out.read_text()), "quick-return") == before  # kept as it was
+    assert main(["baseline", "record", "seed-four-bar", "six-bar", *common]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.endswith("1 updated, 1 kept, 1 added (--replace writes only the runs "
+                         "recorded now)"), last
+    assert main(["baseline", "record", "six-bar", "--replace", *common]) == 0
+    assert capsys.readouterr().out.strip().endswith("(replaced)")
+    assert runs() == ["six-bar"]
+
+
 def test_changed_versions_are_named(mujoco_baseline, tmp_path, capsys):
     def edit(doc):
         for r in doc["runs"]:
@@ -267,7 +377,8 @@ def test_bad_baseline_files_are_one_line_status_2(name, tmp_path, capsys):
     (lambda r: r["request"].update(samples="many"), "'samples' must be a whole number"),
     (lambda r: r["model"].update(file="x.toml"), "exactly one of 'builtin' or 'file'"),
     (lambda r: r["settings"]["fields"].update(warp=9), "no setting 'warp'"),
-    (lambda r: r["settings"]["fields"].update(timestep="fast"), "timestep='fast'"),
+    (lambda r: r["settings"]["fields"].update(timestep="fast"),
+     'timestep="fast": must be a number'),
 ])
 def test_bad_entries_name_the_run_and_key(edit, msg, mujoco_baseline, tmp_path, capsys):
     p = _edited(mujoco_baseline, tmp_path / "b.json", lambda d: edit(d["runs"][0]))
@@ -288,11 +399,44 @@ def test_missing_file_and_bad_options(tmp_path, capsys):
 
 
 # ============================================================== JUnit from xval compare
+#: The rules of the schema the Jenkins xunit plugin validates JUnit files against:
+#: ``junit-10.xsd`` in jenkinsci/xunit-plugin, src/main/resources/org/jenkinsci/plugins/
+#: xunit/types/model/xsd/ (MIT; read at commit 031e285e).  Restated here as checks, not
+#: copied: which attributes and children each element may have, the required ones, and
+#: its time pattern.  Notably ``testcase`` may not carry ``file`` or ``properties``.
+JENKINS_TESTCASE_ATTRS = {"name", "time", "classname", "group"}
+JENKINS_TESTCASE_CHILDREN = {"skipped", "error", "failure", "rerunFailure", "rerunError",
+                             "flakyFailure", "flakyError", "system-out", "system-err"}
+JENKINS_SUITE_ATTRS = {"name", "tests", "failures", "errors", "group", "time", "skipped",
+                       "timestamp", "hostname", "id", "package", "file", "log", "url"}
+JENKINS_SUITES_ATTRS = {"name", "time", "tests", "failures", "errors"}
+JENKINS_TIME = r"(([0-9]{0,3},)*[0-9]{3}|[0-9]{0,3})*(\.[0-9]*)?"
+
+
+def _jenkins_xunit_rules(root: ET.Element) -> None:
+    import re
+    assert root.tag == "testsuites" and set(root.attrib) <= JENKINS_SUITES_ATTRS
+    for el in (root, *root.iter("testsuite")):
+        assert re.fullmatch(JENKINS_TIME, el.get("time", "")), el.get("time")
+    for ts in root.iter("testsuite"):
+        assert set(ts.attrib) <= JENKINS_SUITE_ATTRS, ts.attrib
+        assert {"name", "tests", "failures", "errors"} <= set(ts.attrib)
+        assert {c.tag for c in ts} <= {"testsuite", "properties", "testcase", "system-out",
+                                       "system-err"}
+        for p in ts.iter("property"):
+            assert set(p.attrib) == {"name", "value"}
+    for tc in root.iter("testcase"):
+        assert set(tc.attrib) <= JENKINS_TESTCASE_ATTRS and "name" in tc.attrib, tc.attrib
+        assert {c.tag for c in tc} <= JENKINS_TESTCASE_CHILDREN, [c.tag for c in tc]
+
+
 def _validate_junit(path: Path, tests: int, failures: int, errors: int = 0) -> None:
-    """Valid against the JUnit schema, with the expected counts on both levels."""
+    """Valid against the JUnit schema and the Jenkins xunit plugin's rules, with the
+    expected counts on both levels."""
     xmlschema = pytest.importorskip("xmlschema")
     xmlschema.XMLSchema(str(XSD)).validate(str(path))
     root = ET.parse(path).getroot()
+    _jenkins_xunit_rules(root)
     suite = root.find("testsuite")
     for el in (root, suite):
         assert (int(el.get("tests")), int(el.get("failures")), int(el.get("errors"))) == \
@@ -314,7 +458,9 @@ def test_compare_junit_and_summary(tmp_path, capsys):
     assert code == 1
     _validate_junit(junit, tests=1, failures=1)
     case = ET.parse(junit).getroot().find(".//testcase")
-    assert case.get("classname") == "xval.mujoco" and case.get("name") == "quick-return"
+    assert case.get("classname") == "xval.compare.mujoco" and case.get("name") == "quick-return"
+    props = {p.get("name"): p.get("value") for p in ET.parse(junit).getroot().iter("property")}
+    assert props["engine.mujoco"].startswith("mujoco ") and props["linkage-xval"]
     msg = case.find("failure").get("message")
     q, err = msg.split(": error ")[0], float(msg.split(": error ")[1].split()[0])
     assert err > 1e-3 and "of peak at" in msg and "exceeds the tolerance 0.001" in msg
@@ -322,6 +468,43 @@ def test_compare_junit_and_summary(tmp_path, capsys):
     md = summary.read_text()
     assert "| quick-return | mujoco | **FAIL** |" in md and f"`{q}`" in md
     assert not math.isnan(err)
+
+
+def test_junit_for_ci_pages(tmp_path, capsys):
+    """A model file is the suite's ``file`` attribute (relative, as given); versions are
+    properties; a passing case carries its current worst error in ``system-out``;
+    ``compare`` and ``baseline check`` results never share a (classname, name)."""
+    model = tmp_path / "linkages" / "four.toml"
+    model.parent.mkdir()
+    shutil.copy(case_path("seed-four-bar"), model)
+    base = tmp_path / "b.json"
+    bl.save(bl.record([str(model)], ["mujoco"], base, request=bl.request_dict(samples=12),
+                      runner=cached_runner))
+    import os
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert main(["compare", "linkages/four.toml", "--engine", "mujoco", "--samples",
+                     "12", "--junit", "c.xml"]) == 0
+        assert main(["baseline", "check", "b.json", "--junit", "b.xml"]) == 0
+    finally:
+        os.chdir(cwd)
+    capsys.readouterr()
+    names = []
+    for f in ("c.xml", "b.xml"):
+        _validate_junit(tmp_path / f, tests=1, failures=0)
+        root = ET.parse(tmp_path / f).getroot()
+        assert root.find("testsuite").get("file") == "linkages/four.toml"
+        props = {p.get("name"): p.get("value") for p in root.iter("property")}
+        from importlib.metadata import version
+        assert props["engine.mujoco"] == f"mujoco {version('mujoco')}"
+        assert props["linkage-xval"] == version("linkage-xval")
+        tc = root.find(".//testcase")
+        out = tc.find("system-out").text
+        assert out.startswith("worst: ") and " of peak at " in out and "tolerance 0.001" in out
+        names.append((tc.get("classname"), tc.get("name")))
+    assert names == [("xval.compare.mujoco", "seed-four-bar"),
+                     ("xval.baseline.mujoco", "seed-four-bar")], names
 
 
 def test_record_command_names_settings_that_differ_from_the_defaults(mujoco_baseline):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -65,8 +66,9 @@ def test_sweep_csv(capsys, tmp_path):
     assert code == 0
     df = pd.read_csv(f)
     assert len(df) == 72
-    for col in ("input", "rod.alpha", "slide.a", "C.fx", "drive.torque", "drive.power",
-                "jacobian_condition", "transmission_deg.C"):
+    for col in ("input [deg]", "rod.alpha [rad/s^2]", "slide.a [m/s^2]", "C.fx [N]",
+                "drive.torque [N m]", "drive.power [W]", "jacobian_condition [-]",
+                "transmission.C [deg]", "singular"):
         assert col in df.columns
     # dead centres of a centred slider-crank at 0 and 180 deg (closed form)
     assert "slider velocity = 0" in out and "180" in out
@@ -121,3 +123,35 @@ def test_models_writes_every_case(capsys, tmp_path):
     assert code == 0
     assert len(list(tmp_path.glob("*.xml"))) == len(case_names())
     assert len(list(tmp_path.glob("*.urdf"))) == len(case_names())
+
+
+def test_solve_tables_print_a_nano_linkage_at_its_scale(capsys):
+    """A four-bar with nanometre links (shared/bugs/nano-four-bar.toml): every point's x
+    and y, and every rate, print at their own scale, never as a false 0.000000; the
+    velocity and acceleration columns name their units."""
+    from pathlib import Path
+
+    from analytic import Linkage, load_mechanism
+    f = Path(__file__).parents[1] / "data" / "bugs" / "nano-four-bar.toml"
+    code, out, _ = run(capsys, "solve", str(f), "--angle", "77")
+    assert code == 0
+    for head in ("vx (m/s)", "vy (m/s)", "ax (m/s^2)", "ay (m/s^2)"):
+        assert head in out
+    kin = Linkage(load_mechanism(f)).kinematics(np.radians(77.0))
+    rows = {ln.split("│")[1].strip(): ln.split("│")[2:-1] for ln in out.splitlines()
+            if ln.count("│") == 10}
+    coupler_b = [float(c) for c in rows["coupler.B"]]
+    x, y = kin.point("coupler", "B")[0][0]  # position of the solver, m
+    assert coupler_b[0] == pytest.approx(x, rel=1e-5) and x != 0
+    assert coupler_b[1] == pytest.approx(y, rel=1e-5) and y != 0
+
+
+@pytest.mark.parametrize("case", ["near-toggle-four-bar", "parallelogram-four-bar"])
+def test_every_name_the_report_prints_resolves(capsys, case):
+    """The report's hard cases are cases like the others: `xval cases` lists them and
+    `xval solve` takes their names (it said "no built-in case" before)."""
+    code, out, _ = run(capsys, "cases")
+    assert code == 0 and case in out
+    code, out, err = run(capsys, "solve", case, "--json")
+    assert code == 0, err
+    assert json.loads(out)["case"] == case

@@ -85,12 +85,13 @@ def test_sweep_csv_units(tmp_path):
                     "--units", "mm,rad,rpm")
     assert code == 0 and "table units: lengths mm, angles rad" in out
     a, b = pd.read_csv(si), pd.read_csv(conv)
-    np.testing.assert_allclose(b["input [rad]"], np.radians(a["input"]), rtol=REL, atol=1e-15)
-    np.testing.assert_allclose(b["crank.omega [rpm]"], a["crank.omega"] * 60 / (2 * math.pi),
-                               rtol=REL)
-    np.testing.assert_allclose(b["slide.s [mm]"], 1000 * a["slide.s"], rtol=REL)
+    # the input in rad is the value solved at: radians of the printed degrees, exactly
+    np.testing.assert_array_equal(b["input [rad]"], np.radians(a["input [deg]"]))
+    np.testing.assert_allclose(b["crank.omega [rpm]"],
+                               a["crank.omega [rad/s]"] * 60 / (2 * math.pi), rtol=REL)
+    np.testing.assert_allclose(b["slide.s [mm]"], 1000 * a["slide.s [m]"], rtol=REL)
     # the piston's y stays on the line: 0 (never round-off) in both
-    assert (b["piston.C.y [mm]"] == 0).all() and (a["piston.C.y"] == 0).all()
+    assert (b["piston.C.y [mm]"] == 0).all() and (a["piston.C.y [m]"] == 0).all()
     assert not (np.signbit(b.select_dtypes("number").to_numpy())
                 & (b.select_dtypes("number").to_numpy() == 0)).any()
 
