@@ -6,7 +6,9 @@
   (:func:`case_names`);
 * the **hard cases** (``analytic/cases/hard/*.toml``): linkages made to test numerical
   stability (a crank a hair from its toggle, a parallelogram through its change points),
-  which the report's studies run (:func:`hard_case_names`).
+  which the report's studies run (:func:`hard_case_names`);
+* the **free-motion cases** (``analytic/cases/free/*.toml``): the IFToMM benchmark
+  problems, released linkages for ``xval simulate`` (:func:`free_case_names`).
 
 :func:`load_case` and :func:`case_path` resolve a name of either kind, so every command
 accepts every name the report prints.
@@ -22,6 +24,9 @@ from .toml_io import load_mechanism
 
 CASES_DIR = Path(__file__).parent / "cases"
 HARD_CASES_DIR = CASES_DIR / "hard"
+#: Free-motion cases: loaded by name like the others, not listed by :func:`case_names`
+#: (the prescribed-motion runs iterate over those).
+FREE_CASES_DIR = CASES_DIR / "free"
 
 
 def case_names() -> list[str]:
@@ -34,14 +39,20 @@ def hard_case_names() -> list[str]:
     return sorted(p.stem for p in HARD_CASES_DIR.glob("*.toml"))
 
 
+def free_case_names() -> list[str]:
+    """Names of the free-motion cases (IFToMM benchmark problems), sorted."""
+    return sorted(p.stem for p in FREE_CASES_DIR.glob("*.toml"))
+
+
 def case_path(name: str) -> Path:
     """The file of a built-in or hard case ``name``."""
-    for folder in (CASES_DIR, HARD_CASES_DIR):
+    for folder in (CASES_DIR, HARD_CASES_DIR, FREE_CASES_DIR):
         p = folder / f"{name}.toml"
         if p.is_file():
             return p
     raise DescriptionError(f"no built-in case {name!r}; cases are {case_names()}, "
-                           f"hard cases {hard_case_names()}")
+                           f"hard cases {hard_case_names()}, free-motion cases "
+                           f"{free_case_names()}")
 
 
 def load_case(name_or_path: str | Path) -> Mechanism:

@@ -48,13 +48,13 @@ class LoopEquations:
                 self.Eq[k, t.loop[k], t.group[k]] = 1.0
             if t.slider[k] >= 0:
                 self.Es[k, t.loop[k], self.ng + t.slider[k]] = t.sign[k]
-        self.Eq = self.Eq.reshape(T, -1)
+        self.Eq = self.Eq.reshape(T, self.L * self.nq)  # explicit: T = 0 for an open chain
         # term direction = E of one body of its group (the ground for the ground group)
         # times exp(i (beta - that body's offset from its group angle))
         lead = topo.group_leader
         self.term_body = np.array([lead[g] if g >= 0 else topo.ground for g in t.group], int)
         self.term_rot = np.exp(1j * (self.beta - topo.offset[self.term_body]))
-        self.Es = self.Es.reshape(T, -1)
+        self.Es = self.Es.reshape(T, self.L * self.nq)
 
     def terms(self, q: np.ndarray):
         """The loop vectors' unit directions ``exp(i phi) (N, T)`` and lengths ``m``."""

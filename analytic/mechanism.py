@@ -41,6 +41,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from .errors import DescriptionError
+from .motion_spec import FreeMotion, check_motion
 
 Vec2 = tuple[float, float]
 
@@ -238,6 +239,8 @@ class Mechanism:
     loops: tuple[tuple[str, ...], ...] | None = None
     description: str = ""
     source: str | None = None  # file it came from, for error messages
+    #: how the linkage moves when released (``xval simulate``); None: prescribed only
+    motion: FreeMotion | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "bodies", tuple(self.bodies))
@@ -352,6 +355,8 @@ def validate(mech: Mechanism) -> None:
     _check_graph(mech)
     if mech.loops is not None:
         _check_loops(mech)
+    if mech.motion is not None:
+        check_motion(mech)
 
 
 def _bad_char(text: str, allow: str = "") -> str | None:
@@ -467,6 +472,8 @@ def _check_size(mech: Mechanism) -> None:
                   for j in mech.joints if b.name in j.bodies and isinstance(j, Revolute)]
         for i in range(len(attach)):
             for k in range(i + 1, len(attach)):
+                if attach[i][1] == attach[k][1]:
+                    continue  # a compound pin: several joints declared at one named point
                 p = b.points[attach[i][1]]
                 q = b.points[attach[k][1]]
                 if math.hypot(p[0] - q[0], p[1] - q[1]) < ZERO_LENGTH * size:

@@ -42,12 +42,21 @@ from .mechanism import (
     Revolute,
     check_range,
 )
+from .motion_spec import (
+    MAX_DURATION,
+    FreeMotion,
+    JointDamper,
+    JointSpring,
+    Motor,
+    PointDamper,
+    PointSpring,
+)
 
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 DEG = math.pi / 180.0
 
 _TOP_KEYS = {"name", "description", "ground", "units", "gravity", "bodies", "joints",
-             "driver", "loads", "assembly", "loops"}
+             "driver", "loads", "assembly", "loops", "motion", "springs", "dampers", "motors"}
 _BODY_KEYS = {"points", "mass", "com", "inertia"}
 _REV_KEYS = {"name", "type", "bodies", "points"}
 _PRI_KEYS = {"name", "type", "guide", "origin", "direction", "slider", "point", "angle"}
@@ -251,6 +260,119 @@ def _loops(doc: dict, source: str) -> tuple[tuple[str, ...], ...] | None:
                  for i, lp in enumerate(loops, 1))
 
 
+_MOTION_KEYS = {"joint", "value", "rate", "rate_unit", "duration", "samples"}
+_SPRING_KEYS = {"joint", "bodies", "points", "stiffness", "free_length", "free_angle"}
+_DAMPER_KEYS = {"joint", "bodies", "points", "coefficient"}
+_MOTOR_KEYS = {"joint", "effort", "table"}
+
+
+def _motion(doc: dict, source: str, joints: list, L: float, lu: str) -> FreeMotion | None:
+    """The free-motion sections (``[motion]``, ``[[springs]]``, ``[[dampers]]``,
+    ``[[motors]]``), file units converted to SI; ``None`` when there is no ``[motion]``."""
+    if "motion" not in doc:
+        for key in ("springs", "dampers", "motors"):
+            if key in doc:
+                raise DescriptionError(f"[[{key}]] act in free motion only: add a [motion] "
+                                       "table (initial joint, value, rate, duration)", source)
+        return None
+    mw = f"{source}: [motion]"
+    md = _check_keys(doc["motion"], _MOTION_KEYS, mw)
+    jt = _named_joint(_str(_req(md, "joint", mw), "joint", mw), joints, mw)
+    if isinstance(jt, Revolute):
+        ru = _unit_key(md, "rate_unit", RATE_UNITS, "rad/s", mw)
+        value = _num(_req(md, "value", mw), "value", mw, MAX_ANGLE, "deg", DEG)
+        rate = _num(md.get("rate", 0.0), "rate", mw, MAX_RATE, ru, RATE_UNITS[ru])
+    else:
+        value = _num(_req(md, "value", mw), "value", mw, MAX_LENGTH, lu, L)
+        rate = _num(md.get("rate", 0.0), "rate", mw, MAX_RATE, f"{lu}/s", L)
+    duration = _num(_req(md, "duration", mw), "duration", mw, MAX_DURATION, "s", lo=0.0)
+    samples = md.get("samples", 201)
+    if isinstance(samples, bool) or not isinstance(samples, int):
+        raise DescriptionError(f"samples must be an integer, got {samples!r}", mw)
+    return FreeMotion(
+        jt.name, value, rate, duration, samples,
+        tuple(_element(d, f"{source}: spring {i}", _SPRING_KEYS, joints, L, lu)
+              for i, d in enumerate(_array(doc, "springs", source))),
+        tuple(_element(d, f"{source}: damper {i}", _DAMPER_KEYS, joints, L, lu)
+              for i, d in enumerate(_array(doc, "dampers", source))),
+        tuple(_motor(d, f"{source}: motor {i}", joints)
+              for i, d in enumerate(_array(doc, "motors", source))))
+
+
+def _array(doc: dict, key: str, source: str) -> list:
+    v = doc.get(key, [])
+    if not isinstance(v, list):
+        raise DescriptionError(f"{key} must be an array of tables [[{key}]], got {_kind(v)}",
+                               source)
+    return v
+
+
+def _named_joint(name: str, joints: list, where: str):
+    for j in joints:
+        if j.name == name:
+            return j
+    raise DescriptionError(f"unknown joint {name!r}; joints are {[j.name for j in joints]}",
+                           where)
+
+
+def _element(d: Any, where: str, keys: set, joints: list, L: float, lu: str):
+    """A spring (stiffness) or damper (coefficient): on a ``joint``, or between
+    ``bodies = [a, b]`` at ``points = [pa, pb]``."""
+    _check_keys(d, keys, where)
+    spring = "stiffness" in keys
+    k = _num(_req(d, "stiffness" if spring else "coefficient", where),
+             "stiffness" if spring else "coefficient", where)
+    if "joint" in d:
+        if "bodies" in d or "points" in d:
+            raise DescriptionError("give either joint = name or bodies/points, not both",
+                                   where)
+        jt = _named_joint(_str(d["joint"], "joint", where), joints, where)
+        if not spring:
+            return JointDamper(jt.name, k)
+        if isinstance(jt, Revolute):
+            if "free_length" in d:
+                raise DescriptionError("a revolute joint's spring has free_angle (deg), not "
+                                       "free_length", where)
+            return JointSpring(jt.name, k, _num(d.get("free_angle", 0.0), "free_angle", where,
+                                                MAX_ANGLE, "deg", DEG))
+        if "free_angle" in d:
+            raise DescriptionError("a prismatic joint's spring has free_length, not "
+                                   "free_angle", where)
+        return JointSpring(jt.name, k, _num(d.get("free_length", 0.0), "free_length", where,
+                                            MAX_LENGTH, lu, L))
+    bs, ps = _req(d, "bodies", where), _req(d, "points", where)
+    if not (isinstance(bs, list) and len(bs) == 2 and isinstance(ps, list) and len(ps) == 2):
+        raise DescriptionError("needs joint = name, or bodies = [a, b] and points = [pa, pb]",
+                               where)
+    ends = (_str(bs[0], "bodies[0]", where), _str(ps[0], "points[0]", where),
+            _str(bs[1], "bodies[1]", where), _str(ps[1], "points[1]", where))
+    if not spring:
+        return PointDamper(*ends, k)
+    if "free_angle" in d:
+        raise DescriptionError("a spring between points has free_length, not free_angle",
+                               where)
+    return PointSpring(*ends, k, _num(_req(d, "free_length", where), "free_length", where,
+                                      MAX_LENGTH, lu, L))
+
+
+def _motor(d: Any, where: str, joints: list) -> Motor:
+    """A motor: ``effort`` (constant, N m or N) or ``table = [[t, effort], ...]``."""
+    _check_keys(d, _MOTOR_KEYS, where)
+    jt = _named_joint(_str(_req(d, "joint", where), "joint", where), joints, where)
+    if ("effort" in d) == ("table" in d):
+        raise DescriptionError("a motor needs exactly one of effort (constant) or table "
+                               "([[time s, effort], ...])", where)
+    if "effort" in d:
+        return Motor(jt.name, _num(d["effort"], "effort", where))
+    tab = d["table"]
+    if not isinstance(tab, list) or not all(isinstance(r, list) and len(r) == 2 for r in tab):
+        raise DescriptionError("table must be an array of [time s, effort] pairs", where)
+    rows = [(_num(r[0], f"table row {i} time", where), _num(r[1], f"table row {i} effort",
+                                                             where))
+            for i, r in enumerate(tab)]
+    return Motor(jt.name, 0.0, tuple(r[0] for r in rows), tuple(r[1] for r in rows))
+
+
 def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
     """Build a :class:`Mechanism` from a parsed TOML document (file units).
 
@@ -274,7 +396,8 @@ def mechanism_from_dict(doc: dict, source: str = "<dict>") -> Mechanism:
         bodies=tuple(bodies), joints=tuple(joints), driver=driver,
         loads=tuple(_loads(doc, source)), gravity=gravity,
         assembly=_assembly(doc, source, L, lu), loops=_loops(doc, source),
-        description=str(doc.get("description", "")), source=source)
+        description=str(doc.get("description", "")), source=source,
+        motion=_motion(doc, source, joints, L, lu))
 
 
 def decode_text(data: bytes, where: str) -> str:

@@ -293,6 +293,7 @@ COMMANDS = {
     "plot": ("reports.plot_cmd", "full-cycle curves of one linkage (engines optional)"),
     "animate": ("reports.animate", "the linkage moving through a cycle (GIF, MP4, HTML)"),
     "view": ("reports.view_cmd", "MuJoCo's viewer on the linkage (needs a display)"),
+    "simulate": ("reports.simulate_cmd", "free motion: the exact released trajectory"),
 }
 
 

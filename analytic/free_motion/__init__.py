@@ -1,0 +1,40 @@
+"""Free motion: a released linkage's exact trajectory (the reference side of the engine
+comparison in free motion).
+
+    from analytic import load_case
+    from analytic.free_motion import simulate
+    traj = simulate(load_case("iftomm-a01-pendulum"))
+    s = traj.at([0.0, 1.0])        # FreeSamples: joints, bodies, energies, reactions
+    traj.events                    # switches, singular crossings, limit positions
+
+See :mod:`.dynamics` (the equation of motion from the solver), :mod:`.integrate` (DOP853
+and coordinate switching) and :mod:`.trajectory` (sampling, events).
+"""
+
+from __future__ import annotations
+
+from ..errors import DescriptionError
+from ..motion_spec import MAX_DURATION
+from .integrate import RTOL, integrate
+from .trajectory import Event, FreeSamples, FreeTrajectory, find_events
+
+
+def simulate(mech, duration: float | None = None, rtol: float = RTOL,
+             method: str = "DOP853") -> FreeTrajectory:
+    """Integrate ``mech.motion`` (its ``[motion]`` description) over ``duration`` s
+    (default the description's); ``method`` any of SciPy's ``solve_ivp`` methods
+    (``"Radau"`` for a second opinion).  Returns the :class:`FreeTrajectory`, with
+    ``events`` listed."""
+    if mech.motion is None:
+        raise DescriptionError("no [motion] table: free motion needs the initial joint, "
+                               "value, rate and duration", mech.source)
+    if duration is not None and not 0 < duration <= MAX_DURATION:
+        raise DescriptionError(f"duration = {duration!r} s is out of range: the accepted "
+                               f"range is 0 < duration <= {MAX_DURATION:g} s", mech.source)
+    segs, switches = integrate(mech, duration, rtol, method)
+    traj = FreeTrajectory(mech, segs, switches, rtol, method)
+    traj.events = find_events(traj)
+    return traj
+
+
+__all__ = ["Event", "FreeSamples", "FreeTrajectory", "simulate"]

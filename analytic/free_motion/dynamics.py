@@ -1,0 +1,208 @@
+"""The exact one-degree-of-freedom equation of motion, from the solver's kinematics.
+
+For a linkage with one degree of freedom and the coordinate ``q`` of one joint (the
+integrated coordinate: the driver joint of the :class:`analytic.Linkage` passed here),
+every velocity is ``v = v_q q'`` and every acceleration ``a = v_q q'' + a_qq q'^2``,
+where ``v_q`` and ``a_qq`` are the velocity and acceleration the solver returns at unit
+input rate and zero input acceleration (its exact vector-loop solution; no finite
+differences).  Lagrange's equation is then
+
+    M(q) q'' + C(q) q'^2 = Q(q, q', t),
+    M = sum_b m_b |v_Gb,q|^2 + I_b w_b,q^2          (generalized inertia, kg m^2 or kg)
+    C = sum_b m_b v_Gb,q . a_Gb,qq + I_b w_b,q a_b,qq   (= M'(q) / 2)
+    Q = sum F . v_P,q  (virtual power of gravity, loads, springs, dampers, motors).
+
+Joint coordinates: revolute ``theta_b - theta_a`` (rad), prismatic ``s`` (m); their
+coefficients ``x_q`` come from the same solution.  Potential energy: gravity
+``-m g . r_G`` and springs ``k (L - L0)^2 / 2``; constant loads, motors and dampers
+enter through their work, integrated with the motion (:mod:`.integrate`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import MissingMassError
+from ..mechanism import Revolute
+from ..motion_spec import JointSpring, PointDamper, PointSpring
+
+
+@dataclass
+class Coefficients:
+    """Kinematic coefficients at N values of the integrated coordinate.
+
+    ``kin`` is the solver's :class:`analytic.Kinematics` at unit rate and zero
+    acceleration; ``x, x_q, x_qq`` ``(N, J)`` are every joint's coordinate (wrapped
+    to the solver's angles; see :func:`unwrap_to`) and its first two derivatives with
+    respect to ``q``.
+    """
+
+    kin: object
+    x: np.ndarray
+    x_q: np.ndarray
+    x_qq: np.ndarray
+
+
+def coefficients(lk, q) -> Coefficients:
+    """The solver's kinematics at ``q`` (scalar or ``(N,)``) with ``q' = 1, q'' = 0``."""
+    q = np.atleast_1d(np.asarray(q, float))
+    kin = lk.kinematics(q, 1.0, 0.0, on_singular="flag")
+    topo = lk.topo
+    cols = [], [], []
+    for jt in lk.mech.joints:
+        if isinstance(jt, Revolute):
+            a, b = topo.body_names.index(jt.body_a), topo.body_names.index(jt.body_b)
+            for out, arr in zip(cols, (kin.theta, kin.omega, kin.alpha), strict=True):
+                out.append(arr[:, b] - arr[:, a])
+        else:
+            for out, arr in zip(cols, kin.slider(jt.name), strict=True):
+                out.append(arr)
+    x, x_q, x_qq = (np.stack(c, axis=1) for c in cols)
+    # the integrated coordinate is q itself (the solver may wrap its angle)
+    k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
+    x[:, k] = q
+    return Coefficients(kin, x, x_q, x_qq)
+
+
+def unwrap_to(x: np.ndarray, ref: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """Revolute joint angles ``x`` moved by whole turns to lie within pi of ``ref``."""
+    two_pi = 2.0 * math.pi
+    d = np.where(revolute, np.round((ref - x) / two_pi) * two_pi, 0.0)
+    return x + d
+
+
+def check_masses(mech) -> None:
+    """Free motion needs every moving body's mass and inertia."""
+    missing = [b.name for b in mech.moving_bodies if b.mass is None]
+    if missing:
+        raise MissingMassError(f"free motion needs the mass and inertia of every moving "
+                               f"body; missing for {missing}", mech.source)
+
+
+@dataclass
+class Terms:
+    """The equation's terms at N states (SI): inertia ``M``, ``C``, the generalized
+    force ``Q``, the powers of the motors, constant loads and gravity, the dissipated
+    power (>= 0), and the potential energy of gravity and springs."""
+
+    M: np.ndarray
+    C: np.ndarray
+    Q: np.ndarray
+    motor_power: np.ndarray
+    load_power: np.ndarray
+    damper_power: np.ndarray
+    potential: np.ndarray
+    kinetic: np.ndarray
+
+
+def _point_pair(kin, el):
+    """Positions and unit-rate velocities (complex) of a spring's or damper's ends,
+    its length L and its rate per unit q, L_q."""
+    ra, va, _ = kin.point_c(el.body_a, el.point_a)
+    rb, vb, _ = kin.point_c(el.body_b, el.point_b)
+    d = rb - ra
+    L = np.abs(d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = d / L
+    L_q = u.real * (vb - va).real + u.imag * (vb - va).imag
+    return L, L_q, u
+
+
+def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
+    """The equation's terms at states ``(q, q', t)`` whose coefficients are ``co``;
+    ``x`` ``(N, J)`` are the joint coordinates, unwrapped (for torsional springs)."""
+    mech = lk.mech
+    kin = co.kin
+    qd = np.asarray(qd, float)
+    N = co.x.shape[0]
+    g = complex(*mech.gravity)
+    M, C, Qg = np.zeros(N), np.zeros(N), np.zeros(N)
+    V = np.zeros(N)
+    for b, body in enumerate(mech.bodies):
+        if b == lk.topo.ground or not body.mass and not body.inertia:
+            continue
+        rG, vG, aG = kin.com_c(b)
+        m, inertia = body.mass, body.inertia
+        M += m * np.abs(vG) ** 2 + inertia * kin.omega[:, b] ** 2
+        C += (m * (vG.real * aG.real + vG.imag * aG.imag)
+              + inertia * kin.omega[:, b] * kin.alpha[:, b])
+        Qg += m * (g.real * vG.real + g.imag * vG.imag)
+        V -= m * (g.real * rG.real + g.imag * rG.imag)
+    Ql = np.zeros(N)
+    for ld in mech.loads:
+        b = lk.body_index(ld.body)
+        F = complex(*ld.force)
+        vP = (kin.point_c(b, ld.point)[1] if ld.point is not None else kin.com_c(b)[1])
+        Ql += F.real * vP.real + F.imag * vP.imag + ld.torque * kin.omega[:, b]
+    fm = mech.motion
+    jidx = {j.name: k for k, j in enumerate(mech.joints)}
+    Qs, Qd, Qm = np.zeros(N), np.zeros(N), np.zeros(N)
+    for s in (fm.springs if fm else ()):
+        if isinstance(s, PointSpring):
+            L, L_q, _ = _point_pair(kin, s)
+            ext = L - s.free_length
+        else:
+            k = jidx[s.joint]
+            ext, L_q = x[:, k] - s.free_value, co.x_q[:, k]
+        Qs -= s.stiffness * ext * L_q
+        V += 0.5 * s.stiffness * ext ** 2
+    for d in (fm.dampers if fm else ()):
+        L_q = (_point_pair(kin, d)[1] if isinstance(d, PointDamper)
+               else co.x_q[:, jidx[d.joint]])
+        Qd -= d.coefficient * L_q ** 2 * qd
+    for mo in (fm.motors if fm else ()):
+        Qm += np.array([mo.at(ti) for ti in np.broadcast_to(t, (N,))]) * co.x_q[:, jidx[mo.joint]]
+    T = 0.5 * M * qd ** 2
+    return Terms(M, C, Qg + Ql + Qs + Qd + Qm, Qm * qd, Ql * qd, -Qd * qd, V, T)
+
+
+def element_forces(lk, co: Coefficients, x: np.ndarray, qd: float, t: float):
+    """The springs', dampers' and motors' actions at one state as
+    :class:`analytic.mechanism.Load` objects (force at a named point, couple), for the
+    solver's kinetostatics; also the motors' efforts by joint."""
+    from ..mechanism import Load
+    mech, kin = lk.mech, co.kin
+    fm = mech.motion
+    loads, efforts = [], {}
+    jidx = {j.name: k for k, j in enumerate(mech.joints)}
+    joint_effort: dict[str, float] = {}
+    for el in fm.springs + fm.dampers:
+        if isinstance(el, PointSpring | PointDamper):
+            L, L_q, u = _point_pair(kin, el)
+            tension = (el.stiffness * (L[0] - el.free_length) if isinstance(el, PointSpring)
+                       else el.coefficient * L_q[0] * qd)
+            F = tension * u[0]  # pulls b towards a, a towards b
+            loads.append(Load(el.body_a, el.point_a, (F.real, F.imag)))
+            loads.append(Load(el.body_b, el.point_b, (-F.real, -F.imag)))
+        else:
+            k = jidx[el.joint]
+            e = (-el.stiffness * (x[0, k] - el.free_value) if isinstance(el, JointSpring)
+                 else -el.coefficient * co.x_q[0, k] * qd)
+            joint_effort[el.joint] = joint_effort.get(el.joint, 0.0) + e
+    for mo in fm.motors:
+        e = mo.at(t)
+        efforts[mo.joint] = efforts.get(mo.joint, 0.0) + e
+        joint_effort[mo.joint] = joint_effort.get(mo.joint, 0.0) + e
+    for name, e in joint_effort.items():
+        loads += _joint_effort_loads(lk, kin, mech.joint(name), e)
+    return [ld for ld in loads if ld.body != mech.ground], efforts
+
+
+def _joint_effort_loads(lk, kin, jt, e: float):
+    """An effort on a joint's coordinate as loads: a couple on body_b and the opposite on
+    body_a (revolute), or a force along the line on the slider point and the opposite
+    on the guide at the same world point (prismatic)."""
+    from ..mechanism import Load
+    if isinstance(jt, Revolute):
+        return [Load(jt.body_b, None, (0.0, 0.0), e), Load(jt.body_a, None, (0.0, 0.0), -e)]
+    gb = lk.body_index(jt.guide)
+    u = kin.E[0, gb] * complex(math.cos(jt.direction), math.sin(jt.direction))
+    P = kin.point_c(jt.slider, jt.point)[0][0]
+    O = kin.point_c(jt.guide, jt.origin)[0][0]
+    F = e * u
+    r = P - O
+    return [Load(jt.slider, jt.point, (F.real, F.imag)),
+            Load(jt.guide, jt.origin, (-F.real, -F.imag), -(r.real * F.imag - r.imag * F.real))]

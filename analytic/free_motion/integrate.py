@@ -1,0 +1,262 @@
+"""Integrating the equation of motion, switching coordinates where one fails.
+
+The state is ``y = (q, q', W_motor, W_loads, D)``: the integrated joint coordinate, its
+rate, the work done so far by the motors and by the constant loads, and the energy the
+dampers dissipated (J).  SciPy's DOP853 (explicit Runge-Kutta of order 8 with dense
+output of order 7) integrates it to :data:`RTOL`.
+
+Coordinate partitioning (Wehage and Haug): the integrated coordinate is the driver
+joint of the :class:`analytic.Linkage` the segment uses.  When the rate of another
+joint's coordinate, per unit rate of the integrated one (its kinematic coefficient,
+angles in rad, displacements in mechanism sizes), exceeds :data:`SWITCH_RATIO`, the
+integrated coordinate is near a limit position (its coefficients go to infinity there)
+and the joint with the largest coefficient takes over: a new linkage driven at that
+joint, assembled on the branch nearest the current pose, continues from the same state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..errors import LinkageError
+from ..kinematics import Linkage
+from ..mechanism import Assembly, Driver, Revolute, mechanism_size
+from .dynamics import check_masses, coefficients, terms, unwrap_to
+
+#: Relative tolerance of DOP853 (a few units of double rounding above 1e-16 so that
+#: the step-size control stays meaningful; the runs reach ~1e-12, see the tests).
+RTOL = 1e-13
+#: A coordinate is replaced when another moves this many times faster (per unit of its
+#: rate); its coefficients are then still finite (a factor 4 from the best), far from
+#: the limit position where they blow up.
+SWITCH_RATIO = 4.0
+#: Most coordinate switches in one run: a runaway guard (A rocker swinging for 1e4 s
+#: with a 0.1 s period switches 4e5 times; more means something is wrong).
+MAX_SWITCHES = 1_000_000
+#: Agreement of the pose after a switch with the pose before (fraction of the size).
+SWITCH_POSE = 1e-9
+
+
+@dataclass
+class Segment:
+    """One stretch of the run integrated in one joint's coordinate."""
+
+    lk: Linkage
+    joint: str
+    t0: float
+    t1: float
+    sol: object          # scipy OdeSolution: y(t) = (q, q', W_motor, W_loads, D)
+    ts: np.ndarray       # the integrator's step times
+    xs: np.ndarray       # (len(ts), J) unwrapped joint coordinates at those times
+    nfev: int
+
+
+class NoInertiaError(LinkageError):
+    """The generalized inertia of the moving coordinate is zero or negative."""
+
+
+class _System:
+    """The right-hand side of one segment, with the last evaluation cached (the
+    switching event asks for the same state as the step)."""
+
+    def __init__(self, lk: Linkage, x_ref: np.ndarray, scale: np.ndarray):
+        self.lk = lk
+        self.rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
+        self.last = np.array(x_ref, float)
+        self.k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
+        self.scale = scale / scale[self.k]
+        self._key = None
+        self.nfev = 0
+
+    def coeffs(self, q: float):
+        if self._key != q:
+            co = coefficients(self.lk, q)
+            x = unwrap_to(co.x[0], self.last, self.rev)
+            self._key, self._co, self._x = q, co, x
+            self.last = x
+        return self._co, self._x
+
+    def __call__(self, t, y):
+        self.nfev += 1
+        co, x = self.coeffs(float(y[0]))
+        tm = terms(self.lk, co, x[None], y[1], t)
+        M = float(tm.M[0])
+        if not M > 0:
+            raise NoInertiaError(_no_inertia(self.lk, float(y[0])))
+        qdd = (float(tm.Q[0]) - float(tm.C[0]) * y[1] ** 2) / M
+        return [y[1], qdd, float(tm.motor_power[0]), float(tm.load_power[0]),
+                float(tm.damper_power[0])]
+
+    def ratios(self, q: float) -> np.ndarray:
+        co, _ = self.coeffs(q)
+        return np.abs(co.x_q[0]) * self.scale
+
+    def switch(self, t, y):
+        return float(np.max(self.ratios(float(y[0])))) - SWITCH_RATIO
+
+    switch.terminal = True
+    switch.direction = 1.0
+
+
+def _no_inertia(lk, q: float) -> str:
+    massless = [b.name for b in lk.mech.moving_bodies if not b.mass]
+    return (f"mechanism {lk.mech.name!r}: no inertia in the moving coordinate at joint "
+            f"{lk.mech.driver.joint!r} = {q:.6g}: the generalized inertia M(q) is 0 (massless "
+            f"bodies: {massless}); free motion needs inertia along the motion")
+
+
+def joint_scale(mech) -> np.ndarray:
+    """Per joint: 1 for an angle (rad), 1/size for a displacement (m), so coefficients
+    compare in rad per rad."""
+    size = mechanism_size(mech.bodies) or 1.0
+    return np.array([1.0 if isinstance(j, Revolute) else 1.0 / size for j in mech.joints])
+
+
+def rebased(mech, joint: str, value: float, kin) -> object:
+    """``mech`` driven at ``joint`` from ``value``, assembled on the branch of the pose
+    in ``kin`` (sample 0): every point and body angle given as a hint."""
+    pts, angs = {}, {}
+    for b, body in enumerate(mech.bodies):
+        if body.name == mech.ground:
+            continue
+        angs[body.name] = float(kin.theta[0, b])
+        for p in body.points:
+            z = kin.point_c(b, p)[0][0]
+            pts[f"{body.name}.{p}"] = (float(z.real), float(z.imag))
+    return replace(mech, driver=Driver(joint, float(value), 0.0), assembly=Assembly(pts, angs))
+
+
+def _pose_gap(kin_a, kin_b, size: float) -> float:
+    return float(np.max(np.abs(kin_a.zO[0] - kin_b.zO[0]))) / size
+
+
+def integrate(mech, duration: float | None = None, rtol: float = RTOL,
+              method: str = "DOP853") -> tuple[list[Segment], list[tuple[float, str, str]]]:
+    """Integrate ``mech.motion`` over ``duration`` (s; default the description's).
+
+    Returns the segments and the coordinate switches ``(t, from joint, to joint)``.
+    """
+    check_masses(mech)
+    fm = mech.motion
+    T = fm.duration if duration is None else float(duration)
+    size = mechanism_size(mech.bodies) or 1.0
+    scale = joint_scale(mech)
+    m0 = replace(mech, driver=Driver(fm.joint, fm.value, fm.rate))
+    lk = Linkage(m0)
+    co = coefficients(lk, fm.value)
+    x0 = co.x[0]
+    y = np.array([fm.value, fm.rate, 0.0, 0.0, 0.0])
+    tm0 = terms(lk, co, x0[None], fm.rate, 0.0)
+    if not tm0.M[0] > 0:
+        raise NoInertiaError(_no_inertia(lk, fm.value))
+    e_scale = _energy_scale(mech, tm0, size)
+    t, segs, switches = 0.0, [], []
+    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
+    closed = _closed_form_joints(mech)
+    x_ref = x0
+    while True:
+        sysm = _System(lk, x_ref, scale)
+        r = sysm.ratios(float(y[0]))
+        if np.max(r) > SWITCH_RATIO:  # the coordinate fails here: switch before moving
+            lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+            continue
+        qs = (1.0 if isinstance(lk.mech.driver_joint, Revolute) else size)
+        co_s, x_s = sysm.coeffs(float(y[0]))
+        M_s = float(terms(lk, co_s, x_s[None], y[1], t).M[0])
+        rate_scale = max(abs(y[1]), math.sqrt(2 * e_scale / M_s))
+        atol = rtol * np.array([qs, rate_scale, e_scale, e_scale, e_scale])
+        # a motor table's kinks end a segment: a high-order step across one loses its order
+        t_end = next((b for b in stops if b > t), T)
+        sol = solve_ivp(sysm, (t, t_end), y, method=method, rtol=rtol, atol=atol,
+                        dense_output=True, events=[sysm.switch])
+        if sol.status < 0:
+            raise LinkageError(f"mechanism {mech.name!r}: the integration failed at t = "
+                               f"{sol.t[-1]:.6g} s: {sol.message}")
+        xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)
+        segs.append(Segment(lk, lk.mech.driver.joint, t, float(sol.t[-1]), sol.sol, sol.t,
+                            xs, sysm.nfev))
+        if sol.status == 0 and t_end >= T:
+            return segs, switches
+        if sol.status == 0:  # at a table breakpoint: go on in the same coordinate
+            t, y, x_ref = t_end, sol.y[:, -1].copy(), xs[-1]
+            continue
+        if len(switches) >= MAX_SWITCHES:
+            raise LinkageError(f"mechanism {mech.name!r}: more than {MAX_SWITCHES} "
+                               "coordinate switches")
+        t, y, x_ref = float(sol.t[-1]), sol.y[:, -1].copy(), xs[-1]
+        sysm.last = x_ref
+        r = sysm.ratios(float(y[0]))
+        lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+
+
+def _closed_form_joints(mech) -> np.ndarray:
+    """Per joint: whether the solver has a closed form with that joint driven (else it
+    solves the positions by Newton's method, to its loop tolerance only)."""
+    from ..topology import build_topology
+    out = []
+    for j in mech.joints:
+        try:
+            topo = build_topology(replace(mech, driver=Driver(j.name, 0.0, 0.0)))
+            out.append(topo.plan is not None)
+        except LinkageError:
+            out.append(False)
+    return np.array(out)
+
+
+def _pick(r: np.ndarray, closed: np.ndarray) -> int:
+    """The new coordinate: among the joints moving at least half as fast as the fastest
+    (relative to it every other coefficient is then at most 2 < SWITCH_RATIO, so it
+    does not switch back at once), a closed-form one if any, the fastest of them."""
+    ok = r >= 0.5 * np.max(r)
+    pref = ok & closed
+    pool = pref if pref.any() else ok
+    return int(np.argmax(np.where(pool, r, -1.0)))
+
+
+def _switch(lk, sysm, y, j: int, size, switches, t):
+    """Continue from state ``y`` in joint ``j``'s coordinate."""
+    co, x = sysm.coeffs(float(y[0]))
+    jn = lk.mech.joints[j].name
+    new = Linkage(rebased(lk.mech, jn, x[j], co.kin))
+    co2 = coefficients(new, x[j])
+    gap = _pose_gap(co.kin, co2.kin, size)
+    if not gap <= SWITCH_POSE:
+        raise LinkageError(f"mechanism {lk.mech.name!r}: switching the coordinate from joint "
+                           f"{lk.mech.driver.joint!r} to {jn!r} at t = {t:.6g} s moved the "
+                           f"pose by {gap:.3g} of the size (branch lost)")
+    switches.append((t, lk.mech.driver.joint, jn))
+    y2 = y.copy()
+    y2[0], y2[1] = x[j], co.x_q[0, j] * y[1]
+    return new, y2, x
+
+
+def _unwrapped_track(lk, ts, qs, x_ref) -> np.ndarray:
+    """Joint coordinates at the step times, each revolute angle continued from the last."""
+    co = coefficients(lk, qs)
+    rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
+    out = np.empty_like(co.x)
+    last = np.asarray(x_ref, float)
+    for i in range(len(ts)):
+        last = unwrap_to(co.x[i], last, rev)
+        out[i] = last
+    return out
+
+
+def _energy_scale(mech, tm0, size: float) -> float:
+    """A scale of the run's energies (J): the initial kinetic energy, gravity's work over
+    one size of height, the springs' energy at one size of stretch, a motor's work over
+    one radian or size, each load's work over one size."""
+    g = math.hypot(*mech.gravity)
+    e = float(tm0.kinetic[0]) + sum((b.mass or 0.0) * g * size for b in mech.moving_bodies)
+    fm = mech.motion
+    for s in fm.springs:
+        e += s.stiffness * (size if hasattr(s, "body_a") else 1.0) ** 2
+    for mo in fm.motors:
+        e += max(abs(mo.effort), *(abs(v) for v in mo.efforts)) if mo.efforts else abs(mo.effort)
+    for ld in mech.loads:
+        e += math.hypot(*ld.force) * size + abs(ld.torque)
+    return e or 1.0

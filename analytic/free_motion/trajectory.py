@@ -1,0 +1,228 @@
+"""The free trajectory: a typed object sampled at any time, and its events.
+
+:class:`FreeTrajectory` holds the integrated segments (:mod:`.integrate`) and answers,
+at any times in ``[0, duration]``, with :class:`FreeSamples`: every joint's coordinate,
+rate and acceleration (whatever coordinate was integrated), the solver's
+:class:`analytic.Kinematics` (bodies, points, sliders) and kinetostatics (joint
+reactions, with the springs, dampers and motors applied as loads), the motors' efforts
+and power, and the energies.  Events: coordinate switches, singular positions crossed
+(the loop Jacobian's normalised determinant changes sign), limit positions of a joint
+(its coefficient changes sign: the joint reverses while the motion goes on), and
+turning points of the motion (the integrated rate changes sign).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..kinetostatics import solve_forces
+from ..mechanism import Revolute
+from .dynamics import coefficients, element_forces, terms, unwrap_to
+from .integrate import Segment
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something met along the run: ``kind`` is ``switch``, ``singular``, ``limit`` or
+    ``turn``; ``t`` s; ``joint`` the joint concerned; ``detail`` in words."""
+
+    t: float
+    kind: str
+    joint: str
+    detail: str
+
+
+@dataclass
+class FreeSamples:
+    """The trajectory at N times (SI, world frame; see :mod:`analytic.mechanism`).
+
+    ``x, xd, xdd`` ``(N, J)``: joint coordinates (rad: ``theta_b - theta_a``
+    continuous over turns; m: slider displacement) and their rates, in the order of
+    ``joints``.  ``kinematics`` and ``forces``: the solver's, one per segment met (use
+    :meth:`body_angles`, :meth:`point`).  ``kinetic, potential`` J; ``work_motor``,
+    ``work_loads``, ``dissipated`` J since t = 0; ``energy_residual`` J: ``kinetic +
+    potential - E0 - work_motor - work_loads + dissipated`` (zero for the exact motion).
+    ``motor_effort`` dict joint -> (N,) N m or N; ``motor_power`` (N,) W.
+    ``reactions`` dict joint -> (N, 2) N (by body_a on body_b); ``drive_residual``
+    (N,): the effort the kinetostatics still asks at the integrated joint once every
+    force element is applied (zero for the exact motion; N m or N).
+    """
+
+    t: np.ndarray
+    joints: list[str]
+    coordinate: list[str]
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    theta: np.ndarray
+    omega: np.ndarray
+    alpha: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    work_motor: np.ndarray
+    work_loads: np.ndarray
+    dissipated: np.ndarray
+    energy_residual: np.ndarray
+    motor_effort: dict[str, np.ndarray]
+    motor_power: np.ndarray
+    reactions: dict[str, np.ndarray] = field(default_factory=dict)
+    drive_residual: np.ndarray | None = None
+    points: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def joint(self, name: str) -> np.ndarray:
+        """``(N, 3)``: a joint's coordinate, rate and acceleration."""
+        k = self.joints.index(name)
+        return np.stack([self.x[:, k], self.xd[:, k], self.xdd[:, k]], axis=1)
+
+
+class FreeTrajectory:
+    """A released linkage's motion, to the integrator's tolerance, at any time."""
+
+    def __init__(self, mech, segments: list[Segment], switches, rtol: float, method: str):
+        self.mech = mech
+        self.segments = segments
+        self.switches = switches
+        self.rtol = rtol
+        self.method = method
+        self.duration = segments[-1].t1
+        self.joints = [j.name for j in mech.joints]
+        self._rev = np.array([isinstance(j, Revolute) for j in mech.joints])
+        s0 = self.at(np.array([0.0]), forces=False)
+        self.e0 = float(s0.kinetic[0] + s0.potential[0])
+
+    @property
+    def nfev(self) -> int:
+        return sum(s.nfev for s in self.segments)
+
+    def _segment_of(self, t: np.ndarray) -> np.ndarray:
+        starts = np.array([s.t0 for s in self.segments])
+        return np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
+
+    def state(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """``(N, 5)`` integrated states and the segment index of each time."""
+        t = np.atleast_1d(np.asarray(t, float))
+        si = self._segment_of(t)
+        y = np.empty((len(t), 5))
+        for k in np.unique(si):
+            m = si == k
+            y[m] = self.segments[k].sol(t[m]).T
+        return y, si
+
+    def at(self, times, forces: bool = True) -> FreeSamples:
+        """The trajectory at ``times`` (s, within [0, duration])."""
+        t = np.atleast_1d(np.asarray(times, float))
+        if t.size and (t.min() < 0 or t.max() > self.duration * (1 + 1e-12)):
+            raise ValueError(f"times must lie in [0, {self.duration:g}] s")
+        y, si = self.state(t)
+        N, J = len(t), len(self.joints)
+        out = {k: np.empty((N, J)) for k in ("x", "xd", "xdd")}
+        body = {k: np.empty((N, len(self.mech.bodies))) for k in ("theta", "omega", "alpha")}
+        en = {k: np.empty(N) for k in ("kinetic", "potential", "motor_power")}
+        reactions = {j: np.full((N, 2), np.nan) for j in self.joints}
+        drive = np.full(N, np.nan)
+        efforts = {mo.joint: np.empty(N) for mo in self._motors()}
+        for k in np.unique(si):
+            idx = np.flatnonzero(si == k)
+            self._fill(self.segments[k], idx, t[idx], y[idx], out, body, en, efforts,
+                       reactions if forces else None, drive)
+        return FreeSamples(
+            t, self.joints, [self.segments[k].joint for k in si], out["x"], out["xd"],
+            out["xdd"], body["theta"], body["omega"], body["alpha"], en["kinetic"],
+            en["potential"], y[:, 2], y[:, 3], y[:, 4],
+            en["kinetic"] + en["potential"] - getattr(self, "e0", 0.0) - y[:, 2] - y[:, 3]
+            + y[:, 4], efforts, en["motor_power"], reactions if forces else {},
+            drive if forces else None)
+
+    def _motors(self):
+        return self.mech.motion.motors if self.mech.motion else ()
+
+    def _fill(self, seg: Segment, idx, t, y, out, body, en, efforts, reactions, drive):
+        lk = seg.lk
+        co = coefficients(lk, y[:, 0])
+        # revolute angles: whole turns from the step nearest each time
+        near = np.clip(np.searchsorted(seg.ts, t), 0, len(seg.ts) - 1)
+        x = unwrap_to(co.x, seg.xs[near], self._rev)
+        qd = y[:, 1]
+        tm = terms(lk, co, x, qd, t)
+        qdd = (tm.Q - tm.C * qd ** 2) / tm.M
+        out["x"][idx] = x
+        out["xd"][idx] = co.x_q * qd[:, None]
+        out["xdd"][idx] = co.x_q * qdd[:, None] + co.x_qq * (qd ** 2)[:, None]
+        kin = lk.kinematics(y[:, 0], qd, qdd, on_singular="flag")
+        body["theta"][idx], body["omega"][idx], body["alpha"][idx] = (
+            kin.theta, kin.omega, kin.alpha)
+        en["kinetic"][idx], en["potential"][idx] = tm.kinetic, tm.potential
+        en["motor_power"][idx] = tm.motor_power
+        for mo in self._motors():
+            efforts[mo.joint][idx] = [mo.at(ti) for ti in t]
+        if reactions is None:
+            return
+        for i, n in enumerate(idx):
+            self._forces_at(lk, co, x, i, n, y[i], t[i], reactions, drive)
+
+    def _forces_at(self, lk, co, x, i, n, yi, ti, reactions, drive):
+        """The solver's kinetostatics at one sample, force elements applied as loads."""
+        from dataclasses import replace
+        co1 = coefficients(lk, float(yi[0]))
+        loads, _ = element_forces(lk, co1, x[i:i + 1], float(yi[1]), float(ti))
+        tm = terms(lk, co1, x[i:i + 1], yi[1], ti)
+        qdd = float((tm.Q[0] - tm.C[0] * yi[1] ** 2) / tm.M[0])
+        kin = lk.kinematics(np.array([yi[0]]), float(yi[1]), qdd, on_singular="flag")
+        shadow = _Shadow(lk, replace(lk.mech, loads=lk.mech.loads + tuple(loads)))
+        frc = solve_forces(shadow, kin)
+        for j, f in frc.joint_force.items():
+            reactions[j][n] = f[0]
+        drive[n] = frc.effort[0]
+
+
+class _Shadow:
+    """A linkage seen by :func:`analytic.kinetostatics.solve_forces` with other loads."""
+
+    def __init__(self, lk, mech):
+        self.mech, self.topo, self._lk = mech, lk.topo, lk
+
+    def __getattr__(self, name):
+        return getattr(self._lk, name)
+
+
+def find_events(traj: FreeTrajectory) -> list[Event]:
+    """Switches, singular crossings, joint limit positions and turning points, located
+    to ~1e-13 s by root-finding on the dense output between the integrator's steps."""
+    events = [Event(t, "switch", b, f"integrated coordinate {a!r} -> {b!r}")
+              for t, a, b in traj.switches]
+    names = traj.joints
+    for seg in traj.segments:
+        ts = seg.ts
+        if len(ts) < 2:
+            continue
+        q = seg.sol(ts)
+        co = coefficients(seg.lk, q[0])
+        det = co.kin.determinant
+        k_int = names.index(seg.joint)
+
+        def g_det(t, seg=seg):
+            return float(coefficients(seg.lk, seg.sol(t)[0]).kin.determinant[0])
+
+        for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
+            tc = brentq(g_det, ts[i], ts[i + 1], xtol=1e-14)
+            events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
+                                "(dead centre or change point) crossed"))
+        for j in range(len(names)):
+            if j == k_int:
+                continue
+            c = co.x_q[:, j]
+            for i in np.flatnonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0):
+                def g(t, seg=seg, j=j):
+                    return float(coefficients(seg.lk, seg.sol(t)[0]).x_q[0, j])
+                tc = brentq(g, ts[i], ts[i + 1], xtol=1e-14)
+                events.append(Event(tc, "limit", names[j], f"joint {names[j]!r} reverses "
+                                    "(limit position of its coordinate)"))
+        qd = q[1]
+        for i in np.flatnonzero(np.sign(qd[:-1]) * np.sign(qd[1:]) < 0):
+            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1], xtol=1e-14)
+            events.append(Event(tc, "turn", seg.joint, "the motion reverses (rate of "
+                                f"{seg.joint!r} is zero)"))
+    return sorted(events, key=lambda e: e.t)

@@ -1,0 +1,208 @@
+"""Free-motion description: the initial state, duration and force elements of a released
+linkage (``[motion]``, ``[[springs]]``, ``[[dampers]]``, ``[[motors]]`` in the TOML).
+
+A prescribed run reads ``[driver]``; a free run (``xval simulate``,
+:func:`analytic.free_motion.simulate`) reads :class:`FreeMotion` and ignores the
+driver's rates.  All values here are SI (rad, m, s, N, N m).
+
+Sign conventions (those of :mod:`analytic.mechanism`):
+
+* A joint's coordinate is the angle of ``body_b`` relative to ``body_a`` (rad,
+  counter-clockwise) for a revolute joint, the displacement ``s`` of a prismatic one.
+* A linear spring or damper between point ``a`` and point ``b`` pulls them together
+  when its force ``k (L - L0) + c L'`` is positive (tension).
+* A joint spring or damper acts on the joint's coordinate: its effort on ``body_b``
+  (slider) is ``-k (x - x0) - c x'``, the opposite on ``body_a`` (guide).
+* A motor's effort (N m or N) acts on ``body_b`` (slider) along the coordinate, the
+  reaction on ``body_a`` (guide), as the driver's effort does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import DescriptionError
+
+#: Longest free-motion duration, s (about 3 hours of simulated time: far beyond any
+#: benchmark, short enough that a 1e-12 integration still finishes).
+MAX_DURATION = 1e4
+#: Most output samples of a free trajectory (a table of 8 bytes x ~100 columns x 1e6
+#: rows is ~1 GB).
+MAX_SAMPLES = 1_000_000
+#: Largest stiffness (N/m, N m/rad) and damping coefficient (N s/m, N m s/rad).
+MAX_STIFFNESS = 1e12
+#: Largest motor effort (N m or N), as a load.
+MAX_EFFORT = 1e12
+#: Most rows of a motor table.
+MAX_TABLE = 100_000
+
+
+@dataclass(frozen=True)
+class PointSpring:
+    """A linear spring from ``point_a`` of ``body_a`` to ``point_b`` of ``body_b``:
+    stiffness N/m, free length m."""
+
+    body_a: str
+    point_a: str
+    body_b: str
+    point_b: str
+    stiffness: float
+    free_length: float
+
+
+@dataclass(frozen=True)
+class JointSpring:
+    """A spring on a joint's coordinate: torsional (revolute: N m/rad, free angle rad) or
+    axial (prismatic: N/m, free displacement m)."""
+
+    joint: str
+    stiffness: float
+    free_value: float
+
+
+@dataclass(frozen=True)
+class PointDamper:
+    """A linear viscous damper between two body points, along their line: N s/m."""
+
+    body_a: str
+    point_a: str
+    body_b: str
+    point_b: str
+    coefficient: float
+
+
+@dataclass(frozen=True)
+class JointDamper:
+    """A viscous damper on a joint's coordinate: N m s/rad (revolute) or N s/m."""
+
+    joint: str
+    coefficient: float
+
+
+@dataclass(frozen=True)
+class Motor:
+    """An effort on a joint's coordinate: constant (``times`` empty) or a table
+    ``(times s, efforts)`` interpolated linearly, times strictly increasing."""
+
+    joint: str
+    effort: float = 0.0
+    times: tuple[float, ...] = ()
+    efforts: tuple[float, ...] = ()
+
+    def at(self, t: float) -> float:
+        """The effort at time ``t`` (s): N m or N."""
+        if not self.times:
+            return self.effort
+        import numpy as np  # only here: the description needs no numpy otherwise
+        return float(np.interp(t, self.times, self.efforts))
+
+
+@dataclass(frozen=True)
+class FreeMotion:
+    """How a linkage is released: the initial value (rad or m) and rate of ``joint``'s
+    coordinate, the duration (s), the default number of output samples, and the force
+    elements (besides the mechanism's gravity and constant loads)."""
+
+    joint: str
+    value: float
+    rate: float
+    duration: float
+    samples: int = 201
+    springs: tuple[PointSpring | JointSpring, ...] = ()
+    dampers: tuple[PointDamper | JointDamper, ...] = ()
+    motors: tuple[Motor, ...] = ()
+
+
+def _w(mech, what: str) -> str:
+    return f"{mech.source}: {what}" if mech.source else what
+
+
+def _nonneg(x: float, limit: float, what: str, unit: str, where: str) -> None:
+    if not (isinstance(x, int | float) and math.isfinite(x)):
+        raise DescriptionError(f"{what} must be a finite number, got {x!r}", where)
+    if x < 0:
+        raise DescriptionError(f"{what} must be >= 0 {unit}, got {x:g}", where)
+    if x > limit:
+        raise DescriptionError(f"{what} = {x:g} {unit} is out of range: the accepted range "
+                               f"is 0 to {limit:g} {unit}", where)
+
+
+def _points(mech, el, where: str) -> None:
+    bodies = {b.name: b for b in mech.bodies}
+    for bn, pn in ((el.body_a, el.point_a), (el.body_b, el.point_b)):
+        if bn not in bodies:
+            raise DescriptionError(f"unknown body {bn!r}; bodies are {list(bodies)}", where)
+        if pn not in bodies[bn].points:
+            raise DescriptionError(f"body {bn!r} has no point {pn!r}; it has "
+                                   f"{sorted(bodies[bn].points)}", where)
+    if el.body_a == el.body_b:
+        raise DescriptionError(f"attached to body {el.body_a!r} at both ends: a force "
+                               "element must join two different bodies", where)
+
+
+def _joint(mech, name: str, where: str):
+    for j in mech.joints:
+        if j.name == name:
+            return j
+    raise DescriptionError(f"unknown joint {name!r}; joints are "
+                           f"{[j.name for j in mech.joints]}", where)
+
+
+def check_motion(mech) -> None:
+    """Validate ``mech.motion`` against the mechanism; raise :class:`DescriptionError`
+    naming the file and the element (``spring 1``, ``motor 0``, ``[motion]``)."""
+    fm: FreeMotion = mech.motion
+    mw = _w(mech, "[motion]")
+    _joint(mech, fm.joint, mw)
+    for k, x in (("value", fm.value), ("rate", fm.rate)):
+        if not (isinstance(x, int | float) and math.isfinite(x)):
+            raise DescriptionError(f"{k} must be a finite number, got {x!r}", mw)
+    if not (isinstance(fm.duration, int | float) and 0 < fm.duration <= MAX_DURATION):
+        raise DescriptionError(f"duration = {fm.duration!r} s is out of range: the accepted "
+                               f"range is 0 < duration <= {MAX_DURATION:g} s", mw)
+    if isinstance(fm.samples, bool) or not isinstance(fm.samples, int) \
+            or not 2 <= fm.samples <= MAX_SAMPLES:
+        raise DescriptionError(f"samples = {fm.samples!r} is out of range: the accepted range "
+                               f"is 2 to {MAX_SAMPLES}", mw)
+    for i, s in enumerate(fm.springs):
+        sw = _w(mech, f"spring {i}")
+        if isinstance(s, PointSpring):
+            _points(mech, s, sw)
+            _nonneg(s.free_length, 1e4, "free_length", "m", sw)
+        else:
+            _joint(mech, s.joint, sw)
+        _nonneg(s.stiffness, MAX_STIFFNESS, "stiffness", "N/m or N m/rad", sw)
+    for i, d in enumerate(fm.dampers):
+        dw = _w(mech, f"damper {i}")
+        if isinstance(d, PointDamper):
+            _points(mech, d, dw)
+        else:
+            _joint(mech, d.joint, dw)
+        _nonneg(d.coefficient, MAX_STIFFNESS, "coefficient", "N s/m or N m s/rad", dw)
+    for i, m in enumerate(fm.motors):
+        _check_motor(mech, m, fm.duration, _w(mech, f"motor {i}"))
+
+
+def _check_motor(mech, m: Motor, duration: float, where: str) -> None:
+    _joint(mech, m.joint, where)
+    if not m.times:
+        if not (math.isfinite(m.effort) and abs(m.effort) <= MAX_EFFORT):
+            raise DescriptionError(f"effort = {m.effort:g} is out of range: the accepted range "
+                                   f"is |effort| <= {MAX_EFFORT:g} N m or N", where)
+        return
+    if len(m.times) != len(m.efforts) or len(m.times) < 2:
+        raise DescriptionError("a motor table needs at least 2 rows [time, effort]", where)
+    if len(m.times) > MAX_TABLE:
+        raise DescriptionError(f"a motor table has at most {MAX_TABLE} rows, got "
+                               f"{len(m.times)}", where)
+    for k, (t, e) in enumerate(zip(m.times, m.efforts, strict=True)):
+        if not (math.isfinite(t) and math.isfinite(e) and abs(e) <= MAX_EFFORT):
+            raise DescriptionError(f"table row {k} [{t!r}, {e!r}]: time and effort must be "
+                                   f"finite, |effort| <= {MAX_EFFORT:g}", where)
+        if k and not t > m.times[k - 1]:
+            raise DescriptionError(f"table times must be strictly increasing: row {k} has "
+                                   f"t = {t:g} s after t = {m.times[k - 1]:g} s", where)
+    if m.times[0] > 0 or m.times[-1] < duration:
+        raise DescriptionError(f"the table covers t = {m.times[0]:g} to {m.times[-1]:g} s; "
+                               f"it must cover the run, 0 to {duration:g} s", where)

@@ -1,0 +1,145 @@
+"""``xval simulate``: bad free-motion input gets one line naming the file and the element,
+status 2; a good run prints its table and events, status 0."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from analytic.cases import case_path
+from tests.reports.cli_run import run
+
+MOTION = """
+[motion]
+joint = "O2"
+value = 60.0
+rate = 0.0
+duration = 1.0
+
+[[springs]]
+bodies = ["coupler", "ground"]
+points = ["B", "O2"]
+stiffness = 30.0
+free_length = 250.0
+
+[[dampers]]
+joint = "O4"
+coefficient = 0.01
+
+[[motors]]
+joint = "O2"
+table = [[0.0, 0.0], [1.0, 0.3]]
+"""
+
+
+def _seed() -> str:
+    return case_path("seed-four-bar").read_text().replace("gravity = [0.0, 0.0]",
+                                                           "gravity = [0.0, -9.81]")
+
+
+def edit(old: str, new: str):
+    def f(text: str) -> str:
+        assert old in text, old
+        return text.replace(old, new, 1)
+    return f
+
+
+BAD = [
+    ("spring-one-body", edit('bodies = ["coupler", "ground"]\npoints = ["B", "O2"]',
+                             'bodies = ["coupler", "coupler"]\npoints = ["A", "B"]'),
+     r"spring 0: attached to body 'coupler' at both ends"),
+    ("negative-stiffness", edit("stiffness = 30.0", "stiffness = -30.0"),
+     r"spring 0: stiffness must be >= 0"),
+    ("negative-damping", edit("coefficient = 0.01", "coefficient = -0.01"),
+     r"damper 0: coefficient must be >= 0"),
+    ("table-not-increasing", edit("[[0.0, 0.0], [1.0, 0.3]]",
+                                  "[[0.0, 0.0], [0.5, 1.0], [0.5, 2.0], [1.0, 0.3]]"),
+     r"motor 0: table times must be strictly increasing: row 2"),
+    ("table-ends-early", edit("[[0.0, 0.0], [1.0, 0.3]]", "[[0.0, 0.0], [0.5, 0.3]]"),
+     r"motor 0: the table covers t = 0 to 0.5 s; it must cover the run, 0 to 1 s"),
+    ("table-not-pairs", edit("[[0.0, 0.0], [1.0, 0.3]]", "[0.0, 1.0]"),
+     r"motor 0: table must be an array of \[time s, effort\] pairs"),
+    ("motor-effort-and-table", edit('table = [[0.0, 0.0], [1.0, 0.3]]',
+                                    'table = [[0.0, 0.0], [1.0, 0.3]]\neffort = 1.0'),
+     r"motor 0: a motor needs exactly one of effort"),
+    ("duration-huge", edit("duration = 1.0", "duration = 1e5"),
+     r"\[motion\]: duration = 100000 s is out of range"),
+    ("duration-zero", edit("duration = 1.0", "duration = 0.0"),
+     r"\[motion\]: duration = 0.0 s is out of range"),
+    ("samples-huge", edit("duration = 1.0", "duration = 1.0\nsamples = 2000000"),
+     r"\[motion\]: samples = 2000000 is out of range"),
+    ("spring-unknown-body", edit('["coupler", "ground"]', '["nope", "ground"]'),
+     r"spring 0: unknown body 'nope'"),
+    ("spring-unknown-point", edit('points = ["B", "O2"]', 'points = ["Z", "O2"]'),
+     r"spring 0: body 'coupler' has no point 'Z'"),
+    ("motion-unknown-joint", edit('[motion]\njoint = "O2"', '[motion]\njoint = "Q"'),
+     r"\[motion\]: unknown joint 'Q'"),
+    ("motor-unknown-joint", edit('joint = "O2"\ntable', 'joint = "X9"\ntable'),
+     r"motor 0: unknown joint 'X9'"),
+    ("motion-unknown-key", edit("rate = 0.0", "rate = 0.0\nspeed = 3.0"),
+     r"\[motion\]: unknown keys \['speed'\]"),
+    ("torsional-free-length", edit('joint = "O4"\ncoefficient = 0.01',
+                                   'joint = "O4"\ncoefficient = 0.01\n\n[[springs]]\n'
+                                   'joint = "O4"\nstiffness = 1.0\nfree_length = 3.0'),
+     r"spring 1: a revolute joint's spring has free_angle"),
+    ("unreachable-start", edit('[motion]\njoint = "O2"\nvalue = 60.0',
+                                   '[motion]\njoint = "O4"\nvalue = 170.0'),
+     r"(cannot|not) .*assembl|loops cannot close|no assembly"),
+]
+
+
+@pytest.mark.parametrize("name, change, message", BAD, ids=[b[0] for b in BAD])
+def test_bad_free_motion_input_one_line_status_2(tmp_path, capsys, name, change, message):
+    f = tmp_path / f"{name}.toml"
+    f.write_text(change(_seed() + MOTION))
+    code, out = run("simulate", str(f), "--duration", "0.05")
+    err = capsys.readouterr().err
+    assert code == 2, (out, err)
+    assert err.count("\n") == 1 and err.startswith("xval: error: "), err
+    assert re.search(message, err), err
+
+
+def test_springs_without_motion(tmp_path, capsys):
+    f = tmp_path / "nomotion.toml"
+    f.write_text(_seed() + MOTION[MOTION.index("[[springs]]"):])
+    code, _ = run("simulate", str(f))
+    err = capsys.readouterr().err
+    assert code == 2 and "act in free motion only" in err and err.count("\n") == 1
+
+
+def test_no_motion_table(capsys):
+    code, _ = run("simulate", "seed-four-bar")
+    err = capsys.readouterr().err
+    assert code == 2 and "no [motion] table" in err and err.count("\n") == 1
+
+
+def test_massless_linkage_has_no_inertia(tmp_path, capsys):
+    text = re.sub(r"mass = [0-9.]+", "mass = 0.0", _seed() + MOTION)
+    text = re.sub(r"inertia = [0-9.e-]+", "inertia = 0.0", text)
+    f = tmp_path / "massless.toml"
+    f.write_text(text)
+    code, _ = run("simulate", str(f), "--duration", "0.05")
+    err = capsys.readouterr().err
+    assert code == 2 and "no inertia in the moving coordinate" in err, err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--duration", "0"], r"argument --duration: 0 is out of range"),
+    (["--samples", "1"], r"argument --samples: 1 is out of range"),
+    (["--duration", "nan"], r"argument --duration: nan is not a finite number"),
+    (["--json", "--csv", "-"], r"--json and --csv - both write to standard output"),
+])
+def test_bad_options(capsys, argv, message):
+    code, _ = run("simulate", "iftomm-a01-pendulum", *argv)
+    err = capsys.readouterr().err
+    assert code == 2 and re.search(message, err) and err.count("\n") == 1, err
+
+
+def test_simulate_prints_table_and_events(tmp_path, capsys):
+    csv = tmp_path / "out.csv"
+    code, out = run("simulate", "iftomm-a01-pendulum", "--duration", "1.3", "--samples", "5",
+                    "--csv", str(csv))
+    assert code == 0
+    assert "work-energy balance" in out and "turn" in out
+    assert csv.read_text().count("\n") == 6  # header + 5 samples
