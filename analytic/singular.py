@@ -27,7 +27,9 @@ the rates, and the statics do not fix the reactions.  What the tool reports ther
   one-sided test decides (a divergent quantity's one-sided extrapolations differ by
   ``3 c / h``), from the wider steps :data:`FORCE_LIMIT_STEP` and the looser
   :data:`FORCE_LIMIT_CONTINUITY`: the reactions near a singular position amplify the
-  positions' rounding by the condition number once more.
+  positions' rounding by the condition number once more.  Each output takes its limit
+  from the first of those steps at which it is continuous (a branch that bends on the
+  scale of the wider step is not a divergence).
 
 Status codes (``Kinematics.at_singular``, ``Forces.at_singular``, the sweep's ``singular``
 column): :data:`REGULAR` 0, :data:`LIMIT` 1 (every value is the limit along the branch),
