@@ -27,7 +27,9 @@ the rates, and the statics do not fix the reactions.  What the tool reports ther
   one-sided test decides (a divergent quantity's one-sided extrapolations differ by
   ``3 c / h``), from the wider steps :data:`FORCE_LIMIT_STEP` and the looser
   :data:`FORCE_LIMIT_CONTINUITY`: the reactions near a singular position amplify the
-  positions' rounding by the condition number once more.
+  positions' rounding by the condition number once more.  Each output takes its limit
+  from the first of those steps at which it is continuous (a branch that bends on the
+  scale of the wider step is not a divergence).
 
 Status codes (``Kinematics.at_singular``, ``Forces.at_singular``, the sweep's ``singular``
 column): :data:`REGULAR` 0, :data:`LIMIT` 1 (every value is the limit along the branch),
@@ -119,50 +121,80 @@ def singular_samples(kin) -> np.ndarray:
     return np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
 
 
+def _force_arrays(frc, keys=None) -> list[tuple[str, np.ndarray]]:
+    """``(kind, array)`` for every force-like output of ``frc``: kind ``"f"`` a force,
+    ``"m"`` a moment, ``"e"`` the drive effort, ``"p"`` a power.  ``keys`` (another
+    :class:`Forces`) fixes the joints' order."""
+    keys = frc if keys is None else keys
+    return ([("f", frc.joint_force[k]) for k in keys.joint_force]
+            + [("f", frc.normal[k]) for k in keys.normal]
+            + [("m", frc.moment[k]) for k in keys.moment]
+            + [("e", frc.effort)]
+            + [("p", a) for a in (frc.power, frc.kinetic_rate, frc.load_power)])
+
+
+def _limits_from(linkage, kin, frc, i: int, side, pending: list[int]) -> list[int]:
+    """Write the limits at sample ``i`` of the outputs ``pending`` (indices into
+    :func:`_force_arrays`) that are continuous across ``side`` (regular kinematics at the
+    four side values of one step); returns those that are not."""
+    size = size_of(linkage.topo)
+    arrays = _force_arrays(frc)
+    side_arrays = [a for _, a in _force_arrays(linkage.forces(side), keys=frc)]
+    fs = max([float(np.max(np.abs(a))) for (k, _), a in zip(arrays, side_arrays,
+                                                             strict=True)
+              if k == "f"] + [0.0])
+    ps = max(float(np.max(np.abs(a))) for a in side_arrays[-3:])
+    es = max(float(np.max(np.abs(side_arrays[-4]))),
+             fs * (size if linkage.driver_is_revolute else 1.0))
+    # a power's scale is at least the effort's times the input's speed (the
+    # inertia terms of a constant-speed parallelogram cancel to rounding)
+    ps = max(ps, es * abs(float(kin.velocity[i])))
+    scale = {"f": fs, "m": max(fs * size, es), "e": es, "p": ps}
+    left = []
+    for n in pending:
+        kind, a = arrays[n]
+        if _continuous(side_arrays[n], scale[kind], FORCE_LIMIT_CONTINUITY):
+            a[i] = _extrapolate(side_arrays[n])[0]
+        else:
+            left.append(n)
+    return left
+
+
 def force_limits(linkage, kin, frc, idx: np.ndarray) -> None:
     """Set the forces of ``frc`` at the singular samples ``idx`` (see the module
     docstring): limits where bounded, NaN where unbounded or undetermined; records
-    ``frc.at_singular``."""
+    ``frc.at_singular``.
+
+    Each output is tried at the steps of :data:`FORCE_LIMIT_STEP` in order and takes
+    its limit from the first at which it is continuous.  One step alone cannot tell a
+    divergence from a branch that curves sharply on the scale of the step: a bounded
+    output's one-sided extrapolations differ by ``12 h^3`` times its third derivative,
+    which falls a thousandfold from one step to the next, an unbounded one's by
+    ``3 c / h``, as large a fraction of its scale at every step."""
     status = np.array(kin.at_singular if getattr(kin, "at_singular", None) is not None
                       else np.zeros(kin.n, np.int8), np.int8)
-    size = size_of(linkage.topo)
-    arrays = ([("f", frc.joint_force[k]) for k in frc.joint_force]
-              + [("f", frc.normal[k]) for k in frc.normal]
-              + [("m", frc.moment[k]) for k in frc.moment]
-              + [("e", frc.effort)]
-              + [("p", a) for a in (frc.power, frc.kinetic_rate, frc.load_power)])
+    arrays = _force_arrays(frc)
+    branch = getattr(kin, "_branch", "continued")
     for i in np.asarray(idx, int):
-        side = None if status[i] == UNDETERMINED else \
-            _sides(linkage, float(kin.value[i]), kin.velocity[i], kin.acceleration[i],
-                   getattr(kin, "_branch", "continued"), FORCE_LIMIT_STEP)
-        if side is None:
+        pending, passed = list(range(len(arrays))), False
+        for h in (FORCE_LIMIT_STEP if status[i] != UNDETERMINED else ()):
+            side = _sides(linkage, float(kin.value[i]), kin.velocity[i],
+                          kin.acceleration[i], branch, (h,))
+            if side is not None:
+                passed = True
+                pending = _limits_from(linkage, kin, frc, i, side, pending)
+            if not pending:
+                break
+        if not passed:
             status[i] = UNDETERMINED
-            for _, a in arrays:
-                a[i] = np.nan
+            pending = list(range(len(arrays)))
+        for n in pending:
+            arrays[n][1][i] = np.nan
+        if not passed:
             frc.power_residual[i] = np.nan
             continue
-        sf = linkage.forces(side)
-        side_arrays = ([sf.joint_force[k] for k in frc.joint_force]
-                       + [sf.normal[k] for k in frc.normal]
-                       + [sf.moment[k] for k in frc.moment]
-                       + [sf.effort, sf.power, sf.kinetic_rate, sf.load_power])
-        fs = max([float(np.max(np.abs(a))) for (k, _), a in zip(arrays, side_arrays,
-                                                                 strict=True)
-                  if k == "f"] + [0.0])
-        ps = max(float(np.max(np.abs(a))) for a in side_arrays[-3:])
-        es = max(float(np.max(np.abs(sf.effort))),
-                 fs * (size if linkage.driver_is_revolute else 1.0))
-        # a power's scale is at least the effort's times the input's speed (the
-        # inertia terms of a constant-speed parallelogram cancel to rounding)
-        ps = max(ps, es * abs(float(kin.velocity[i])))
-        scale = {"f": fs, "m": max(fs * size, es), "e": es, "p": ps}
-        unbounded = False
-        for (kind, a), s in zip(arrays, side_arrays, strict=True):
-            if _continuous(s, scale[kind], FORCE_LIMIT_CONTINUITY):
-                a[i] = _extrapolate(s)[0]
-            else:
-                a[i] = np.nan
-                unbounded = True
+        # the power is the effort times the input's speed, whichever step each came from
+        frc.power[i] = frc.effort[i] * kin.velocity[i]
         frc.power_residual[i] = frc.power[i] - (frc.kinetic_rate[i] - frc.load_power[i])
-        status[i] = UNBOUNDED_FORCES if unbounded else LIMIT
+        status[i] = UNBOUNDED_FORCES if pending else LIMIT
     frc.at_singular = status
