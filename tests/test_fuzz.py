@@ -262,6 +262,25 @@ def said_unbounded(header, row) -> bool:
         and all(h.endswith((".fx [N]", ".fy [N]", ".moment [N m]")) for h in bad)
 
 
+#: Columns a sweep row always has, also at a sample the linkage does not pass through:
+#: the input, the positions and the diagnostics.
+_POSE_COLUMNS = ("input [", ".angle [", ".x [", ".y [", ".s [", "transmission", "jacobian_",
+                 "singular")
+
+
+def said_undetermined(header, row) -> bool:
+    """A sweep row at a singular position the linkage does not pass through smoothly
+    (``singular`` 3: a dead centre, a limit position, or a change point where the branch
+    followed kinks; analytic.singular): its rates and forces are not determined by the
+    input, so those cells are empty and the sweep prints a note naming the sample.  Only
+    rate, acceleration, force, effort and power cells may be empty -- said, not silent."""
+    bad = [h for h, c in zip(header, row, strict=True)
+           if c == "" or c.lower() in ("nan", "inf", "-inf")]
+    return bool(bad) and "singular" in header and row[header.index("singular")] == "3" \
+        and not any(h.startswith(_POSE_COLUMNS) or any(k in h for k in _POSE_COLUMNS)
+                    for h in bad)
+
+
 def check_one(kind, shape, kw, values, sweep, path, tally):
     tally.n += 1
     tally.c[f"{kind} {shape}"] += 1
@@ -283,6 +302,9 @@ def check_one(kind, shape, kw, values, sweep, path, tally):
     for r in rows[1:]:
         if said_unbounded(rows[0], r):
             tally.c["sweep: unbounded joint forces at a change point, said"] += 1
+            continue
+        if said_undetermined(rows[0], r):
+            tally.c["sweep: rates not determined at a singular position, said"] += 1
             continue
         if any(c == "" or c.lower() in ("nan", "inf", "-inf") for c in r):
             at_singular = not float(r[cond]) < SINGULAR_CONDITION
