@@ -179,14 +179,20 @@ def _print_tables(res: dict, units=None) -> None:
 
 
 def cmd_cases(args) -> int:
-    from analytic.cases import hard_case_names
+    import shutil
+
+    from analytic.cases import free_case_names, hard_case_names
+    width = shutil.get_terminal_size().columns
     for title, names in (("built-in cases", case_names()),
-                         ("hard cases (numerical stability studies)", hard_case_names())):
+                         ("hard cases (numerical stability studies)", hard_case_names()),
+                         ("free-motion cases (xval simulate)", free_case_names())):
         print(f"{title}:")
         for n in names:
             m = load_case(n)
             first = m.description.strip().splitlines()[0] if m.description else ""
-            print(f"  {n:24s} {first}")
+            line = f"  {n:24s} {first}"
+            # the description's first line, cut to the terminal (the name stays whole)
+            print(line if len(line) <= width else line[:max(width - 3, 27)].rstrip() + "...")
     return 0
 
 

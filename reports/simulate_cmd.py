@@ -93,8 +93,8 @@ def _print_table(mech, smp, traj) -> None:
     rows = np.unique(np.linspace(0, len(smp.t) - 1, min(len(smp.t), 11)).round().astype(int))
     heads = ["t s"] + [f"{j.name} {'deg' if isinstance(j, Revolute) else 'm'}"
                        for j in mech.joints] + ["KE J", "PE J", "balance J"]
-    print(f"{mech.name}: free motion, {traj.duration:g} s, DOP853 rtol {traj.rtol:g}, "
-          f"{traj.nfev} evaluations, {len(traj.segments)} segment(s)")
+    print(f"{mech.name}: free motion, {traj.duration:g} s, DOP853 rtol {traj.rtol:g},")
+    print(f"  {traj.nfev} evaluations, {len(traj.segments)} segment(s)")
     print("  ".join(f"{h:>12}" for h in heads))
     for i in rows:
         vals = [smp.t[i]] + [math.degrees(v) if isinstance(j, Revolute) else v
