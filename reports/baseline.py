@@ -502,17 +502,33 @@ def _fmt_value(v, paren: bool = False) -> str:
     return str(v)
 
 
-def settings_from_json(rec: RunRecord, where: str):
-    """The settings object a record was run with (:meth:`EngineSettings.from_overrides`);
-    raises :class:`BaselineError` when the engine no longer accepts a recorded field."""
+def settings_from_json(rec: RunRecord, where: str, overrides: dict | None = None):
+    """The settings object a record was run with (:meth:`EngineSettings.from_overrides`),
+    with ``overrides`` ({field: value} of this engine, ``--set``) over the recorded
+    fields; raises :class:`BaselineError` when the engine no longer accepts a recorded
+    field (a bad override is the :class:`SettingsError` of ``--set``: status 2)."""
     from sim_models.engine_base import SettingsError
     from sim_models.registry import get_engine
     eng = get_engine(rec.engine)
     try:
-        return eng.settings_class.from_overrides(rec.settings["fields"], eng.name)
+        s = eng.settings_class.from_overrides(rec.settings["fields"], eng.name)
     except SettingsError as e:
         raise BaselineError(f"{where}: {rec.label}: the recorded settings cannot be "
                             f"rebuilt: {e}") from None
+    if overrides:
+        s = eng.settings_class.from_overrides({**s.as_dict(), **overrides}, eng.name)
+    return s
+
+
+def overrides_for(pairs, engines) -> dict:
+    """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (as ``xval compare --set`` takes them)
+    as ``{engine: {field: value}}`` for those of ``engines`` that have a field set
+    (:func:`sim_models.registry.split_overrides`; :class:`SettingsError`: status 2)."""
+    if not pairs:
+        return {}
+    from sim_models.registry import split_overrides
+    return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines))).items()
+            if v}
 
 
 # ============================================================================ record
@@ -865,18 +881,12 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
     from sim_models.registry import get_engine
     from sim_models.tree import SimModelError
     try:
-        eng = get_engine(rec.engine)
+        get_engine(rec.engine)
     except (SimModelError, ImportError) as e:  # not registered, or its library missing
         out.problems.append(f"engine {rec.engine!r} is not available: {e}")
         return None
-    s = settings_from_json(rec, str(baseline.path))
-    if overrides:  # --set over the recorded settings (SettingsError: status 2 upstream)
-        s = eng.settings_class.from_overrides({**s.as_dict(), **overrides}, eng.name)
-    missing = sorted(set(s.as_dict()) - set(rec.settings["fields"]))
-    if missing:
-        out.notes.append(f"settings not in the baseline, run at {eng.name}'s defaults: "
-                         + ", ".join(f"{k}={getattr(s, k)!r}" for k in missing))
-    return s
+    # every field is present: a missing one is refused where the file is read
+    return settings_from_json(rec, str(baseline.path), overrides)
 
 
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",

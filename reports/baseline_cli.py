@@ -105,11 +105,7 @@ def cmd_check(args) -> int:
 def _check_overrides(pairs, base: bl.Baseline) -> dict:
     """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
     (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
-    if not pairs:
-        return {}
-    from sim_models.registry import split_overrides
-    engines = list(dict.fromkeys(r.engine for r in base.runs))
-    return {e: v for e, v in split_overrides(pairs, engines).items() if v}
+    return bl.overrides_for(pairs, (r.engine for r in base.runs))
 
 
 def _override_props(overrides: dict) -> dict:

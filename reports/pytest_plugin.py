@@ -127,8 +127,8 @@ def cached_runner(mech, engine: str, settings, request: dict):
 def _at_text(run_, at: float) -> str:
     if not math.isfinite(at):
         return "at an unreached sample"
-    unit = "m" if run_.extra.get("prismatic_driver") else "deg"
-    return f"at input {at:.6g} {unit}"
+    from analytic.input_display import format_input  # the one input convention
+    return f"at input {format_input(at, 'm' if run_.extra.get('prismatic_driver') else 'deg')}"
 
 
 def _unit(quantity: str, run_) -> str:
@@ -349,10 +349,8 @@ class Xval:
             rec = c.record
             model = rec.model.name if rec.model.kind == "builtin" else \
                 str(rec.model.path(base.base_dir))
-            s = bl.settings_from_json(rec, str(base.path))
-            ov = _overrides(settings, [rec.engine]).get(rec.engine)
-            if ov:
-                s = type(s).from_overrides({**s.as_dict(), **ov}, rec.engine)
+            s = bl.settings_from_json(rec, str(base.path),
+                                      _overrides(settings, [rec.engine]).get(rec.engine))
             tol = rec.quantities[0].tolerance if rec.quantities else None
             why = c.problems[0] if c.problems else (c.failures() or c.loose())[0].message()
             self._record(base.path, model, rec.engine, s, rec.request, tol,
@@ -364,11 +362,8 @@ def _overrides(settings, engines) -> dict:
     per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
     if not settings:
         return {}
-    from reports.baseline import _fmt_value
-    from sim_models.registry import split_overrides
-    pairs = [f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()]
-    return {e: v for e, v in split_overrides(pairs, list(dict.fromkeys(engines))).items()
-            if v}
+    from reports.baseline import _fmt_value, overrides_for
+    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines)
 
 
 def failure_text(base, checks, factor: float, root: Path) -> str:
