@@ -146,17 +146,6 @@ def snap(values, scale: float):
     return float(out) if np.ndim(out) == 0 else out
 
 
-def scale_of(*arrays) -> float:
-    """The scale of a quantity: the largest finite magnitude among ``arrays``."""
-    m = 0.0
-    for a in arrays:
-        a = np.abs(np.asarray(a, float))
-        a = a[np.isfinite(a)]
-        if a.size:
-            m = max(m, float(a.max()))
-    return m
-
-
 def text(v: float, spec: str = ".6g") -> str:
     """``format(v, spec)`` without a sign on a zero (``-0.000000`` -> ``0.000000``)."""
     s = format(float(v), spec)
@@ -435,5 +424,5 @@ def convert_figure(fig, units: DisplayUnits):
 
 __all__ = ["ANGLES", "DisplayUnits", "KINDS", "LENGTHS", "NOISE", "SPEEDS", "UnitsError",
            "column_kind", "column_name", "convert_frame", "convert_result", "row_scales",
-           "scale_of", "snap", "snap_rows", "text",
+           "snap", "snap_rows", "text",
            "units_option", "UNITS_HELP", "convert_figure", "FIGURE_KINDS"]
