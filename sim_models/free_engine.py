@@ -26,7 +26,7 @@ from .tree import SimTree
 #: engine name -> (module, free session class)
 FREE_SESSIONS: dict[str, tuple[str, str]] = {
     "mujoco": ("sim_models.mujoco_free", "MujocoFreeSession"),
-    # "pybullet": ("sim_models.pybullet_free", "PybulletFreeSession"),
+    "pybullet": ("sim_models.pybullet_free", "PybulletFreeSession"),
     # "exudyn": ("sim_models.exudyn_free", "ExudynFreeSession"),
 }
 
