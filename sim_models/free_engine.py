@@ -27,7 +27,7 @@ from .tree import SimTree
 FREE_SESSIONS: dict[str, tuple[str, str]] = {
     "mujoco": ("sim_models.mujoco_free", "MujocoFreeSession"),
     "pybullet": ("sim_models.pybullet_free", "PybulletFreeSession"),
-    # "exudyn": ("sim_models.exudyn_free", "ExudynFreeSession"),
+    "exudyn": ("sim_models.exudyn_free", "ExudynFreeSession"),
 }
 
 

@@ -122,10 +122,12 @@ def test_force_elements_follow_reference(engine, seed_elements):
 
 
 #: Settings far outside any stable step (a 50 ms explicit step on a four-bar whose
-#: rocker swings at ~10 rad/s): the loop opens within a few steps.
+#: rocker swings at ~10 rad/s): the loop opens within a few steps.  Exudyn's implicit
+#: index-3 step passes 50 ms at rho_inf 0.8; without numerical damping (rho_inf 1) its
+#: Newton fails (measured at t = 0.6 s).
 DIVERGING = {"mujoco": {"timestep": 0.05, "integrator": "Euler"},
              "pybullet": {"timestep": 0.05, "erp": 0.0},
-             "exudyn": {"timestep": 0.2, "newton_tolerance": 1e-4}}
+             "exudyn": {"timestep": 0.1, "spectral_radius": 1.0}}
 
 
 @pytest.mark.parametrize("engine", ENGINES)
