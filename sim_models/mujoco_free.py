@@ -110,6 +110,7 @@ class MujocoFreeSession(MujocoSession, FreeSession):
 
     name = "mujoco"
     settings_class = MujocoFreeSettings
+    motor_effort_source = "engine"
     native = ("gravity, point springs/dampers (spatial tendons), joint springs/dampers "
               "(fixed tendons), motors (motor actuator on a fixed tendon): MuJoCo's own; "
               "constant loads: harness (xfrc_applied each step)")

@@ -147,3 +147,18 @@ def test_wall_clock_limit_is_a_result(seed):
                    reference=ref)
     assert not run.ok and "wall-clock" in run.reason
     assert math.isclose(run.t_fail, 0.1)
+
+
+@pytest.mark.parametrize("name", ["iftomm-a03-andrews", "seed-four-bar", "quick-return",
+                                  "inverted-slider-crank"])
+def test_scalar_body_states_equal_propagate(name):
+    """The per-step body states of the harness (scalar) equal SimTree.propagate's."""
+    from sim_models.free_base import bodies_at
+    from sim_models.tree import SimTree
+    st = SimTree(load_case(name))
+    nt = len(st.joints)
+    rng = np.random.default_rng(7)
+    q, qd = 0.2 * rng.normal(size=nt), rng.normal(size=nt)
+    th, om, _, org, vo, _ = st.propagate(q[None], qd[None], np.zeros((1, nt)))
+    for got, want in zip(bodies_at(st, q, qd), (th, om, org, vo), strict=True):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
