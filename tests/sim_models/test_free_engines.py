@@ -162,3 +162,16 @@ def test_scalar_body_states_equal_propagate(name):
     th, om, _, org, vo, _ = st.propagate(q[None], qd[None], np.zeros((1, nt)))
     for got, want in zip(bodies_at(st, q, qd), (th, om, org, vo), strict=True):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
+
+
+def test_bare_stepping_loop_is_timed(seed):
+    """The speed study's loop: steps per second of advance() alone, from the start."""
+    from sim_models.free_base import time_free_steps
+    mech, ref = seed
+    sess = open_free_session(mech, "mujoco")
+    try:
+        start = free_start(sess.tree, ref.at(np.array([0.0]), forces=False))
+        rate = time_free_steps(sess, start, 5e-4, 200, repeats=1)
+    finally:
+        sess.close()
+    assert rate > 0 and math.isfinite(rate)
