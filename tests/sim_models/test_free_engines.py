@@ -199,3 +199,4 @@ def test_prismatic_coordinates_follow_reference(engine, slider_crank):
     assert np.max(np.abs(run.x[0] - s.x[0])) < TOL_START
     assert np.max(np.abs(run.xd[0] - s.xd[0])) < TOL_START
     assert _rel_err(run, ref) < TOL_SLIDER[engine]
+    assert np.isfinite(run.joint_force[1:]).all()  # every joint read (t = 0: see PyBullet)
