@@ -53,6 +53,9 @@ class FreeStart:
     v_origin: np.ndarray
     x: np.ndarray
     xd: np.ndarray
+    #: whole turns (rad, multiples of 2 pi) from the engines' body angles to the
+    #: reference's (the tree starts within half a turn of its reference pose)
+    turns: np.ndarray | None = None
 
 
 def free_start(tree: SimTree, s0) -> FreeStart:
@@ -77,7 +80,8 @@ def free_start(tree: SimTree, s0) -> FreeStart:
         raise EngineRefusal(f"mechanism {mech.name!r}: the engines' tree cannot take the "
                             "reference's initial pose (body angles differ by "
                             f"{np.max(np.abs(wrap(pth[0] - th))):.3g} rad)")
-    return FreeStart(q, qd, pth[0], pom[0], org[0], vo[0], jx, jxd)
+    turns = 2 * np.pi * np.round((th - pth[0]) / (2 * np.pi))
+    return FreeStart(q, qd, pth[0], pom[0], org[0], vo[0], jx, jxd, turns)
 
 
 # ============================================================================ readout
@@ -446,7 +450,8 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
         if reason is not None:
             t_fail = float(t)
             break
-        th[k], om[k], al[k], org[k], vo[k] = r.theta, r.omega, r.alpha, r.origin, r.v_origin
+        th[k], om[k], al[k], org[k], vo[k] = (r.theta + start.turns, r.omega, r.alpha,
+                                              r.origin, r.v_origin)
         jf[k], eff[k] = r.joint_force, r.motor_effort
     x, xd, gap, T, V = free_readout(st, th, om, org, vo, start.x)
     has_motor = bool(mech.motion and mech.motion.motors)
