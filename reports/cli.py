@@ -26,7 +26,6 @@ import sys
 import numpy as np
 
 from analytic import Linkage, LinkageError, case_names, load_case
-from analytic.errors import OutputError
 from analytic.mechanism import Prismatic, Revolute
 from analytic.stream import STREAM_POINTS, sweep_csv
 
@@ -208,7 +207,7 @@ def cmd_solve(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from .cli_paths import check_outputs
+    from .cli_paths import check_outputs, write_csv
     from .display_units import DisplayUnits, convert_frame
     check_outputs([("--csv", args.csv)], [("the case file", args.case)])
     mech = load_case(args.case)
@@ -271,17 +270,6 @@ def _paragraph_printer():
     def say(text: str) -> None:
         print(textwrap.fill(text, width, subsequent_indent="    ", break_on_hyphens=False))
     return say
-
-
-def write_csv(frame, path: str, stdout) -> None:
-    """Write a table as CSV to ``path``, or to ``stdout`` when ``path`` is ``-``."""
-    if path == "-":
-        frame.to_csv(stdout, index=False)
-        return
-    try:
-        frame.to_csv(path, index=False)
-    except OSError as e:  # checked at the option; this is a race or a full disk
-        raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
 
 
 #: Every command: name -> (the module whose ``register(sub)`` adds it, its line in
