@@ -293,15 +293,6 @@ def write_text(path: str, text: str, what: str) -> None:
         raise OutputError(f"cannot write {what} {path!r}: {e.strerror}") from None
 
 
-def add_options(parser) -> None:
-    """``--junit FILE`` and ``--summary FILE`` on a command."""
-    from . import cli_options as opt
-    parser.add_argument("--junit", type=opt.output_file, metavar="FILE",
-                        help="write JUnit XML: one test case per case x engine")
-    parser.add_argument("--summary", type=opt.output_file, metavar="FILE",
-                        help="write a Markdown summary (e.g. a CI job summary)")
-
-
 def write_outputs(args, suite: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
                   properties: dict | None = None, command: str = "compare") -> None:
     """Write what ``--junit`` / ``--summary`` ask for (nothing when neither is given)."""
@@ -323,5 +314,5 @@ def write_compare_outputs(args, mech, results) -> None:
     write_outputs(args, f"xval compare {mech.name}", cases)
 
 
-__all__ = ["CiCase", "add_options", "from_baseline", "from_compare", "junit_xml",
+__all__ = ["CiCase", "from_baseline", "from_compare", "junit_xml",
            "markdown_summary", "write_compare_outputs", "write_outputs", "write_text"]

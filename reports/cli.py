@@ -30,7 +30,6 @@ from analytic.mechanism import Prismatic, Revolute
 from analytic.stream import STREAM_POINTS, sweep_csv
 
 from . import cli_options as opt
-from .display_units import UNITS_HELP, units_option
 
 CONVENTIONS = {
     "units": "SI: m, rad, s, kg, N; angle_deg in degrees",
@@ -302,7 +301,7 @@ def register(sub) -> None:
     s.add_argument("--omega", type=opt.rate, help="input velocity, rad/s (or m/s)")
     s.add_argument("--alpha", type=opt.accel, help="input acceleration, rad/s^2 (or m/s^2)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP)
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.set_defaults(func=cmd_solve)
     s = sub.add_parser("sweep", help="full-cycle table")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -320,7 +319,7 @@ def register(sub) -> None:
                    default="continuous",
                    help="branch taken at a change point: the one whose velocity is "
                         "continuous (default), or hold / switch the dyad signs")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP + " (each CSV column "
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP + " (each CSV column "
                    "names its unit: 'crank.omega [rpm]')")
     s.set_defaults(func=cmd_sweep)
 

@@ -134,9 +134,10 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
 
 def cmd_report(args) -> int:
     from analytic.errors import OutputError
-    from reports.report import main as report_main
+
+    from .report_cmd import run
     try:
-        return report_main(args)
+        return run(args)
     except OSError as e:  # the output folder was checked at --out; a race or a full disk
         if e.filename is None:
             raise
@@ -170,8 +171,8 @@ def register(sub) -> None:
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s")
     s.add_argument("--json", action="store_true")
-    from . import baseline_cli, ci_formats
-    ci_formats.add_options(s)
+    from . import baseline_cli
+    opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
     baseline_cli.register(sub)  # xval baseline record|check
     try:

@@ -249,7 +249,6 @@ def _interactive_backend() -> None:  # pragma: no cover - needs a display
 
 def register(sub) -> None:
     from . import cli_options as opt
-    from .display_units import UNITS_HELP, units_option
     s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional)")
     s.add_argument("case", help="built-in case name or TOML file")
     s.add_argument("--what", default=DEFAULT_WHAT,
@@ -257,7 +256,7 @@ def register(sub) -> None:
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
                    help="overlay this engine's run (markers) and plot its error below")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP)
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.add_argument("--out", type=opt.output_file,
                    help="output file; .png, .svg or .pdf (default <case>-plot.png)")
     s.add_argument("--show", action="store_true", help="open a window (needs a display)")

@@ -371,7 +371,7 @@ def failure_text(base, checks, factor: float, root: Path) -> str:
     the factor and where) or the run's problem, then the check's report of the failed
     runs, then how to record them again."""
     from reports.baseline import Baseline, record_command
-    from reports.baseline_cli import report_lines
+    from reports.baseline_messages import report_lines
     failed = [c for c in checks if not c.passed]
     worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
     first = worst.problems[0] if worst.problems else worst.failures()[0].message()

@@ -10,8 +10,8 @@ Pure functions returning pandas DataFrames and PNG bytes::
     scene = studies.scene_economy(quick=True)
     everything = studies.run_study(quick=True)                     # all of it + figures
 
-``python -m reports.studies [--quick] [--out DIR] [--workers N]`` runs the whole study
-and writes CSV tables and PNG figures.
+``python -m reports.studies_cmd [--quick] [--out DIR] [--workers N]`` runs the whole
+study and writes CSV tables and PNG figures.
 
 Measurements
 ------------
@@ -72,13 +72,11 @@ serially in this process.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import math
 import multiprocessing
 import os
-import sys
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from dataclasses import asdict, replace
@@ -852,38 +850,3 @@ def write_study(res: dict, out_dir: Path) -> list[Path]:
                             indent=1))
     written.append(p)
     return written
-
-
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m reports.studies",
-                                 description="Speed against error of the engines.")
-    ap.add_argument("--quick", action="store_true", help="the reduced study (~40 s)")
-    ap.add_argument("--out", type=Path, default=None, help="write CSV and PNG files here")
-    ap.add_argument("--workers", type=int, default=None, help="process-pool size")
-    ap.add_argument("--serial", action="store_true", help="no process pool")
-    a = ap.parse_args(argv)
-    res = run_study(a.quick, pool=False if a.serial else None, workers=a.workers)
-    pd.set_option("display.width", 200)
-    pd.set_option("display.max_colwidth", 60)
-    print(res["cheapest"].drop(columns=["settings"]).to_string(index=False))
-    h = res["hard"]
-    print(h["high_speed"][["engine", "label", "seconds_per_rev", "accel_error",
-                           "force_error", "ok"]].to_string(index=False))
-    print(h["near_toggle"][["case", "engine", "label", "transmission_extreme_deg",
-                            "accel_error", "force_error", "error_vs_seed_four_bar",
-                            "ok"]].to_string(index=False))
-    print(h["change_point"][["engine", "label", "branch_after_singular", "final_branch",
-                             "flips", "ok"]].to_string(index=False))
-    print(h["long_run_summary"].drop(columns=["settings"]).T.to_string(
-        float_format=lambda v: f"{v:.3g}"))
-    print(res["scene_economy"].drop(columns=["notes"]).to_string(index=False))
-    print("analytic seconds per revolution:", res["analytic_seconds_per_rev"])
-    print("timings (s):", {k: round(v, 2) for k, v in res["timings"].items()})
-    if a.out:
-        for p in write_study(res, a.out):
-            print("wrote", p)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -27,14 +27,27 @@ LAYERS = ("analytic", "sim_models", "reports")
 TOP_MODULES = ("xval_pytest_plugin",)
 
 #: The command line: the modules that build ``xval``'s parser and turn its arguments into
-#: calls.  ``reports.cli`` (the parser, the ``COMMANDS`` table and its own commands
-#: ``cases``/``solve``/``sweep``), ``reports.cli_options`` (the option types and the
-#: one-line-error parser), and every module named in ``reports.cli.COMMANDS`` (each adds
-#: its command with ``register(sub)``).  The pytest entry point ``xval_pytest_plugin``
-#: reads pytest's options (its ``--xval-factor`` type raises ``argparse``'s error) and
-#: is listed too.  Everything else is library code: it takes typed values, not
-#: ``argparse.Namespace``.
-COMMAND_LINE_CORE = frozenset({"reports.cli", "reports.cli_options", "xval_pytest_plugin"})
+#: calls of the library (:func:`command_line_modules`):
+#:
+#: * ``reports.cli`` (the parser, the ``COMMANDS`` table, its own commands ``cases``,
+#:   ``solve``, ``sweep``), ``reports.cli_options`` (option types, ``OneLineParser``),
+#:   ``reports.cli_paths`` (what a command may write);
+#: * every module named in ``reports.cli.COMMANDS`` (each adds its commands with
+#:   ``register(sub)``);
+#: * the command modules a command hands its work to, named ``*_cmd`` or ``*_cli``
+#:   (``baseline_cli``, ``report_cmd``, ``plot_cmd`` ..., and ``studies_cmd``, the
+#:   maintainer's ``python -m reports.studies_cmd``);
+#: * ``xval_pytest_plugin``, pytest's entry point (it adds pytest options).
+#:
+#: Everything else is library code: it takes typed values, never an ``argparse``
+#: parser or namespace, and imports none of the modules above.
+COMMAND_LINE_CORE = frozenset({"reports.cli", "reports.cli_options", "reports.cli_paths",
+                               "xval_pytest_plugin"})
+#: Modules that read ``sys.argv`` without being the command line: the README-figure
+#: maintainer script (``python -m reports.readme_figures``; issue 19 moves it out of the
+#: package) and the background kernel compiler's worker process, whose arguments are
+#: written by :func:`analytic.kernels.background.start`, not typed by a user.
+ARGV_READERS = frozenset({"reports.readme_figures", "analytic.kernels.background"})
 
 
 @dataclass(frozen=True)
@@ -51,9 +64,9 @@ class Import:
     by_name: bool = False
 
 
-def module_name(path: Path, root: Path = ROOT) -> str:
+def module_name(path: Path, root: Path | None = None) -> str:
     """``reports/cli.py`` -> ``reports.cli``; a package's ``__init__`` -> the package."""
-    rel = path.relative_to(root).with_suffix("")
+    rel = path.relative_to(root or ROOT).with_suffix("")
     parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
     return ".".join(parts)
 
@@ -219,15 +232,18 @@ def upward_imports(files, imports: list[Import]) -> list[str]:
 
 
 def command_line_modules() -> frozenset[str]:
-    """:data:`COMMAND_LINE_CORE` and every module named in ``reports.cli.COMMANDS``
-    (read from the source: the table's values' first strings)."""
+    """:data:`COMMAND_LINE_CORE`, the ``reports`` modules named ``*_cmd``/``*_cli``, and
+    every module named in ``reports.cli.COMMANDS`` (read from the source: the first
+    string of each of the table's values)."""
+    named = {f"reports.{p.stem}" for p in (ROOT / "reports").glob("*.py")
+             if p.stem.endswith(("_cmd", "_cli"))}
     tree = ast.parse((ROOT / "reports" / "cli.py").read_text(encoding="utf-8"))
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign | ast.AnnAssign):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             if any(isinstance(t, ast.Name) and t.id == "COMMANDS" for t in targets):
                 table = ast.literal_eval(node.value)
-                return COMMAND_LINE_CORE | {module for module, _ in table.values()}
+                return COMMAND_LINE_CORE | named | {module for module, _ in table.values()}
     raise AssertionError("reports/cli.py has no COMMANDS table")
 
 
@@ -297,3 +313,40 @@ def test_no_package_imports_one_above_it():
     files, imports = project_imports()
     bad = upward_imports(files, imports)
     assert not bad, "\n".join(bad)
+
+
+def _reads_argv(path: Path) -> list[int]:
+    """Lines where a module reads ``sys.argv``."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    return [n.lineno for n in ast.walk(tree) if isinstance(n, ast.Attribute)
+            and n.attr == "argv" and isinstance(n.value, ast.Name) and n.value.id == "sys"]
+
+
+def test_only_the_command_line_reads_arguments():
+    """``argparse`` is imported only by the command-line modules, and ``sys.argv`` read
+    only there (and by :data:`ARGV_READERS`); a library module takes typed values."""
+    cli = command_line_modules()
+    files = project_files()
+    assert cli <= set(files), f"unknown command modules: {sorted(cli - set(files))}"
+    assert "reports.cli_engines" in cli and "reports.baseline_cli" in cli  # the rule's reach
+    bad = []
+    for name, path in files.items():
+        if name in cli:
+            continue
+        bad += [f"{_where(path)}:{i.line}: {name} imports argparse"
+                for i in imports_of(name, path)
+                if i.target == "argparse" or i.target.startswith("argparse.")]
+        if name not in ARGV_READERS:
+            bad += [f"{_where(path)}:{line}: {name} reads sys.argv"
+                    for line in _reads_argv(path)]
+    assert not bad, "command-line arguments read outside the command line:\n" + "\n".join(bad)
+
+
+def test_library_modules_do_not_import_the_command_line():
+    """No library module imports a command-line module (the command line calls the
+    library, never the other way round); the package front doors are library code."""
+    cli = command_line_modules()
+    files, imports = project_imports()
+    bad = [f"{_where(files[i.source])}:{i.line}: {i.source} imports {i.target}"
+           for i in imports if i.source not in cli and i.target in cli]
+    assert not bad, "library modules importing the command line:\n" + "\n".join(bad)
