@@ -60,6 +60,8 @@ from pathlib import Path
 
 from analytic.errors import LinkageError, OutputError
 
+from .quantities import judged
+
 SCHEMA = "linkage-xval baseline"
 SCHEMA_VERSION = 1
 
@@ -465,11 +467,6 @@ def run_and_compare(mech, engine: str, settings, request: dict):
             samples=request["samples"], max_violation=request["max_violation"],
             max_speed_error=request["max_speed_error"])
     return r, judged(compare_run(r, tree.linkage))
-
-
-def judged(comparisons) -> list:
-    """The quantities this project computes (the engines' own readings left out)."""
-    return [c for c in comparisons if not c.quantity.endswith("[engine]")]
 
 
 def request_dict(revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,

@@ -40,6 +40,8 @@ from pathlib import Path
 
 from analytic.errors import OutputError
 
+from . import quantities
+
 
 @dataclass(frozen=True)
 class CiCase:
@@ -91,7 +93,7 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
     unit = "deg" if revolute else "m"
     out = []
     for r, comps, ok, near in results:
-        judged = [c for c in comps if not c.quantity.endswith("[engine]")]
+        judged = quantities.judged(comps)
         bad = [c for c in judged if not c.passed]
         pool = bad or judged
         worst = max(pool, key=lambda c: c.normalised if math.isfinite(c.normalised)

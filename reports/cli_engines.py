@@ -10,6 +10,7 @@ import sys
 
 from . import cli_options as opt
 from .cli_paths import check_outputs
+from .quantities import is_engine_reading
 
 
 def cmd_models(args) -> int:
@@ -78,7 +79,7 @@ def _table(comps) -> list[list[str]]:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
             ["not measured"] * 2
         # the engines' own readings are reported, not judged (reports.compare.verdict)
-        judged = "not judged" if c.quantity.endswith("[engine]") else \
+        judged = "not judged" if is_engine_reading(c.quantity) else \
             ("pass" if c.passed else "FAIL")
         rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
                      f"{c.tolerance:.3g}", judged])
@@ -122,7 +123,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 say(f"not measured: the engine has no values from the sample at "
                     f"{format_input(first, 'deg' if revolute else 'm')} on (the run stopped "
                     "there); the verdict is a failure")
-            if any(c.quantity.endswith("[engine]") for c in comps):
+            if any(is_engine_reading(c.quantity) for c in comps):
                 say("rows marked [engine] are the engine's own readings, reported but not "
                     "judged: PyBullet's jointReactionForces are known wrong for links with "
                     "a moving parent or children (README, Engines)")

@@ -25,6 +25,8 @@ import numpy as np
 
 from analytic.input_display import convention_of, display_input
 
+from . import quantities
+
 #: Points of the dense analytic line per plotted span (the samples are added to them).
 LINE_POINTS = 361
 
@@ -240,7 +242,7 @@ def sample_errors(run_, ref: Reference, comparisons) -> dict[str, np.ndarray]:
     not judge: the largest value of each is that quantity's verdict error.  Keys are the
     verdict's quantity names (the engines' own ``[engine]`` readings left out)."""
     kin, frc, keep = ref.kin, ref.frc, ref.judged
-    peaks = {c.quantity: c.peak for c in comparisons if not c.quantity.endswith("[engine]")}
+    peaks = {c.quantity: c.peak for c in quantities.judged(comparisons)}
     raw: dict[str, np.ndarray] = {}
     for b, name in enumerate(run_.body_names):
         raw[f"{name}.alpha"] = np.abs(run_.alpha[:, b] - kin.alpha[:, b])

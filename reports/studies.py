@@ -187,10 +187,11 @@ def run_errors(run_, reference=None) -> dict:
     """Normalised errors of an engine run through :func:`reports.compare.compare_run`
     (``reference``: the compiled linkage's Linkage; default the run's own mechanism)."""
     from reports.compare import compare_run
+    from reports.quantities import judged
     if not run_.ok:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
-    comps = [c for c in compare_run(run_, reference) if not c.quantity.endswith("[engine]")]
+    comps = judged(compare_run(run_, reference))
     acc = [c for c in comps if c.quantity.endswith(".alpha") or c.quantity.endswith(".a")]
     frc = [c for c in comps if c.quantity == "drive.effort" or c.quantity.endswith(".force")]
     a = max((c.normalised for c in acc), default=math.nan)
