@@ -458,15 +458,11 @@ Runner = Callable[..., tuple]
 
 def run_and_compare(mech, engine: str, settings, request: dict):
     """Run ``engine`` on ``mech`` as ``request`` asks and compare every judged quantity
-    with the analytic solution: ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
-    from reports.compare import compare_run
-    from sim_models import compile_linkage
-    from sim_models.engines import run
-    tree = compile_linkage(mech, chords=request.get("chords", "moving"))
-    r = run(tree, engine, settings, revolutions=request["revolutions"],
-            samples=request["samples"], max_violation=request["max_violation"],
-            max_speed_error=request["max_speed_error"])
-    return r, judged(compare_run(r, tree.linkage))
+    with the analytic solution (:func:`reports.verdict_runs.run_verdict`):
+    ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
+    from .verdict_runs import request_of, run_verdict
+    v = run_verdict(mech, engine, settings, request_of(request))
+    return v.run, v.judged()
 
 
 def request_dict(revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,

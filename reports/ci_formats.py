@@ -40,8 +40,6 @@ from pathlib import Path
 
 from analytic.errors import OutputError
 
-from . import quantities
-
 
 @dataclass(frozen=True)
 class CiCase:
@@ -87,13 +85,14 @@ def _at(value: float, unit: str) -> str:
 
 
 def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiCase]:
-    """``xval compare``'s ``(run, comparisons, ok, near_event)`` tuples (``file``: the
+    """``xval compare``'s verdicts (:class:`reports.verdict_runs.Verdict`; ``file``: the
     model file, empty for a built-in case)."""
     from .baseline import versions
     unit = "deg" if revolute else "m"
     out = []
-    for r, comps, ok, near in results:
-        judged = quantities.judged(comps)
+    for v in results:
+        r, comps, ok = v.run, v.comparisons, v.ok
+        judged = v.judged()
         bad = [c for c in judged if not c.passed]
         pool = bad or judged
         worst = max(pool, key=lambda c: c.normalised if math.isfinite(c.normalised)
@@ -110,8 +109,8 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
                 f"{worst.quantity}: error {worst.normalised:.3g} of peak{where} exceeds "
                 f"the tolerance {worst.tolerance:g}" if worst.measured else
                 f"{worst.quantity}: not measured from {_at(worst.at, unit)} on")
-            if near:
-                msg += f" ({near})"
+            if v.near_event:
+                msg += f" ({v.near_event})"
         lines = [str(c) for c in comps] + [f"settings: {r.engine} {r.settings_text}"]
         lines += [f"note: {n}" for n in r.notes]
         out.append(CiCase(

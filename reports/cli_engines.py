@@ -31,9 +31,10 @@ def cmd_models(args) -> int:
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import json_safe, near_event, step_note, verdict
-    from reports.verdict_runs import engine_list, run_comparison, settings_for
+    from reports.compare import json_safe
+    from reports.verdict_runs import engine_list, run_verdict, settings_for
     from sim_models import compile_linkage
+    from sim_models.engine_run import RunRequest
     mech = load_case(args.case)
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
@@ -42,31 +43,37 @@ def cmd_compare(args) -> int:
                             {"--timestep": ("timestep", args.timestep),
                              "--integrator": ("integrator", args.integrator)})
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
-    out, all_ok = [], True
+    request = RunRequest(args.revolutions, args.samples, mode=args.mode)
+    out = []
     from reports.progress import engine_progress
     for eng in engines:
         with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
-            r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
-                                      args.samples)
-        ok = r.ok and verdict(comps)
-        all_ok &= ok
-        out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
+            out.append(run_verdict(tree, eng, settings[eng], request))
+    all_ok = all(v.ok for v in out)
     if args.json:
-        print(json.dumps(json_safe([{
-            "case": mech.name, "engine": r.engine, "mode": args.mode,
-            "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
-            "sampled_by": "time" if r.by_time else "input",
-            "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if ok else "fail",
-            "near_event": near, "wall_seconds_per_revolution": r.wall_per_rev,
-            "timestep": r.timestep, "notes": list(r.notes),
-            "step_note": None if ok else step_note(r, tree.linkage.driver_is_revolute),
-            "comparisons": [c.as_json() for c in comps]} for r, comps, ok, near in out]),
-            indent=2, allow_nan=False))
+        print(json.dumps(json_safe([_verdict_json(v, args.mode) for v in out]), indent=2,
+                         allow_nan=False))
     else:
         _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
     from reports.ci_formats import write_compare_outputs  # --junit, --summary
     write_compare_outputs(args, mech, out)
     return 0 if all_ok else 1
+
+
+def _verdict_json(v, mode: str) -> dict:
+    """One engine's object in ``xval compare --json`` (a :class:`reports.verdict_runs.
+    Verdict`)."""
+    from reports.compare import step_note
+    r = v.run
+    return {
+        "case": r.case, "engine": r.engine, "mode": mode,
+        "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
+        "sampled_by": "time" if r.by_time else "input",
+        "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if v.ok else "fail",
+        "near_event": v.near_event, "wall_seconds_per_revolution": r.wall_per_rev,
+        "timestep": r.timestep, "notes": list(r.notes),
+        "step_note": None if v.ok else step_note(r, v.tree.linkage.driver_is_revolute),
+        "comparisons": [c.as_json() for c in v.comparisons]}
 
 
 def _table(comps) -> list[list[str]]:
@@ -102,7 +109,8 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
         print(textwrap.fill(text, width, subsequent_indent="  ", break_on_hyphens=False))
 
     with pd.option_context("display.width", width, "display.max_columns", 20):
-        for r, comps, ok, near in out:
+        for v in out:
+            r, comps, ok, near = v.run, v.comparisons, v.ok, v.near_event
             print(f"== {mech.name} / {r.engine} ({mode}) : {'PASS' if ok else 'FAIL'}")
             say(f"settings: {r.settings_text}")
             if r.by_time:

@@ -88,22 +88,16 @@ def _entry(mech, engine: str, settings, request: dict) -> dict:
 
 def _make_run(mech, engine, settings, request) -> dict:
     from analytic.errors import LinkageError
-    from reports.compare import compare_run
-    from sim_models import compile_linkage
-    from sim_models.engines import run
+    from reports.verdict_runs import request_of, run_verdict
     t0 = time.perf_counter()
     _STATS["runs"] += 1
     try:
-        tree = compile_linkage(mech, chords=request["chords"])
-        r = run(tree, engine, settings, revolutions=request["revolutions"],
-                samples=request["samples"], max_violation=request["max_violation"],
-                max_speed_error=request["max_speed_error"])
-        comps = compare_run(r, tree.linkage)
+        v = run_verdict(mech, engine, settings, request_of(request))
     except LinkageError as e:  # a refusal or nothing to compare: cached like a result
         return {"error": e}
     finally:
         _STATS["seconds"] += time.perf_counter() - t0
-    return {"run": r, "tree": tree, "comparisons": comps}
+    return {"run": v.run, "tree": v.tree, "comparisons": list(v.comparisons)}
 
 
 def session_run(mech, engine: str, settings=None, revolutions: int = 2, samples: int = 36,
