@@ -465,11 +465,20 @@ def run_and_compare(mech, engine: str, settings, request: dict):
     return v.run, v.judged()
 
 
-def request_dict(revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,
-                 max_speed_error: float = 1e-2, chords: str = "moving") -> dict:
-    return {"revolutions": int(revolutions), "samples": int(samples),
-            "max_violation": float(max_violation), "max_speed_error": float(max_speed_error),
-            "chords": chords, "mode": "run"}
+def request_dict(revolutions: int | None = None, samples: int | None = None,
+                 max_violation: float | None = None, max_speed_error: float | None = None,
+                 chords: str | None = None) -> dict:
+    """A run request as a baseline records it; a value not given (None) is the default of
+    :class:`sim_models.engine_run.RunRequest`, the one holder of the run defaults."""
+    from sim_models.engine_run import RunRequest
+
+    def given(value, name: str):
+        return getattr(RunRequest, name) if value is None else value
+    return {"revolutions": int(given(revolutions, "revolutions")),
+            "samples": int(given(samples, "samples")),
+            "max_violation": float(given(max_violation, "max_violation")),
+            "max_speed_error": float(given(max_speed_error, "max_speed_error")),
+            "chords": given(chords, "chords"), "mode": "run"}
 
 
 def settings_json(engine: str, settings) -> dict:

@@ -123,6 +123,7 @@ def _model(text: str) -> str:
 
 def register(sub) -> None:
     """``xval baseline record|check``."""
+    from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
     p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
@@ -135,9 +136,9 @@ def register(sub) -> None:
                    help="the baseline file to write (JSON)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
-    r.add_argument("--revolutions", type=opt.revolutions, default=2,
+    r.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")
-    r.add_argument("--samples", type=opt.samples, default=36,
+    r.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
     r.add_argument("--tolerance", type=_tolerance, default=None,
                    help="relative to peak, recorded per quantity (default 1e-3)")

@@ -162,6 +162,7 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_models)
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
+    from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
@@ -172,9 +173,9 @@ def register(sub) -> None:
                         "only), e.g. --set integrator=Euler --set pybullet.erp=0.2")
     s.add_argument("--integrator", choices=["RK4", "implicitfast", "implicit", "Euler"],
                    help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
-    s.add_argument("--revolutions", type=opt.revolutions, default=2,
+    s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")
-    s.add_argument("--samples", type=opt.samples, default=36,
+    s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
     s.add_argument("--timestep", type=opt.timestep,
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "

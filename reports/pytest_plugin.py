@@ -67,8 +67,9 @@ def _settings_of(engine: str, settings):
     return settings
 
 
-def _request(revolutions=2, samples=36, max_violation=1e-3, max_speed_error=1e-2,
-             chords="moving") -> dict:
+def _request(revolutions=None, samples=None, max_violation=None, max_speed_error=None,
+             chords=None) -> dict:
+    """:func:`reports.baseline.request_dict`: None takes ``RunRequest``'s default."""
     from reports.baseline import request_dict
     return request_dict(revolutions, samples, max_violation, max_speed_error, chords)
 
@@ -100,11 +101,12 @@ def _make_run(mech, engine, settings, request) -> dict:
     return {"run": v.run, "tree": v.tree, "comparisons": list(v.comparisons)}
 
 
-def session_run(mech, engine: str, settings=None, revolutions: int = 2, samples: int = 36,
-                max_violation: float = 1e-3, max_speed_error: float = 1e-2,
-                chords: str = "moving"):
+def session_run(mech, engine: str, settings=None, revolutions: int | None = None,
+                samples: int | None = None, max_violation: float | None = None,
+                max_speed_error: float | None = None, chords: str | None = None):
     """:func:`sim_models.engines.run` of a Mechanism, cached for the session (same
-    arguments, same run object).  ``settings``: None, overrides or a settings object."""
+    arguments, same run object).  ``settings``: None, overrides or a settings object; a
+    request value left None is :class:`sim_models.engine_run.RunRequest`'s default."""
     s = _settings_of(engine, settings)
     req = _request(revolutions, samples, max_violation, max_speed_error, chords)
     return _entry(mech, engine, s, req)["run"]
@@ -188,14 +190,14 @@ class Xval:
         return m if not isinstance(m, (str, Path)) else load_case(str(m))
 
     # -- runs ---------------------------------------------------------------------
-    def run(self, model, engine: str = "mujoco", settings=None, *, revolutions: int = 2,
-            samples: int = 36):
+    def run(self, model, engine: str = "mujoco", settings=None, *,
+            revolutions: int | None = None, samples: int | None = None):
         """The engine run (cached for the session)."""
         return session_run(self.mechanism(model), engine, settings, revolutions, samples)
 
     def compare(self, model, engine: str = "mujoco", tolerance: float | None = None,
-                settings=None, *, revolutions: int = 2, samples: int = 36,
-                quantities=None):
+                settings=None, *, revolutions: int | None = None,
+                samples: int | None = None, quantities=None):
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
         ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
         from dataclasses import replace
@@ -219,8 +221,8 @@ class Xval:
         return e["run"], comps
 
     def assert_agrees(self, model, engine: str = "mujoco", tolerance: float | None = None,
-                      settings=None, *, revolutions: int = 2, samples: int = 36,
-                      quantities=None):
+                      settings=None, *, revolutions: int | None = None,
+                      samples: int | None = None, quantities=None):
         """Every judged quantity of ``model`` in ``engine`` within ``tolerance`` of its
         peak over the cycle (default 1e-3); returns the comparisons.  The failure message
         names each failing quantity, its error, where in the cycle, and the settings."""

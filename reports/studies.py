@@ -268,19 +268,24 @@ def _failed_row(meta: dict, reason: str) -> dict:
 
 
 def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
-              revolutions: int = 2, samples: int = 36, timing_steps: int = 5000,
+              revolutions: int | None = None, samples: int | None = None,
+              timing_steps: int = 5000,
               timing_repeats: int = 3, meta: dict | None = None,
               keep_samples: bool = False) -> dict:
     """One engine run at one setting: errors (engine run + :func:`run_errors`) and speed
-    (bare stepping loop).  Never raises: failures are rows with ``ok = False``."""
+    (bare stepping loop); ``revolutions``/``samples`` None: the run request's defaults.
+    Never raises: failures are rows with ``ok = False``."""
     meta = dict(meta or {})
     meta.update(case=case_name, engine=engine, label=label, settings_dict=settings_dict)
     try:
         from sim_models import compile_linkage
         from sim_models.engines import run
+
+        from .verdict_runs import request_of
         tree = compile_linkage(load(case_name))  # one compiled linkage for run and errors
         s = make_settings(engine, settings_dict)
-        r = run(tree, engine, s, revolutions=revolutions, samples=samples)
+        req = request_of({"revolutions": revolutions, "samples": samples})
+        r = run(tree, engine, s, revolutions=req.revolutions, samples=req.samples)
         row = {k: meta.get(k) for k in GRID_COLUMNS}
         row.update(case=case_name, engine=engine, label=label, settings=s.describe(),
                    timestep=float(r.timestep), steps_per_rev=float(r.steps_per_rev),
@@ -738,7 +743,7 @@ def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: 
         mech = replace(mech0, gravity=(0.0, -9.81)) if gravity else mech0
         tree = compile_linkage(mech)
         s = make_settings("mujoco", dict(settings_dict, scene=scene))
-        r = run(tree, "mujoco", s, revolutions=2, samples=36)
+        r = run(tree, "mujoco", s)  # the run request's defaults
         e = run_errors(r, tree.linkage)
         notes = [SCENE_VARIANTS[variant]]
         if mech is not mech0 and r.ok:

@@ -60,9 +60,10 @@ class Verdict:
 
 def request_of(values: Mapping[str, object]) -> RunRequest:
     """A :class:`RunRequest` from a mapping of its fields (a baseline record's
-    ``request``); a field not given takes the request's default."""
+    ``request``, a function's keyword arguments); a field not given, or None, takes the
+    request's default (the one holder of the run defaults)."""
     names = {f.name for f in dataclasses.fields(RunRequest)}
-    return RunRequest(**{k: v for k, v in values.items() if k in names})
+    return RunRequest(**{k: v for k, v in values.items() if k in names and v is not None})
 
 
 def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,

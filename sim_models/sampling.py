@@ -87,7 +87,7 @@ def travel_time(d, distance: float) -> float:
     return t_r + math.sqrt(2 * (distance - back) / abs(d.acceleration))
 
 
-def plan_samples(tree: SimTree, revolutions: int = 2, samples: int = 36) -> Plan:
+def plan_samples(tree: SimTree, revolutions: int, samples: int) -> Plan:
     """The sampling plan of a run (see the module docstring).
 
     Raises :class:`EngineRefusal` when the driver does not move or no sample can be
