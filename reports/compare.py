@@ -16,6 +16,7 @@ import pandas as pd
 from analytic.errors import LinkageError
 from analytic.input_display import convention_of, display_input, format_input, input_number
 from analytic.positions import size_of
+from sim_models.sampling import near_limit
 
 from .quantities import engine_reading, is_engine_reading, judged
 from .reference import MAX_CONDITION, analytic_reference, linkage_of
@@ -181,7 +182,7 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     tol = ENGINE_RELATIVE if tolerance is None else tolerance
     lk, kin, frc = analytic_at(run_, reference)
     mech = lk.mech
-    keep = kin.condition <= max_condition
+    keep = ~near_limit(kin.condition, max_condition)
     if run_.ok:
         # a limited-range driver runs forward from its reference value only: samples
         # behind it are NaN by design (counted in ``skipped_samples``), not failures

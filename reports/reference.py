@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic.input_display import convention_of, display_input
+from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
 
 from . import quantities
 
@@ -53,8 +54,10 @@ class Reference:
 #: out of engine comparisons: only the ends of a limited-range sweep, 1e-6 of the range
 #: from a limit position, where the exact accelerations reach ~1e9 and a sample-time
 #: offset of one ulp changes them by percent.  Every full-cycle case stays below 20.
-#: (Defined here, not in reports.compare, which imports this module: no import cycle.)
-MAX_CONDITION = 100.0
+#: The same number at which a limited-range engine run stops
+#: (:data:`sim_models.sampling.LIMITED_RANGE_CONDITION`): one decision, in
+#: :func:`sim_models.sampling.near_limit`.
+MAX_CONDITION = LIMITED_RANGE_CONDITION
 
 
 def linkage_of(run_, reference=None):
@@ -113,7 +116,7 @@ def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
 def reference_of(run_, reference=None) -> Reference:
     """:func:`analytic_reference` with the judged samples and the plotted axis."""
     lk, kin, frc = analytic_reference(run_, reference)
-    judged = kin.condition <= MAX_CONDITION
+    judged = ~near_limit(kin.condition, MAX_CONDITION)
     if run_.ok:
         judged &= np.all(np.isfinite(run_.alpha), axis=1)
     u, _ = axis_of(run_, lk)

@@ -65,3 +65,15 @@ def test_verdict_is_the_comparison_verdict():
     assert [c.quantity for c in v.judged()] == ["rocker.alpha"]
     failed = type("Failed", (_Run,), {"ok": False, "reason": "diverged"})()
     assert not vr.Verdict(None, failed, comps).ok
+
+
+def test_near_a_limit_is_one_decision():
+    """A condition number above 100, or NaN (a singular sample), is near a limit: where a
+    limited-range run stops and what the verdict leaves out (the same predicate)."""
+    import numpy as np
+
+    from reports.reference import MAX_CONDITION
+    from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
+    assert MAX_CONDITION == LIMITED_RANGE_CONDITION == 100.0
+    np.testing.assert_array_equal(near_limit([1.0, 99.9, 100.0, 100.1, np.inf, np.nan]),
+                                  [False, False, False, True, True, True])
