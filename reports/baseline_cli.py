@@ -96,8 +96,9 @@ def cmd_check(args) -> int:
                        for k, v in kv.items())  # record what was checked
         print("if the change is intended, record the baseline again: "
               f"{bl.record_command(base)}{sets}")
-    ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
-                             ci_formats.from_baseline(checks, base.base_dir), intro=lines[:2],
+    ci_formats.write_outputs(f"xval baseline check {args.baseline}",
+                             ci_formats.from_baseline(checks, base.base_dir), args.junit,
+                             args.summary, intro=lines[:2],
                              properties=_override_props(overrides), command="baseline")
     return 0 if all(c.passed for c in checks) else 1
 

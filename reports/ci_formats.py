@@ -294,25 +294,28 @@ def write_text(path: str, text: str, what: str) -> None:
         raise OutputError(f"cannot write {what} {path!r}: {e.strerror}") from None
 
 
-def write_outputs(args, suite: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
+def write_outputs(suite: str, cases: Sequence[CiCase], junit: str | None = None,
+                  summary: str | None = None, intro: Sequence[str] = (),
                   properties: dict | None = None, command: str = "compare") -> None:
-    """Write what ``--junit`` / ``--summary`` ask for (nothing when neither is given)."""
-    if getattr(args, "junit", None):
-        write_text(args.junit, junit_xml(suite, cases, properties, command), "JUnit file")
-    if getattr(args, "summary", None):
-        write_text(args.summary, markdown_summary(suite, cases, intro), "summary")
+    """Write the JUnit XML to ``junit`` and the Markdown summary to ``summary`` (paths,
+    ``-``: standard output; None: not asked for)."""
+    if junit:
+        write_text(junit, junit_xml(suite, cases, properties, command), "JUnit file")
+    if summary:
+        write_text(summary, markdown_summary(suite, cases, intro), "summary")
 
 
-def write_compare_outputs(args, mech, results) -> None:
-    """``xval compare --junit/--summary`` (called from :func:`reports.cli_engines.cmd_compare`)."""
-    if not (getattr(args, "junit", None) or getattr(args, "summary", None)):
+def write_compare_outputs(mech, results, given: str, junit: str | None = None,
+                          summary: str | None = None) -> None:
+    """``xval compare --junit/--summary`` of ``results`` (:class:`reports.verdict_runs.
+    Verdict` per engine) on ``mech``, given as ``given`` (a built-in name or a file)."""
+    if not (junit or summary):
         return
     from analytic.mechanism import Prismatic
-    given = str(getattr(args, "case", "") or "")
     file = Path(given).as_posix() if given.endswith(".toml") else ""  # not a built-in
     cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic),
                          file)
-    write_outputs(args, f"xval compare {mech.name}", cases)
+    write_outputs(f"xval compare {mech.name}", cases, junit, summary)
 
 
 __all__ = ["CiCase", "from_baseline", "from_compare", "junit_xml",

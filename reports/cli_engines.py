@@ -56,7 +56,7 @@ def cmd_compare(args) -> int:
     else:
         _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
     from reports.ci_formats import write_compare_outputs  # --junit, --summary
-    write_compare_outputs(args, mech, out)
+    write_compare_outputs(mech, out, str(args.case or ""), args.junit, args.summary)
     return 0 if all_ok else 1
 
 
