@@ -629,8 +629,10 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
     req = baseline.runs[0].request if baseline.runs else request_dict()
     words = ["xval baseline record", *models, *(f"--engine {e}" for e in engines),
              *(f"--set {s}" for s in sets)]
-    words += [f"--revolutions {req['revolutions']}"] if req["revolutions"] != 2 else []
-    words += [f"--samples {req['samples']}"] if req["samples"] != 36 else []
+    default = request_dict()  # the options' defaults: RunRequest's
+    words += [f"--revolutions {req['revolutions']}"] \
+        if req["revolutions"] != default["revolutions"] else []
+    words += [f"--samples {req['samples']}"] if req["samples"] != default["samples"] else []
     from analytic.tolerances import ENGINE_RELATIVE
     tols = {q.tolerance for r in baseline.runs for q in r.quantities}
     if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:
