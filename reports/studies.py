@@ -183,6 +183,18 @@ def grid_plan(case: str, quick: bool) -> list[dict]:
 
 
 # ============================================================================ errors
+def _is_accel(quantity: str) -> bool:
+    """An acceleration quantity of the studies' ``accel_error``: a body's alpha, a
+    slider's acceleration."""
+    return quantity.endswith((".alpha", ".a"))
+
+
+def _is_force(quantity: str) -> bool:
+    """A force quantity of the studies' ``force_error``: the drive effort and the joint
+    forces (not a prismatic joint's normal and moment)."""
+    return quantity == "drive.effort" or quantity.endswith(".force")
+
+
 def run_errors(run_, reference=None) -> dict:
     """Normalised errors of an engine run through :func:`reports.compare.compare_run`
     (``reference``: the compiled linkage's Linkage; default the run's own mechanism)."""
@@ -192,8 +204,8 @@ def run_errors(run_, reference=None) -> dict:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
     comps = judged(compare_run(run_, reference))
-    acc = [c for c in comps if c.quantity.endswith(".alpha") or c.quantity.endswith(".a")]
-    frc = [c for c in comps if c.quantity == "drive.effort" or c.quantity.endswith(".force")]
+    acc = [c for c in comps if _is_accel(c.quantity)]
+    frc = [c for c in comps if _is_force(c.quantity)]
     a = max((c.normalised for c in acc), default=math.nan)
     f = max((c.normalised for c in frc), default=math.nan)
     worst = max(comps, key=lambda c: c.normalised if np.isfinite(c.normalised) else math.inf,
@@ -206,25 +218,21 @@ def run_errors(run_, reference=None) -> dict:
 
 
 def sample_errors(run_, lk: Linkage | None = None) -> dict[str, np.ndarray]:
-    """Per-sample normalised errors of a run (for plots): ``alpha`` (worst body, by the
-    largest body peak) and ``force`` (worst of the drive effort and each joint force,
-    each by its own peak), NaN where the run has no value."""
-    lk = lk or Linkage(run_.mechanism)
-    mech = lk.mech
-    vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
-                   mech.driver.velocity)
-    kin = lk.kinematics(run_.values, vel, run_.driver_acceleration, on_singular="flag")
-    moving = [b for b, n in enumerate(run_.body_names) if n != mech.ground]
-    pk = np.nanmax(np.abs(kin.alpha[:, moving]))
-    out = {"alpha": np.max(np.abs(run_.alpha[:, moving] - kin.alpha[:, moving]), axis=1) / pk}
-    if run_.has_forces and mech.has_mass:
-        frc = lk.forces(kin)
-        e = np.abs(run_.drive_effort - frc.effort) / np.nanmax(np.abs(frc.effort))
-        for j, name in enumerate(run_.joint_names):
-            ref = frc.joint_force[name]
-            e = np.fmax(e, np.linalg.norm(run_.joint_force[:, j] - ref, axis=1)
-                        / np.nanmax(np.linalg.norm(ref, axis=1)))
-        out["force"] = e
+    """Per-sample normalised errors of a run (for the study plots): ``alpha`` the worst
+    acceleration quantity and ``force`` the worst force quantity at each sample
+    (:func:`_is_accel`, :func:`_is_force`), each quantity divided by the peak its verdict
+    divides by (:func:`reports.reference.sample_errors`, the one per-sample error), so a
+    curve's largest value is the row's ``accel_error`` / ``force_error``; NaN where the
+    verdict judges no sample."""
+    from reports.compare import compare_run
+    from reports.reference import reference_of
+    from reports.reference import sample_errors as per_quantity
+    errs = per_quantity(run_, reference_of(run_, lk), compare_run(run_, lk))
+    out = {}
+    for key, family in (("alpha", _is_accel), ("force", _is_force)):
+        cols = [e for q, e in errs.items() if family(q)]
+        if cols:
+            out[key] = np.fmax.reduce(np.vstack(cols), axis=0)  # NaN where all are NaN
     return out
 
 
@@ -302,7 +310,7 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
                 f"timing failed: {type(e).__name__}: {e}"
         row["steps_per_second"] = float(sps)
         row["seconds_per_rev"] = float(r.steps_per_rev / sps) if sps and sps > 0 else math.nan
-        if keep_samples:
+        if keep_samples and r.ok:  # the plots draw successful runs only
             row["samples"] = {"input_deg": np.degrees(r.values).tolist(),
                               **{k: v.tolist()
                                  for k, v in sample_errors(r, tree.linkage).items()}}
