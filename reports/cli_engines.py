@@ -185,10 +185,6 @@ def register(sub) -> None:
     opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
     baseline_cli.register(sub)  # xval baseline record|check
-    try:
-        import reports.report as _  # noqa: F401
-    except ImportError:
-        return
     s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
     s.add_argument("--out", type=opt.output_dir,
                    help="output directory (default reports/out/<timestamp>)")
