@@ -15,6 +15,7 @@ import (file and line), not by an import error.
 from __future__ import annotations
 
 import ast
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -132,7 +133,13 @@ def imports_by_name(name: str, path: Path, modules) -> list[Import]:
 
 
 def project_imports() -> tuple[dict[str, Path], list[Import]]:
-    """The project's modules and the imports between them (:func:`edges_of`)."""
+    """The project's modules and the imports between them (:func:`edges_of`), read once
+    per ``ROOT``."""
+    return _project_imports(ROOT)
+
+
+@functools.cache
+def _project_imports(root: Path) -> tuple[dict[str, Path], list[Import]]:
     files = project_files()
     return files, edges_of(files)
 
@@ -148,10 +155,12 @@ def edges_of(files: dict[str, Path]) -> list[Import]:
     # ``from P import X`` added both P.X and P: keep P only when X is not a module
     # (P's __init__ still runs, but a package's __init__ importing its own submodules
     # is a front door, not a cycle through the submodule).
+    on_line: dict[tuple[str, int], set[str]] = {}
+    for e in edges:
+        on_line.setdefault((e.source, e.line), set()).add(e.target)
     kept, seen = [], set()
     for imp in edges:
-        key = (imp.source, imp.line)
-        targets = {e.target for e in edges if (e.source, e.line) == key}
+        targets = on_line[(imp.source, imp.line)]
         if any(t.startswith(imp.target + ".") for t in targets):
             continue  # the parent of a submodule imported on the same line
         if (imp.source, imp.target, imp.line) not in seen:
