@@ -60,6 +60,8 @@ from pathlib import Path
 
 from analytic.errors import LinkageError, OutputError
 
+from .quantities import judged
+
 SCHEMA = "linkage-xval baseline"
 SCHEMA_VERSION = 1
 
@@ -456,27 +458,27 @@ Runner = Callable[..., tuple]
 
 def run_and_compare(mech, engine: str, settings, request: dict):
     """Run ``engine`` on ``mech`` as ``request`` asks and compare every judged quantity
-    with the analytic solution: ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
-    from reports.compare import compare_run
-    from sim_models import compile_linkage
-    from sim_models.engines import run
-    tree = compile_linkage(mech, chords=request.get("chords", "moving"))
-    r = run(tree, engine, settings, revolutions=request["revolutions"],
-            samples=request["samples"], max_violation=request["max_violation"],
-            max_speed_error=request["max_speed_error"])
-    return r, judged(compare_run(r, tree.linkage))
+    with the analytic solution (:func:`reports.verdict_runs.run_verdict`):
+    ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
+    from .verdict_runs import request_of, run_verdict
+    v = run_verdict(mech, engine, settings, request_of(request))
+    return v.run, v.judged()
 
 
-def judged(comparisons) -> list:
-    """The quantities this project computes (the engines' own readings left out)."""
-    return [c for c in comparisons if not c.quantity.endswith("[engine]")]
+def request_dict(revolutions: int | None = None, samples: int | None = None,
+                 max_violation: float | None = None, max_speed_error: float | None = None,
+                 chords: str | None = None) -> dict:
+    """A run request as a baseline records it; a value not given (None) is the default of
+    :class:`sim_models.engine_run.RunRequest`, the one holder of the run defaults."""
+    from sim_models.engine_run import RunRequest
 
-
-def request_dict(revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,
-                 max_speed_error: float = 1e-2, chords: str = "moving") -> dict:
-    return {"revolutions": int(revolutions), "samples": int(samples),
-            "max_violation": float(max_violation), "max_speed_error": float(max_speed_error),
-            "chords": chords, "mode": "run"}
+    def given(value, name: str):
+        return getattr(RunRequest, name) if value is None else value
+    return {"revolutions": int(given(revolutions, "revolutions")),
+            "samples": int(given(samples, "samples")),
+            "max_violation": float(given(max_violation, "max_violation")),
+            "max_speed_error": float(given(max_speed_error, "max_speed_error")),
+            "chords": given(chords, "chords"), "mode": "run"}
 
 
 def settings_json(engine: str, settings) -> dict:
@@ -627,8 +629,10 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
     req = baseline.runs[0].request if baseline.runs else request_dict()
     words = ["xval baseline record", *models, *(f"--engine {e}" for e in engines),
              *(f"--set {s}" for s in sets)]
-    words += [f"--revolutions {req['revolutions']}"] if req["revolutions"] != 2 else []
-    words += [f"--samples {req['samples']}"] if req["samples"] != 36 else []
+    default = request_dict()  # the options' defaults: RunRequest's
+    words += [f"--revolutions {req['revolutions']}"] \
+        if req["revolutions"] != default["revolutions"] else []
+    words += [f"--samples {req['samples']}"] if req["samples"] != default["samples"] else []
     from analytic.tolerances import ENGINE_RELATIVE
     tols = {q.tolerance for r in baseline.runs for q in r.quantities}
     if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import math
 import os
-from collections import Counter
 
 from . import baseline as bl
 from . import ci_formats
 from . import cli_options as opt
+from .baseline_messages import report_lines
 from .cli_paths import check_outputs
 
 
@@ -96,8 +96,9 @@ def cmd_check(args) -> int:
                        for k, v in kv.items())  # record what was checked
         print("if the change is intended, record the baseline again: "
               f"{bl.record_command(base)}{sets}")
-    ci_formats.write_outputs(args, f"xval baseline check {args.baseline}",
-                             ci_formats.from_baseline(checks, base.base_dir), intro=lines[:2],
+    ci_formats.write_outputs(f"xval baseline check {args.baseline}",
+                             ci_formats.from_baseline(checks, base.base_dir), args.junit,
+                             args.summary, intro=lines[:2],
                              properties=_override_props(overrides), command="baseline")
     return 0 if all(c.passed for c in checks) else 1
 
@@ -112,55 +113,6 @@ def _override_props(overrides: dict) -> dict:
     return {f"set.{e}.{k}": v for e, kv in overrides.items() for k, v in kv.items()}
 
 
-def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
-    """What ``xval baseline check`` prints: a header, the versions that changed, one line
-    per run, and under each failed run every failing quantity, its settings and versions."""
-    failed = [c for c in checks if not c.passed]
-    out = [f"baseline {base.path}: {len(checks)} runs (recorded {base.recorded or '?'}); "
-           f"drift factor {factor:g}, floor {bl.DRIFT_FLOOR:g} of peak",
-           versions_line(checks)]
-    for c in checks:
-        w = c.worst()
-        if c.passed:
-            ratio = f", {w.ratio:.3g}x" if w and math.isfinite(w.ratio) else ""
-            worst = f"worst {w.quantity} {w.error:.3g} of peak (baseline {w.base:.3g}" \
-                    f"{ratio})" if w else "nothing compared"
-            out.append(f"pass  {c.record.label}: {worst}")
-            continue
-        first = c.problems[0] if c.problems else c.failures()[0].message()
-        out.append(f"FAIL  {c.record.label}: {first}")
-        rest = c.problems[1:] + [q.message() for q in c.failures()][0 if c.problems else 1:]
-        out += [f"        {m}" for m in rest]
-        if c.settings_text:
-            out.append(f"        settings: {c.settings_text}")
-        ch = c.versions_changed()
-        if ch:
-            out.append("        versions changed: " +
-                       ", ".join(f"{k} {a} -> {b}" for k, (a, b) in ch.items()))
-    for c in checks:
-        out += [f"warning: {c.record.label}: {q.message()}" for q in c.loose()]
-    for c in checks:
-        out += [f"note: {c.record.label}: {q.message()}" for q in c.quantities
-                if q.status == "new"]
-        out += [f"note: {c.record.label}: {n}" for n in c.notes]
-    out.append(f"result: {'FAIL' if failed else 'PASS'}: {len(failed)} of {len(checks)} "
-               "runs failed" + (" (drift, tolerance, or a run, quantity or model gone or "
-                                "changed)" if failed else ""))
-    return out
-
-
-def versions_line(checks) -> str:
-    """Versions that differ from the recorded ones, with how many runs each affects."""
-    changed: Counter = Counter()
-    for c in checks:
-        for k, (a, b) in c.versions_changed().items():
-            changed[(k, a, b)] += 1
-    if not changed:
-        return "versions: unchanged since the baseline"
-    return "versions changed since the baseline: " + "; ".join(
-        f"{k} {a} -> {b} ({n} runs)" for (k, a, b), n in sorted(changed.items()))
-
-
 # ============================================================================ parser
 _tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
                               why="an error relative to the quantity's peak")
@@ -172,6 +124,7 @@ def _model(text: str) -> str:
 
 def register(sub) -> None:
     """``xval baseline record|check``."""
+    from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
     p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
@@ -184,9 +137,9 @@ def register(sub) -> None:
                    help="the baseline file to write (JSON)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
-    r.add_argument("--revolutions", type=opt.revolutions, default=2,
+    r.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")
-    r.add_argument("--samples", type=opt.samples, default=36,
+    r.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
     r.add_argument("--tolerance", type=_tolerance, default=None,
                    help="relative to peak, recorded per quantity (default 1e-3)")
@@ -210,7 +163,7 @@ def register(sub) -> None:
     c.add_argument("--fail-loose", action="store_true",
                    help="fail when an error shrank by more than the factor (the baseline "
                         "is loose; default: a warning)")
-    ci_formats.add_options(c)
+    opt.add_ci_outputs(c)
     c.set_defaults(func=cmd_check)
 
 

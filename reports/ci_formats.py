@@ -85,13 +85,14 @@ def _at(value: float, unit: str) -> str:
 
 
 def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiCase]:
-    """``xval compare``'s ``(run, comparisons, ok, near_event)`` tuples (``file``: the
+    """``xval compare``'s verdicts (:class:`reports.verdict_runs.Verdict`; ``file``: the
     model file, empty for a built-in case)."""
     from .baseline import versions
     unit = "deg" if revolute else "m"
     out = []
-    for r, comps, ok, near in results:
-        judged = [c for c in comps if not c.quantity.endswith("[engine]")]
+    for v in results:
+        r, comps, ok = v.run, v.comparisons, v.ok
+        judged = v.judged()
         bad = [c for c in judged if not c.passed]
         pool = bad or judged
         worst = max(pool, key=lambda c: c.normalised if math.isfinite(c.normalised)
@@ -108,8 +109,8 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
                 f"{worst.quantity}: error {worst.normalised:.3g} of peak{where} exceeds "
                 f"the tolerance {worst.tolerance:g}" if worst.measured else
                 f"{worst.quantity}: not measured from {_at(worst.at, unit)} on")
-            if near:
-                msg += f" ({near})"
+            if v.near_event:
+                msg += f" ({v.near_event})"
         lines = [str(c) for c in comps] + [f"settings: {r.engine} {r.settings_text}"]
         lines += [f"note: {n}" for n in r.notes]
         out.append(CiCase(
@@ -293,35 +294,29 @@ def write_text(path: str, text: str, what: str) -> None:
         raise OutputError(f"cannot write {what} {path!r}: {e.strerror}") from None
 
 
-def add_options(parser) -> None:
-    """``--junit FILE`` and ``--summary FILE`` on a command."""
-    from . import cli_options as opt
-    parser.add_argument("--junit", type=opt.output_file, metavar="FILE",
-                        help="write JUnit XML: one test case per case x engine")
-    parser.add_argument("--summary", type=opt.output_file, metavar="FILE",
-                        help="write a Markdown summary (e.g. a CI job summary)")
-
-
-def write_outputs(args, suite: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
+def write_outputs(suite: str, cases: Sequence[CiCase], junit: str | None = None,
+                  summary: str | None = None, intro: Sequence[str] = (),
                   properties: dict | None = None, command: str = "compare") -> None:
-    """Write what ``--junit`` / ``--summary`` ask for (nothing when neither is given)."""
-    if getattr(args, "junit", None):
-        write_text(args.junit, junit_xml(suite, cases, properties, command), "JUnit file")
-    if getattr(args, "summary", None):
-        write_text(args.summary, markdown_summary(suite, cases, intro), "summary")
+    """Write the JUnit XML to ``junit`` and the Markdown summary to ``summary`` (paths,
+    ``-``: standard output; None: not asked for)."""
+    if junit:
+        write_text(junit, junit_xml(suite, cases, properties, command), "JUnit file")
+    if summary:
+        write_text(summary, markdown_summary(suite, cases, intro), "summary")
 
 
-def write_compare_outputs(args, mech, results) -> None:
-    """``xval compare --junit/--summary`` (called from :func:`reports.cli_engines.cmd_compare`)."""
-    if not (getattr(args, "junit", None) or getattr(args, "summary", None)):
+def write_compare_outputs(mech, results, given: str, junit: str | None = None,
+                          summary: str | None = None) -> None:
+    """``xval compare --junit/--summary`` of ``results`` (:class:`reports.verdict_runs.
+    Verdict` per engine) on ``mech``, given as ``given`` (a built-in name or a file)."""
+    if not (junit or summary):
         return
     from analytic.mechanism import Prismatic
-    given = str(getattr(args, "case", "") or "")
     file = Path(given).as_posix() if given.endswith(".toml") else ""  # not a built-in
     cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic),
                          file)
-    write_outputs(args, f"xval compare {mech.name}", cases)
+    write_outputs(f"xval compare {mech.name}", cases, junit, summary)
 
 
-__all__ = ["CiCase", "add_options", "from_baseline", "from_compare", "junit_xml",
+__all__ = ["CiCase", "from_baseline", "from_compare", "junit_xml",
            "markdown_summary", "write_compare_outputs", "write_outputs", "write_text"]

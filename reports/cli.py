@@ -26,12 +26,10 @@ import sys
 import numpy as np
 
 from analytic import Linkage, LinkageError, case_names, load_case
-from analytic.errors import OutputError
 from analytic.mechanism import Prismatic, Revolute
 from analytic.stream import STREAM_POINTS, sweep_csv
 
 from . import cli_options as opt
-from .display_units import UNITS_HELP, units_option
 
 CONVENTIONS = {
     "units": "SI: m, rad, s, kg, N; angle_deg in degrees",
@@ -208,7 +206,7 @@ def cmd_solve(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from .cli_paths import check_outputs
+    from .cli_paths import check_outputs, write_csv
     from .display_units import DisplayUnits, convert_frame
     check_outputs([("--csv", args.csv)], [("the case file", args.case)])
     mech = load_case(args.case)
@@ -273,17 +271,6 @@ def _paragraph_printer():
     return say
 
 
-def write_csv(frame, path: str, stdout) -> None:
-    """Write a table as CSV to ``path``, or to ``stdout`` when ``path`` is ``-``."""
-    if path == "-":
-        frame.to_csv(stdout, index=False)
-        return
-    try:
-        frame.to_csv(path, index=False)
-    except OSError as e:  # checked at the option; this is a race or a full disk
-        raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
-
-
 #: Every command: name -> (the module whose ``register(sub)`` adds it, its line in
 #: ``xval --help``), one line per command.  Only the module of the command that runs is
 #: imported (``xval --help`` imports none of them).
@@ -314,7 +301,7 @@ def register(sub) -> None:
     s.add_argument("--omega", type=opt.rate, help="input velocity, rad/s (or m/s)")
     s.add_argument("--alpha", type=opt.accel, help="input acceleration, rad/s^2 (or m/s^2)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP)
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.set_defaults(func=cmd_solve)
     s = sub.add_parser("sweep", help="full-cycle table")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -332,7 +319,7 @@ def register(sub) -> None:
                    default="continuous",
                    help="branch taken at a change point: the one whose velocity is "
                         "continuous (default), or hold / switch the dyad signs")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP + " (each CSV column "
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP + " (each CSV column "
                    "names its unit: 'crank.omega [rpm]')")
     s.set_defaults(func=cmd_sweep)
 

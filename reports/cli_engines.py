@@ -10,6 +10,7 @@ import sys
 
 from . import cli_options as opt
 from .cli_paths import check_outputs
+from .quantities import is_engine_reading
 
 
 def cmd_models(args) -> int:
@@ -30,9 +31,10 @@ def cmd_models(args) -> int:
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     from analytic import load_case
-    from reports.compare import json_safe, near_event, step_note, verdict
-    from reports.verdict_runs import engine_list, run_comparison, settings_for
+    from reports.compare import json_safe
+    from reports.verdict_runs import engine_list, run_verdict, settings_for
     from sim_models import compile_linkage
+    from sim_models.engine_run import RunRequest
     mech = load_case(args.case)
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
@@ -41,31 +43,37 @@ def cmd_compare(args) -> int:
                             {"--timestep": ("timestep", args.timestep),
                              "--integrator": ("integrator", args.integrator)})
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
-    out, all_ok = [], True
+    request = RunRequest(args.revolutions, args.samples, mode=args.mode)
+    out = []
     from reports.progress import engine_progress
     for eng in engines:
         with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
-            r, comps = run_comparison(tree, eng, settings[eng], args.mode, args.revolutions,
-                                      args.samples)
-        ok = r.ok and verdict(comps)
-        all_ok &= ok
-        out.append((r, comps, ok, None if ok else near_event(comps, tree.linkage)))
+            out.append(run_verdict(tree, eng, settings[eng], request))
+    all_ok = all(v.ok for v in out)
     if args.json:
-        print(json.dumps(json_safe([{
-            "case": mech.name, "engine": r.engine, "mode": args.mode,
-            "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
-            "sampled_by": "time" if r.by_time else "input",
-            "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if ok else "fail",
-            "near_event": near, "wall_seconds_per_revolution": r.wall_per_rev,
-            "timestep": r.timestep, "notes": list(r.notes),
-            "step_note": None if ok else step_note(r, tree.linkage.driver_is_revolute),
-            "comparisons": [c.as_json() for c in comps]} for r, comps, ok, near in out]),
-            indent=2, allow_nan=False))
+        print(json.dumps(json_safe([_verdict_json(v, args.mode) for v in out]), indent=2,
+                         allow_nan=False))
     else:
         _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
     from reports.ci_formats import write_compare_outputs  # --junit, --summary
-    write_compare_outputs(args, mech, out)
+    write_compare_outputs(mech, out, str(args.case or ""), args.junit, args.summary)
     return 0 if all_ok else 1
+
+
+def _verdict_json(v, mode: str) -> dict:
+    """One engine's object in ``xval compare --json`` (a :class:`reports.verdict_runs.
+    Verdict`)."""
+    from reports.compare import step_note
+    r = v.run
+    return {
+        "case": r.case, "engine": r.engine, "mode": mode,
+        "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
+        "sampled_by": "time" if r.by_time else "input",
+        "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if v.ok else "fail",
+        "near_event": v.near_event, "wall_seconds_per_revolution": r.wall_per_rev,
+        "timestep": r.timestep, "notes": list(r.notes),
+        "step_note": None if v.ok else step_note(r, v.tree.linkage.driver_is_revolute),
+        "comparisons": [c.as_json() for c in v.comparisons]}
 
 
 def _table(comps) -> list[list[str]]:
@@ -78,7 +86,7 @@ def _table(comps) -> list[list[str]]:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
             ["not measured"] * 2
         # the engines' own readings are reported, not judged (reports.compare.verdict)
-        judged = "not judged" if c.quantity.endswith("[engine]") else \
+        judged = "not judged" if is_engine_reading(c.quantity) else \
             ("pass" if c.passed else "FAIL")
         rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
                      f"{c.tolerance:.3g}", judged])
@@ -101,7 +109,8 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
         print(textwrap.fill(text, width, subsequent_indent="  ", break_on_hyphens=False))
 
     with pd.option_context("display.width", width, "display.max_columns", 20):
-        for r, comps, ok, near in out:
+        for v in out:
+            r, comps, ok, near = v.run, v.comparisons, v.ok, v.near_event
             print(f"== {mech.name} / {r.engine} ({mode}) : {'PASS' if ok else 'FAIL'}")
             say(f"settings: {r.settings_text}")
             if r.by_time:
@@ -122,7 +131,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 say(f"not measured: the engine has no values from the sample at "
                     f"{format_input(first, 'deg' if revolute else 'm')} on (the run stopped "
                     "there); the verdict is a failure")
-            if any(c.quantity.endswith("[engine]") for c in comps):
+            if any(is_engine_reading(c.quantity) for c in comps):
                 say("rows marked [engine] are the engine's own readings, reported but not "
                     "judged: PyBullet's jointReactionForces are known wrong for links with "
                     "a moving parent or children (README, Engines)")
@@ -134,9 +143,10 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
 
 def cmd_report(args) -> int:
     from analytic.errors import OutputError
-    from reports.report import main as report_main
+
+    from .report_cmd import run
     try:
-        return report_main(args)
+        return run(args)
     except OSError as e:  # the output folder was checked at --out; a race or a full disk
         if e.filename is None:
             raise
@@ -152,6 +162,7 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_models)
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
+    from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
@@ -162,22 +173,18 @@ def register(sub) -> None:
                         "only), e.g. --set integrator=Euler --set pybullet.erp=0.2")
     s.add_argument("--integrator", choices=["RK4", "implicitfast", "implicit", "Euler"],
                    help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
-    s.add_argument("--revolutions", type=opt.revolutions, default=2,
+    s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")
-    s.add_argument("--samples", type=opt.samples, default=36,
+    s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
     s.add_argument("--timestep", type=opt.timestep,
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s")
     s.add_argument("--json", action="store_true")
-    from . import baseline_cli, ci_formats
-    ci_formats.add_options(s)
+    from . import baseline_cli
+    opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
     baseline_cli.register(sub)  # xval baseline record|check
-    try:
-        import reports.report as _  # noqa: F401
-    except ImportError:
-        return
     s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
     s.add_argument("--out", type=opt.output_dir,
                    help="output directory (default reports/out/<timestamp>)")

@@ -257,3 +257,28 @@ def case_or_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"no such file {text!r}")
     raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}, "
                                      f"hard cases {hard_case_names()}")
+
+
+# --- display units and CI outputs ------------------------------------------------
+
+def units_option(text: str):
+    """The type of ``--units``: a :class:`~reports.display_units.DisplayUnits` (an error
+    is one line, status 2)."""
+    from .display_units import DisplayUnits, UnitsError
+    try:
+        return DisplayUnits.parse(text)
+    except UnitsError as e:
+        raise argparse.ArgumentTypeError(str(e).removeprefix("option --units: ")) from None
+
+
+UNITS_HELP = ("display units, e.g. mm,deg,rpm: a length m|cm|mm|in, an angle deg|rad, an "
+              "angular speed rad/s|rpm (default m,deg,rad/s)")
+
+
+def add_ci_outputs(parser) -> None:
+    """``--junit FILE`` and ``--summary FILE`` on a command (:mod:`reports.ci_formats`
+    writes them)."""
+    parser.add_argument("--junit", type=output_file, metavar="FILE",
+                        help="write JUnit XML: one test case per case x engine")
+    parser.add_argument("--summary", type=output_file, metavar="FILE",
+                        help="write a Markdown summary (e.g. a CI job summary)")

@@ -57,4 +57,15 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
                                   "overwrite the other; give two file names")
 
 
-__all__ = ["check_outputs", "safe_stem"]
+def write_csv(frame, path: str, stdout) -> None:
+    """Write a table as CSV to ``path``, or to ``stdout`` when ``path`` is ``-``."""
+    if path == "-":
+        frame.to_csv(stdout, index=False)
+        return
+    try:
+        frame.to_csv(path, index=False)
+    except OSError as e:  # checked at the option; this is a race or a full disk
+        raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
+
+
+__all__ = ["check_outputs", "safe_stem", "write_csv"]

@@ -16,7 +16,9 @@ import pandas as pd
 from analytic.errors import LinkageError
 from analytic.input_display import convention_of, display_input, format_input, input_number
 from analytic.positions import size_of
+from sim_models.sampling import near_limit
 
+from .quantities import engine_reading, is_engine_reading, judged
 from .reference import MAX_CONDITION, analytic_reference, linkage_of
 
 
@@ -65,7 +67,7 @@ class Comparison:
         ``normalised`` are ``null`` where not measured, and ``measured`` says so."""
         d = json_safe(asdict(self))
         d["measured"] = self.measured
-        d["judged"] = not self.quantity.endswith("[engine]")  # an engine's own reading: no
+        d["judged"] = not is_engine_reading(self.quantity)  # an engine's own reading: no
         return d
 
     def __str__(self) -> str:
@@ -180,7 +182,7 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     tol = ENGINE_RELATIVE if tolerance is None else tolerance
     lk, kin, frc = analytic_at(run_, reference)
     mech = lk.mech
-    keep = kin.condition <= max_condition
+    keep = ~near_limit(kin.condition, max_condition)
     if run_.ok:
         # a limited-range driver runs forward from its reference value only: samples
         # behind it are NaN by design (counted in ``skipped_samples``), not failures
@@ -232,10 +234,10 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
         out += _prismatic_reactions(run_, frc, keep, at, tol, f_peak, size)
         if run_.joint_force_engine is not None:
             for j, name in enumerate(run_.joint_names):
-                out.append(compare(f"{name}.force[engine]", frc.joint_force[name][keep],
+                out.append(compare(engine_reading(f"{name}.force"), frc.joint_force[name][keep],
                                    run_.joint_force_engine[keep, j], at, tol))
         if run_.drive_effort_engine is not None:
-            out.append(compare("drive.effort[engine]", frc.effort[keep],
+            out.append(compare(engine_reading("drive.effort"), frc.effort[keep],
                                run_.drive_effort_engine[keep], at, tol))
     return out
 
@@ -270,7 +272,7 @@ def near_event(comparisons: list[Comparison], linkage) -> str | None:
     (:func:`analytic.sweep.nearest_event`), when within :data:`NEAR_EVENT_DEG` (or
     :data:`NEAR_EVENT_STROKE` of the stroke); else None."""
     from analytic.sweep import nearest_event
-    bad = [c for c in comparisons if not c.passed and not c.quantity.endswith("[engine]")]
+    bad = [c for c in judged(comparisons) if not c.passed]
     if not bad:
         return None
     worst = max(bad, key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf)
@@ -338,7 +340,7 @@ def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
         d = c.as_dict()
         d.update(case=run_.case, engine=run_.engine, settings=run_.settings_text,
                  run_ok=run_.ok, run_reason=run_.reason or "",
-                 engine_reading=c.quantity.endswith("[engine]"))
+                 engine_reading=is_engine_reading(c.quantity))
         rows.append(d)
     cols = ["case", "engine", "quantity", "max_abs", "peak", "normalised", "at", "tolerance",
             "passed", "engine_reading", "run_ok", "run_reason", "settings"]
@@ -348,4 +350,4 @@ def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
 def verdict(comparisons: list[Comparison]) -> bool:
     """Pass when every quantity computed by this project passes (the engines' own
     readings known to be wrong are reported, not judged)."""
-    return all(c.passed for c in comparisons if not c.quantity.endswith("[engine]"))
+    return all(c.passed for c in judged(comparisons))

@@ -120,19 +120,6 @@ class DisplayUnits:
             ("length", "velocity", "acceleration")
 
 
-def units_option(text: str) -> DisplayUnits:
-    """The argparse type of ``--units`` (an error is one line, status 2)."""
-    import argparse
-    try:
-        return DisplayUnits.parse(text)
-    except UnitsError as e:
-        raise argparse.ArgumentTypeError(str(e).removeprefix("option --units: ")) from None
-
-
-UNITS_HELP = ("display units, e.g. mm,deg,rpm: a length m|cm|mm|in, an angle deg|rad, an "
-              "angular speed rad/s|rpm (default m,deg,rad/s)")
-
-
 #: Quantity kinds (what :meth:`DisplayUnits.factor` and ``unit`` know).
 KINDS = ("length", "velocity", "acceleration", "angle", "omega", "alpha", "force",
          "moment", "power", "time", "ratio")
@@ -425,4 +412,4 @@ def convert_figure(fig, units: DisplayUnits):
 __all__ = ["ANGLES", "DisplayUnits", "KINDS", "LENGTHS", "NOISE", "SPEEDS", "UnitsError",
            "column_kind", "column_name", "convert_frame", "convert_result", "row_scales",
            "snap", "snap_rows", "text",
-           "units_option", "UNITS_HELP", "convert_figure", "FIGURE_KINDS"]
+           "convert_figure", "FIGURE_KINDS"]

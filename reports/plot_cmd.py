@@ -80,10 +80,15 @@ def parse_what(text: str | None) -> list[str]:
 
 
 def case_figures(mech, what: list[str], engines: list[str], settings: dict,
-                 revolutions: int = 2, samples: int = 36, quiet: tuple[str, ...] = ()):
+                 revolutions: int | None = None, samples: int | None = None,
+                 quiet: tuple[str, ...] = ()):
     """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
-    case: the report's figure code on the analytic solution and the engine runs."""
+    case: the report's figure code on the analytic solution and the engine runs
+    (``revolutions``/``samples`` None: :class:`sim_models.engine_run.RunRequest`'s)."""
     from sim_models import compile_linkage
+    from sim_models.engine_run import RunRequest
+    revolutions = RunRequest.revolutions if revolutions is None else revolutions
+    samples = RunRequest.samples if samples is None else samples
 
     from .case_figures import curve_figures, error_figure
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
@@ -249,21 +254,21 @@ def _interactive_backend() -> None:  # pragma: no cover - needs a display
 
 def register(sub) -> None:
     from . import cli_options as opt
-    from .display_units import UNITS_HELP, units_option
     s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional)")
     s.add_argument("case", help="built-in case name or TOML file")
     s.add_argument("--what", default=DEFAULT_WHAT,
                    help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT})")
+    from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
                    help="overlay this engine's run (markers) and plot its error below")
-    s.add_argument("--units", type=units_option, help=UNITS_HELP)
+    s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.add_argument("--out", type=opt.output_file,
                    help="output file; .png, .svg or .pdf (default <case>-plot.png)")
     s.add_argument("--show", action="store_true", help="open a window (needs a display)")
-    s.add_argument("--revolutions", type=opt.revolutions, default=2,
+    s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help="engine revolutions (the last is plotted)")
-    s.add_argument("--samples", type=opt.samples, default=36,
+    s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
                    help="engine samples per revolution")
     s.set_defaults(func=cmd_plot)
 

@@ -67,8 +67,9 @@ def _settings_of(engine: str, settings):
     return settings
 
 
-def _request(revolutions=2, samples=36, max_violation=1e-3, max_speed_error=1e-2,
-             chords="moving") -> dict:
+def _request(revolutions=None, samples=None, max_violation=None, max_speed_error=None,
+             chords=None) -> dict:
+    """:func:`reports.baseline.request_dict`: None takes ``RunRequest``'s default."""
     from reports.baseline import request_dict
     return request_dict(revolutions, samples, max_violation, max_speed_error, chords)
 
@@ -88,29 +89,24 @@ def _entry(mech, engine: str, settings, request: dict) -> dict:
 
 def _make_run(mech, engine, settings, request) -> dict:
     from analytic.errors import LinkageError
-    from reports.compare import compare_run
-    from sim_models import compile_linkage
-    from sim_models.engines import run
+    from reports.verdict_runs import request_of, run_verdict
     t0 = time.perf_counter()
     _STATS["runs"] += 1
     try:
-        tree = compile_linkage(mech, chords=request["chords"])
-        r = run(tree, engine, settings, revolutions=request["revolutions"],
-                samples=request["samples"], max_violation=request["max_violation"],
-                max_speed_error=request["max_speed_error"])
-        comps = compare_run(r, tree.linkage)
+        v = run_verdict(mech, engine, settings, request_of(request))
     except LinkageError as e:  # a refusal or nothing to compare: cached like a result
         return {"error": e}
     finally:
         _STATS["seconds"] += time.perf_counter() - t0
-    return {"run": r, "tree": tree, "comparisons": comps}
+    return {"run": v.run, "tree": v.tree, "comparisons": list(v.comparisons)}
 
 
-def session_run(mech, engine: str, settings=None, revolutions: int = 2, samples: int = 36,
-                max_violation: float = 1e-3, max_speed_error: float = 1e-2,
-                chords: str = "moving"):
+def session_run(mech, engine: str, settings=None, revolutions: int | None = None,
+                samples: int | None = None, max_violation: float | None = None,
+                max_speed_error: float | None = None, chords: str | None = None):
     """:func:`sim_models.engines.run` of a Mechanism, cached for the session (same
-    arguments, same run object).  ``settings``: None, overrides or a settings object."""
+    arguments, same run object).  ``settings``: None, overrides or a settings object; a
+    request value left None is :class:`sim_models.engine_run.RunRequest`'s default."""
     s = _settings_of(engine, settings)
     req = _request(revolutions, samples, max_violation, max_speed_error, chords)
     return _entry(mech, engine, s, req)["run"]
@@ -194,14 +190,14 @@ class Xval:
         return m if not isinstance(m, (str, Path)) else load_case(str(m))
 
     # -- runs ---------------------------------------------------------------------
-    def run(self, model, engine: str = "mujoco", settings=None, *, revolutions: int = 2,
-            samples: int = 36):
+    def run(self, model, engine: str = "mujoco", settings=None, *,
+            revolutions: int | None = None, samples: int | None = None):
         """The engine run (cached for the session)."""
         return session_run(self.mechanism(model), engine, settings, revolutions, samples)
 
     def compare(self, model, engine: str = "mujoco", tolerance: float | None = None,
-                settings=None, *, revolutions: int = 2, samples: int = 36,
-                quantities=None):
+                settings=None, *, revolutions: int | None = None,
+                samples: int | None = None, quantities=None):
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
         ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
         from dataclasses import replace
@@ -225,8 +221,8 @@ class Xval:
         return e["run"], comps
 
     def assert_agrees(self, model, engine: str = "mujoco", tolerance: float | None = None,
-                      settings=None, *, revolutions: int = 2, samples: int = 36,
-                      quantities=None):
+                      settings=None, *, revolutions: int | None = None,
+                      samples: int | None = None, quantities=None):
         """Every judged quantity of ``model`` in ``engine`` within ``tolerance`` of its
         peak over the cycle (default 1e-3); returns the comparisons.  The failure message
         names each failing quantity, its error, where in the cycle, and the settings."""
@@ -371,7 +367,7 @@ def failure_text(base, checks, factor: float, root: Path) -> str:
     the factor and where) or the run's problem, then the check's report of the failed
     runs, then how to record them again."""
     from reports.baseline import Baseline, record_command
-    from reports.baseline_cli import report_lines
+    from reports.baseline_messages import report_lines
     failed = [c for c in checks if not c.passed]
     worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
     first = worst.problems[0] if worst.problems else worst.failures()[0].message()

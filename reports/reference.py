@@ -24,6 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic.input_display import convention_of, display_input
+from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
+
+from . import quantities
 
 #: Points of the dense analytic line per plotted span (the samples are added to them).
 LINE_POINTS = 361
@@ -51,8 +54,10 @@ class Reference:
 #: out of engine comparisons: only the ends of a limited-range sweep, 1e-6 of the range
 #: from a limit position, where the exact accelerations reach ~1e9 and a sample-time
 #: offset of one ulp changes them by percent.  Every full-cycle case stays below 20.
-#: (Defined here, not in reports.compare, which imports this module: no import cycle.)
-MAX_CONDITION = 100.0
+#: The same number at which a limited-range engine run stops
+#: (:data:`sim_models.sampling.LIMITED_RANGE_CONDITION`): one decision, in
+#: :func:`sim_models.sampling.near_limit`.
+MAX_CONDITION = LIMITED_RANGE_CONDITION
 
 
 def linkage_of(run_, reference=None):
@@ -111,7 +116,7 @@ def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
 def reference_of(run_, reference=None) -> Reference:
     """:func:`analytic_reference` with the judged samples and the plotted axis."""
     lk, kin, frc = analytic_reference(run_, reference)
-    judged = kin.condition <= MAX_CONDITION
+    judged = ~near_limit(kin.condition, MAX_CONDITION)
     if run_.ok:
         judged &= np.all(np.isfinite(run_.alpha), axis=1)
     u, _ = axis_of(run_, lk)
@@ -240,7 +245,7 @@ def sample_errors(run_, ref: Reference, comparisons) -> dict[str, np.ndarray]:
     not judge: the largest value of each is that quantity's verdict error.  Keys are the
     verdict's quantity names (the engines' own ``[engine]`` readings left out)."""
     kin, frc, keep = ref.kin, ref.frc, ref.judged
-    peaks = {c.quantity: c.peak for c in comparisons if not c.quantity.endswith("[engine]")}
+    peaks = {c.quantity: c.peak for c in quantities.judged(comparisons)}
     raw: dict[str, np.ndarray] = {}
     for b, name in enumerate(run_.body_names):
         raw[f"{name}.alpha"] = np.abs(run_.alpha[:, b] - kin.alpha[:, b])

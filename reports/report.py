@@ -456,41 +456,4 @@ def _result_or_error(fut):
 
 
 # ----------------------------------------------------------------------------- command
-def main(args) -> int:
-    """``xval report`` entry point: progress by phase, the console verdict, wall time."""
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from reports.console import print_verdict
-    t0 = time.perf_counter()
-    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out = Path(args.out) if args.out else DEFAULT_OUT / stamp
-    cfg = ReportConfig(out=out, quick=args.quick, cases=tuple(args.cases or ()),
-                       samples=36 if args.quick else 72, workers=args.workers,
-                       dask=args.dask)
-    console = Console(width=100)
-    with Progress(TextColumn("{task.description:<17}"), BarColumn(bar_width=30),
-                  TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                  console=console, transient=False) as pg:
-        ids = {}
-
-        def progress(stage, done, total):
-            if stage not in ids:
-                ids[stage] = pg.add_task(stage, total=total)
-            pg.update(ids[stage], completed=done, total=total)
-            if done >= total:
-                pg.stop_task(ids[stage])
-
-        path = build_report(cfg, progress)
-    summary = pd.read_csv(path / "verdict_summary.csv", keep_default_na=False,
-                          na_values=[""])
-    print_verdict(summary)
-    wall = time.perf_counter() - t0
-    phases = pd.read_csv(path / "phases.csv")
-    print(f"wall time {wall:.1f} s ("
-          + ", ".join(f"{r.phase} {r.seconds:.1f} s" for r in phases.itertuples()) + ")")
-    print(f"report: {path / 'index.html'}  ({path / 'report.md'})")
-    return 0 if (summary["verdict"] == "pass").all() else 1  # a failed verdict: status 1
-
-
-__all__ = ["ReportConfig", "build_report", "engine_task", "main"]
+__all__ = ["ReportConfig", "build_report", "engine_task"]

@@ -14,6 +14,9 @@ import pandas as pd
 
 from analytic.input_display import format_input
 
+from . import quantities
+from .quantities import base_quantity
+
 # The notes' own figures (REFERENCE.md) for the seed comparison: (label, notes,
 # SolidWorks in the notes, why the notes differ from the exact value)
 SEED_ROWS = {
@@ -112,7 +115,7 @@ def summary_table(verdicts: pd.DataFrame, units: dict[str, str] | None = None
 
 def quantity_unit(quantity: str, revolute: bool) -> str:
     """SI unit of a verdict quantity's absolute error and peak."""
-    q = quantity.replace("[engine]", "")
+    q = base_quantity(quantity)
     if q.endswith(".alpha"):
         return "rad/s^2"
     if q.endswith(".a"):
@@ -135,7 +138,7 @@ def instantaneous_floors(results: list[dict], units: dict[str, str] | None = Non
         if res["mode"] != "instantaneous":
             continue
         variant = res["overrides"].get("_label", "")
-        judged = [c for c in res["comparisons"] if not c.quantity.endswith("[engine]")]
+        judged = quantities.judged(res["comparisons"])
         unit = (units or {}).get(res["case"], "")
         if res["run"] is None or not judged:
             rows.append({"case": res["case"], "variant": variant, "floor (-)": np.inf,

@@ -63,7 +63,7 @@ def _frame(mech, smp):
 def cmd_simulate(args) -> int:
     from analytic.errors import OutputError
 
-    from .cli import write_csv
+    from .cli_paths import write_csv
     if args.json and args.csv == "-":
         raise OutputError("--json and --csv - both write to standard output; give --csv a "
                           "file name")

@@ -10,8 +10,8 @@ Pure functions returning pandas DataFrames and PNG bytes::
     scene = studies.scene_economy(quick=True)
     everything = studies.run_study(quick=True)                     # all of it + figures
 
-``python -m reports.studies [--quick] [--out DIR] [--workers N]`` runs the whole study
-and writes CSV tables and PNG figures.
+``python -m reports.studies_cmd [--quick] [--out DIR] [--workers N]`` runs the whole
+study and writes CSV tables and PNG figures.
 
 Measurements
 ------------
@@ -72,13 +72,11 @@ serially in this process.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import math
 import multiprocessing
 import os
-import sys
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from dataclasses import asdict, replace
@@ -185,16 +183,29 @@ def grid_plan(case: str, quick: bool) -> list[dict]:
 
 
 # ============================================================================ errors
+def _is_accel(quantity: str) -> bool:
+    """An acceleration quantity of the studies' ``accel_error``: a body's alpha, a
+    slider's acceleration."""
+    return quantity.endswith((".alpha", ".a"))
+
+
+def _is_force(quantity: str) -> bool:
+    """A force quantity of the studies' ``force_error``: the drive effort and the joint
+    forces (not a prismatic joint's normal and moment)."""
+    return quantity == "drive.effort" or quantity.endswith(".force")
+
+
 def run_errors(run_, reference=None) -> dict:
     """Normalised errors of an engine run through :func:`reports.compare.compare_run`
     (``reference``: the compiled linkage's Linkage; default the run's own mechanism)."""
     from reports.compare import compare_run
+    from reports.quantities import judged
     if not run_.ok:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
-    comps = [c for c in compare_run(run_, reference) if not c.quantity.endswith("[engine]")]
-    acc = [c for c in comps if c.quantity.endswith(".alpha") or c.quantity.endswith(".a")]
-    frc = [c for c in comps if c.quantity == "drive.effort" or c.quantity.endswith(".force")]
+    comps = judged(compare_run(run_, reference))
+    acc = [c for c in comps if _is_accel(c.quantity)]
+    frc = [c for c in comps if _is_force(c.quantity)]
     a = max((c.normalised for c in acc), default=math.nan)
     f = max((c.normalised for c in frc), default=math.nan)
     worst = max(comps, key=lambda c: c.normalised if np.isfinite(c.normalised) else math.inf,
@@ -207,25 +218,21 @@ def run_errors(run_, reference=None) -> dict:
 
 
 def sample_errors(run_, lk: Linkage | None = None) -> dict[str, np.ndarray]:
-    """Per-sample normalised errors of a run (for plots): ``alpha`` (worst body, by the
-    largest body peak) and ``force`` (worst of the drive effort and each joint force,
-    each by its own peak), NaN where the run has no value."""
-    lk = lk or Linkage(run_.mechanism)
-    mech = lk.mech
-    vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
-                   mech.driver.velocity)
-    kin = lk.kinematics(run_.values, vel, run_.driver_acceleration, on_singular="flag")
-    moving = [b for b, n in enumerate(run_.body_names) if n != mech.ground]
-    pk = np.nanmax(np.abs(kin.alpha[:, moving]))
-    out = {"alpha": np.max(np.abs(run_.alpha[:, moving] - kin.alpha[:, moving]), axis=1) / pk}
-    if run_.has_forces and mech.has_mass:
-        frc = lk.forces(kin)
-        e = np.abs(run_.drive_effort - frc.effort) / np.nanmax(np.abs(frc.effort))
-        for j, name in enumerate(run_.joint_names):
-            ref = frc.joint_force[name]
-            e = np.fmax(e, np.linalg.norm(run_.joint_force[:, j] - ref, axis=1)
-                        / np.nanmax(np.linalg.norm(ref, axis=1)))
-        out["force"] = e
+    """Per-sample normalised errors of a run (for the study plots): ``alpha`` the worst
+    acceleration quantity and ``force`` the worst force quantity at each sample
+    (:func:`_is_accel`, :func:`_is_force`), each quantity divided by the peak its verdict
+    divides by (:func:`reports.reference.sample_errors`, the one per-sample error), so a
+    curve's largest value is the row's ``accel_error`` / ``force_error``; NaN where the
+    verdict judges no sample."""
+    from reports.compare import compare_run
+    from reports.reference import reference_of
+    from reports.reference import sample_errors as per_quantity
+    errs = per_quantity(run_, reference_of(run_, lk), compare_run(run_, lk))
+    out = {}
+    for key, family in (("alpha", _is_accel), ("force", _is_force)):
+        cols = [e for q, e in errs.items() if family(q)]
+        if cols:
+            out[key] = np.fmax.reduce(np.vstack(cols), axis=0)  # NaN where all are NaN
     return out
 
 
@@ -269,19 +276,24 @@ def _failed_row(meta: dict, reason: str) -> dict:
 
 
 def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
-              revolutions: int = 2, samples: int = 36, timing_steps: int = 5000,
+              revolutions: int | None = None, samples: int | None = None,
+              timing_steps: int = 5000,
               timing_repeats: int = 3, meta: dict | None = None,
               keep_samples: bool = False) -> dict:
     """One engine run at one setting: errors (engine run + :func:`run_errors`) and speed
-    (bare stepping loop).  Never raises: failures are rows with ``ok = False``."""
+    (bare stepping loop); ``revolutions``/``samples`` None: the run request's defaults.
+    Never raises: failures are rows with ``ok = False``."""
     meta = dict(meta or {})
     meta.update(case=case_name, engine=engine, label=label, settings_dict=settings_dict)
     try:
         from sim_models import compile_linkage
         from sim_models.engines import run
+
+        from .verdict_runs import request_of
         tree = compile_linkage(load(case_name))  # one compiled linkage for run and errors
         s = make_settings(engine, settings_dict)
-        r = run(tree, engine, s, revolutions=revolutions, samples=samples)
+        req = request_of({"revolutions": revolutions, "samples": samples})
+        r = run(tree, engine, s, revolutions=req.revolutions, samples=req.samples)
         row = {k: meta.get(k) for k in GRID_COLUMNS}
         row.update(case=case_name, engine=engine, label=label, settings=s.describe(),
                    timestep=float(r.timestep), steps_per_rev=float(r.steps_per_rev),
@@ -298,7 +310,7 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
                 f"timing failed: {type(e).__name__}: {e}"
         row["steps_per_second"] = float(sps)
         row["seconds_per_rev"] = float(r.steps_per_rev / sps) if sps and sps > 0 else math.nan
-        if keep_samples:
+        if keep_samples and r.ok:  # the plots draw successful runs only
             row["samples"] = {"input_deg": np.degrees(r.values).tolist(),
                               **{k: v.tolist()
                                  for k, v in sample_errors(r, tree.linkage).items()}}
@@ -739,7 +751,7 @@ def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: 
         mech = replace(mech0, gravity=(0.0, -9.81)) if gravity else mech0
         tree = compile_linkage(mech)
         s = make_settings("mujoco", dict(settings_dict, scene=scene))
-        r = run(tree, "mujoco", s, revolutions=2, samples=36)
+        r = run(tree, "mujoco", s)  # the run request's defaults
         e = run_errors(r, tree.linkage)
         notes = [SCENE_VARIANTS[variant]]
         if mech is not mech0 and r.ok:
@@ -852,38 +864,3 @@ def write_study(res: dict, out_dir: Path) -> list[Path]:
                             indent=1))
     written.append(p)
     return written
-
-
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m reports.studies",
-                                 description="Speed against error of the engines.")
-    ap.add_argument("--quick", action="store_true", help="the reduced study (~40 s)")
-    ap.add_argument("--out", type=Path, default=None, help="write CSV and PNG files here")
-    ap.add_argument("--workers", type=int, default=None, help="process-pool size")
-    ap.add_argument("--serial", action="store_true", help="no process pool")
-    a = ap.parse_args(argv)
-    res = run_study(a.quick, pool=False if a.serial else None, workers=a.workers)
-    pd.set_option("display.width", 200)
-    pd.set_option("display.max_colwidth", 60)
-    print(res["cheapest"].drop(columns=["settings"]).to_string(index=False))
-    h = res["hard"]
-    print(h["high_speed"][["engine", "label", "seconds_per_rev", "accel_error",
-                           "force_error", "ok"]].to_string(index=False))
-    print(h["near_toggle"][["case", "engine", "label", "transmission_extreme_deg",
-                            "accel_error", "force_error", "error_vs_seed_four_bar",
-                            "ok"]].to_string(index=False))
-    print(h["change_point"][["engine", "label", "branch_after_singular", "final_branch",
-                             "flips", "ok"]].to_string(index=False))
-    print(h["long_run_summary"].drop(columns=["settings"]).T.to_string(
-        float_format=lambda v: f"{v:.3g}"))
-    print(res["scene_economy"].drop(columns=["notes"]).to_string(index=False))
-    print("analytic seconds per revolution:", res["analytic_seconds_per_rev"])
-    print("timings (s):", {k: round(v, 2) for k, v in res["timings"].items()})
-    if a.out:
-        for p in write_study(res, a.out):
-            print("wrote", p)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

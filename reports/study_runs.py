@@ -61,15 +61,18 @@ class Trace:
 
 
 def trace(tree, engine: str, settings, revolutions: int, per_rev: int,
-          max_violation: float = 1e-3, max_speed_error: float = 1e-2) -> Trace:
+          max_violation: float | None = None, max_speed_error: float | None = None) -> Trace:
     """Run ``engine`` for ``revolutions`` turns from the reference state, sampled
     ``per_rev`` times per turn (the verdict runs' session and run loop); samples up to a
-    divergence."""
+    divergence.  A divergence limit left None is the run request's default."""
     from sim_models.engine_base import periodic_plan
     from sim_models.engines import run
+
+    from .verdict_runs import request_of
     plan = periodic_plan(tree, revolutions, per_rev)
-    r = run(tree, engine, settings, plan=plan, max_violation=max_violation,
-            max_speed_error=max_speed_error)
+    req = request_of({"max_violation": max_violation, "max_speed_error": max_speed_error})
+    r = run(tree, engine, settings, plan=plan, max_violation=req.max_violation,
+            max_speed_error=req.max_speed_error)
     good = np.all(np.isfinite(r.q), axis=1) & np.isfinite(r.times)
     K = int(np.argmin(good)) if not good.all() else len(good)
     return Trace(r.engine, r.settings_text, r.times[:K], r.q[:K], r.qd[:K], r.qdd[:K],

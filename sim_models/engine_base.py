@@ -191,8 +191,8 @@ class Session(ABC):
         self.tree = tree
         self.settings = settings if settings is not None else self.settings_class()
         self.notes: list[str] = []
-        self.max_violation = 1e-3
-        self.max_speed_error = 1e-2
+        self.max_violation = RunRequest.max_violation
+        self.max_speed_error = RunRequest.max_speed_error
 
     # -- the contract -------------------------------------------------------------
     @abstractmethod

@@ -53,8 +53,9 @@ def open_session(tree: Mechanism | SimTree, engine: str,
 
 
 def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None = None,
-        revolutions: int = 2, samples: int = 36, max_violation: float = 1e-3,
-        max_speed_error: float = 1e-2, chords: str = "moving",
+        revolutions: int = RunRequest.revolutions, samples: int = RunRequest.samples,
+        max_violation: float = RunRequest.max_violation,
+        max_speed_error: float = RunRequest.max_speed_error, chords: str = RunRequest.chords,
         plan: Plan | None = None) -> EngineRun:
     """Simulate the linkage in ``engine`` and sample it (see :mod:`sim_models.engine_base`).
 

@@ -22,6 +22,14 @@ from .tree import SimTree
 LIMITED_RANGE_CONDITION = 100.0
 
 
+def near_limit(condition, limit: float = LIMITED_RANGE_CONDITION) -> np.ndarray:
+    """Where a sample sits at or near a limit or singular position: its analytic
+    loop-Jacobian condition number ``condition`` (array) above ``limit``, or NaN.  The one
+    decision of "near a limit position": a limited-range run stops before the first such
+    sample, and the verdicts leave such samples out (:mod:`reports.reference`)."""
+    return ~(np.asarray(condition, float) <= limit)
+
+
 @dataclass(frozen=True)
 class Plan:
     """When and where a run is sampled.
@@ -87,7 +95,7 @@ def travel_time(d, distance: float) -> float:
     return t_r + math.sqrt(2 * (distance - back) / abs(d.acceleration))
 
 
-def plan_samples(tree: SimTree, revolutions: int = 2, samples: int = 36) -> Plan:
+def plan_samples(tree: SimTree, revolutions: int, samples: int) -> Plan:
     """The sampling plan of a run (see the module docstring).
 
     Raises :class:`EngineRefusal` when the driver does not move or no sample can be
@@ -131,7 +139,7 @@ def _value_plan(tree: SimTree, revolutions: int, samples: int) -> Plan | None:
         return None
     if not full:
         kin = lk.kinematics(vals, on_singular="flag")
-        bad = ok & ~(kin.condition <= LIMITED_RANGE_CONDITION)
+        bad = ok & near_limit(kin.condition)
         if bad.any():
             times[times >= np.min(times[bad])] = np.nan
         ok = np.isfinite(times)
@@ -174,7 +182,7 @@ def _time_plan(tree: SimTree, revolutions: int, samples: int) -> Plan:
     times = np.linspace(0.0, t_run, samples) if samples > 1 else np.zeros(1)
     x, v, a = (np.asarray(z, float) for z in tree.driver_path(times))
     kin = lk.kinematics(x, v, a, on_singular="flag")
-    bad = ~(kin.condition <= LIMITED_RANGE_CONDITION) | ~np.all(np.isfinite(kin.theta), axis=1)
+    bad = near_limit(kin.condition) | ~np.all(np.isfinite(kin.theta), axis=1)
     if bad.any():
         k = int(np.argmax(bad))
         if k == 0:

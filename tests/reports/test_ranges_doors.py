@@ -36,6 +36,7 @@ def no_run(monkeypatch):
     def ran(*a, **k):
         pytest.fail("an engine ran for an impossible setting")
     monkeypatch.setattr(vr, "run_comparison", ran)
+    monkeypatch.setattr(vr, "run_verdict", ran)
     monkeypatch.setattr(bl, "run_and_compare", ran)
     monkeypatch.setattr(bl, "record", ran)
     monkeypatch.setattr(engines, "open_session", ran)

@@ -16,6 +16,9 @@ pytest.importorskip("mujoco")
 pytest.importorskip("pybullet")
 
 PNG = b"\x89PNG"
+#: The same quotient computed twice (the curve's sample and the verdict's maximum):
+#: round-off only.
+SAME_QUOTIENT = 1e-12
 BRANCHES = {"parallelogram", "anti-parallelogram", "diverged"}
 
 
@@ -81,6 +84,21 @@ def test_cheapest_settings_synthetic():
     assert t.loc[("b", 1e-3), "label"] == "none"
     assert t.loc[("b", 1e-4), "label"] == "none"
     assert math.isnan(t.loc[("b", 1e-4), "seconds_per_rev"])
+
+
+@pytest.mark.parametrize("case, engine", [("seed-four-bar", "pybullet"),
+                                          ("seed-slider-crank", "mujoco")])
+def test_sample_error_curves_peak_at_the_rows_errors(case, engine):
+    """The hard-case figures' per-sample curves are the verdict's errors sample by sample:
+    their largest values are the row's accel_error and force_error (one normalisation,
+    each quantity by its own verdict peak), to round-off."""
+    r = S.grid_task(case, engine, {}, "default", 2, 36, timing_steps=50, timing_repeats=1,
+                    keep_samples=True)
+    assert r["ok"], r["reason"]
+    smp = r["samples"]
+    assert len(smp["alpha"]) == len(smp["input_deg"]) == 36
+    assert np.nanmax(smp["alpha"]) == pytest.approx(r["accel_error"], rel=SAME_QUOTIENT)
+    assert np.nanmax(smp["force"]) == pytest.approx(r["force_error"], rel=SAME_QUOTIENT)
 
 
 def test_divergence_and_bad_settings_are_rows():

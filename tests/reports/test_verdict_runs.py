@@ -1,0 +1,79 @@
+"""The one compile -> run -> compare (reports.verdict_runs.run_verdict): every door that
+runs an engine and compares it goes through it with the request it was given, and its
+:class:`Verdict` answers ok / near_event / judged as the comparison module decides them."""
+
+from __future__ import annotations
+
+import pytest
+
+import reports.verdict_runs as vr
+from analytic import load_case
+from reports.compare import Comparison, verdict
+from sim_models.engine_run import RunRequest
+
+
+class _Run:
+    """The parts of an EngineRun the callers read."""
+
+    ok = True
+    reason = ""
+
+
+def _comps():
+    return (Comparison("rocker.alpha", 1e-6, 1.0, 1e-6, 10.0, 1e-3, True),
+            Comparison("B.force[engine]", 1.0, 1.0, 1.0, 20.0, 1e-3, False))
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """Replace run_verdict by a recorder: (linkage, engine, settings, request) per call."""
+    seen = []
+
+    def fake(linkage, engine, settings=None, request=None):
+        seen.append((linkage, engine, settings, request))
+        return vr.Verdict(linkage, _Run(), _comps())
+    monkeypatch.setattr(vr, "run_verdict", fake)
+    return seen
+
+
+def test_every_caller_runs_through_run_verdict(calls, monkeypatch):
+    from reports import baseline, pytest_plugin
+    monkeypatch.setattr(pytest_plugin, "_STATS", {"runs": 0, "hits": 0, "seconds": 0.0})
+    mech = load_case("seed-four-bar")
+    req = baseline.request_dict(3, 24, 2e-3, 3e-2, "moving")
+    run_, comps = baseline.run_and_compare(mech, "mujoco", None, req)
+    assert [c.quantity for c in comps] == ["rocker.alpha"]  # judged only
+    entry = pytest_plugin._make_run(mech, "pybullet", None, req)
+    assert [c.quantity for c in entry["comparisons"]] == ["rocker.alpha", "B.force[engine]"]
+    r, comps = vr.run_comparison("TREE", "exudyn", None, "instantaneous", 1, 5)
+    assert len(comps) == 2
+    assert [c[1] for c in calls] == ["mujoco", "pybullet", "exudyn"]
+    assert calls[0][3] == calls[1][3] == RunRequest(3, 24, 2e-3, 3e-2, "moving", "run")
+    assert calls[2][3] == RunRequest(1, 5, mode="instantaneous")
+
+
+def test_request_of_takes_the_defaults_of_run_request():
+    assert vr.request_of({}) == RunRequest()
+    assert vr.request_of({"samples": 12, "unknown": 1}) == RunRequest(samples=12)
+
+
+def test_verdict_is_the_comparison_verdict():
+    comps = _comps()
+    v = vr.Verdict(None, _Run(), comps)
+    assert v.ok is verdict(list(comps)) is True  # the [engine] row's failure is not judged
+    assert v.near_event is None  # a pass has no event to point at
+    assert [c.quantity for c in v.judged()] == ["rocker.alpha"]
+    failed = type("Failed", (_Run,), {"ok": False, "reason": "diverged"})()
+    assert not vr.Verdict(None, failed, comps).ok
+
+
+def test_near_a_limit_is_one_decision():
+    """A condition number above 100, or NaN (a singular sample), is near a limit: where a
+    limited-range run stops and what the verdict leaves out (the same predicate)."""
+    import numpy as np
+
+    from reports.reference import MAX_CONDITION
+    from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
+    assert MAX_CONDITION == LIMITED_RANGE_CONDITION == 100.0
+    np.testing.assert_array_equal(near_limit([1.0, 99.9, 100.0, 100.1, np.inf, np.nan]),
+                                  [False, False, False, True, True, True])
