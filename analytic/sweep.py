@@ -29,6 +29,7 @@ Columns of :attr:`SweepResult.frame` (SI unless the name says otherwise)
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -40,9 +41,9 @@ from .kinematics import Kinematics, Linkage
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
-from .refine import least_transmission, sign_changes, turning_points
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
+from .sweep_facts import ArrayFacts
 from .tolerances import SINGULAR_CONDITION
 
 
@@ -68,19 +69,24 @@ class SweepResult:
         return nearest_event(self, at, kinds)
 
 
-def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf
-                  ) -> np.ndarray:
+def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf,
+                  snap: bool | None = None) -> np.ndarray:
     """Input angles (rad) moved to values whose degree value, printed in full, reads back
     as the same angle (``radians(degrees(v)) == v``; :func:`input_degrees` prints it):
     to the nearest 1e-10 deg where the grid is coarse enough that this cannot reorder
     it or leave ``[lo, hi]`` (``359``, not ``358.99999999999994``), else by a few ulps.
-    A row of the table is then solved at exactly the input it prints."""
+    A row of the table is then solved at exactly the input it prints.  ``snap``: whether
+    the grid is that coarse (default: decided from ``values``; a block of a longer grid
+    passes the whole grid's answer, :meth:`InputGrid.snaps`).  Each value's result
+    depends on that answer and on the value alone."""
     v = np.asarray(values, float).copy()
     if not len(v):
         return v
     d = np.degrees(v)
     r = np.radians(np.round(d, 10))
-    if len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8:
+    if snap is None:
+        snap = len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8
+    if snap:
         v = np.where((r >= lo) & (r <= hi), r, v)
     for _ in range(8):  # radians(degrees(.)) reaches a fixed point in 1-2 steps
         w = np.radians(np.degrees(v))
@@ -89,6 +95,72 @@ def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.in
             break
         v = np.where(ok, v, w)
     return v
+
+
+@dataclass(frozen=True)
+class InputGrid:
+    """A sweep's input values (SI), made block by block without holding them all:
+    ``a + 2 pi i / n`` over a full turn (``kind="turn"``, ``a`` the start) or
+    ``np.linspace(a, b, n)`` (``"linspace"``), moved to printable angles by
+    :func:`exact_degrees` within ``[lo, hi]`` when ``exact`` (a revolute input).
+    :meth:`block` gives the same numbers as :meth:`values` (``tests/analytic/
+    test_sweep.py`` checks it), 8 bytes per value of the block only."""
+
+    kind: str
+    a: float
+    b: float
+    n: int
+    exact: bool
+    lo: float = -math.inf
+    hi: float = math.inf
+
+    def _raw(self, i: int, k: int) -> np.ndarray:
+        if self.kind == "turn":
+            return self.a + 2 * math.pi * np.arange(i, k) / self.n
+        # np.linspace's own arithmetic (numpy >= 1.20): i * step + start, the end exact
+        y = np.arange(i, k, dtype=float)
+        y *= (self.b - self.a) / (self.n - 1)
+        y += self.a
+        if k == self.n and k > i and self.n > 1:
+            y[-1] = self.b
+        return y
+
+    @functools.cached_property
+    def snaps(self) -> bool:
+        """:func:`exact_degrees`'s decision for the whole grid (the least spacing in
+        degrees above 1e-8), block by block with the step across each boundary."""
+        if self.n < 2:
+            return True
+        least, prev = math.inf, None
+        for i in range(0, self.n, GRID_BLOCK):
+            d = np.degrees(self._raw(i, min(self.n, i + GRID_BLOCK)))
+            if prev is not None:
+                d = np.concatenate(([prev], d))
+            least = min(least, float(np.min(np.abs(np.diff(d)))) if len(d) > 1 else least)
+            prev = d[-1]
+        return least > 1e-8
+
+    def block(self, i: int, k: int) -> np.ndarray:
+        """Values ``i`` to ``k - 1``."""
+        x = self._raw(i, k)
+        return exact_degrees(x, self.lo, self.hi, self.snaps) if self.exact else x
+
+    def at(self, idx) -> np.ndarray:
+        """The values at the indices ``idx`` (negative from the end)."""
+        idx = np.asarray(idx, int) % self.n
+        return np.array([self.block(int(j), int(j) + 1)[0] for j in idx])
+
+    def values(self) -> np.ndarray:
+        """Every value at once (as the in-memory sweep takes them)."""
+        if self.kind == "turn":
+            x = self.a + 2 * math.pi * np.arange(self.n) / self.n
+        else:
+            x = np.linspace(self.a, self.b, self.n)
+        return exact_degrees(x, self.lo, self.hi) if self.exact else x
+
+
+#: values per block where :class:`InputGrid` scans its spacing
+GRID_BLOCK = 1 << 16
 
 
 def input_degrees(values: np.ndarray) -> np.ndarray:
@@ -105,12 +177,19 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
     angle) when the crank can turn fully, else the feasible interval of the assembled
     branch holding the reference value (on the Newton path, the traced branch between
     its limit positions), so the sweep ends near the limit positions."""
+    grid, full, feas = input_grid(linkage, points, start)
+    return grid.values(), full, feas
+
+
+def input_grid(linkage: Linkage, points: int, start: float | None = None
+               ) -> tuple[InputGrid, bool, list]:
+    """:func:`input_values` as an :class:`InputGrid` (values made block by block)."""
     v0 = linkage.mech.driver.value
     feas = linkage.feasible_ranges()
-    if linkage.driver_is_revolute and len(feas) == 1 and \
-            feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
+    rev = linkage.driver_is_revolute
+    if rev and len(feas) == 1 and feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
         a = v0 if start is None else start
-        return exact_degrees(a + 2 * math.pi * np.arange(points) / points), True, feas
+        return InputGrid("turn", a, a + 2 * math.pi, points, True), True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
             # stay a hair inside the limit positions, where the Jacobian is singular:
@@ -118,16 +197,16 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
             # of a linkage with a link 1e-6 of the others)
             for frac in (1e-6, 1e-5, 1e-4, 1e-3):
                 pad = frac * (hi - lo)
-                x = np.linspace(lo + pad, hi - pad, points)
+                ends = InputGrid("linspace", lo + pad, hi - pad, points, False).at([0, -1])
                 try:
-                    ends = linkage.kinematics(x[[0, -1]], on_singular="flag", limits=False)
+                    kin = linkage.kinematics(ends, on_singular="flag", limits=False)
                 except LinkageError:
                     continue
-                if np.all(ends.condition < SINGULAR_CONDITION):
+                if np.all(kin.condition < SINGULAR_CONDITION):
                     break
-            if linkage.driver_is_revolute:  # printable inputs, still half the pad inside
-                x = exact_degrees(x, lo + pad / 2, hi - pad / 2)
-            return x, False, feas
+            # printable inputs (revolute), still half the pad inside
+            return InputGrid("linspace", lo + pad, hi - pad, points, rev, lo + pad / 2,
+                             hi - pad / 2), False, feas
     raise AssemblyError(f"mechanism {linkage.mech.name!r}: the reference input is not in a "
                         f"feasible range {feas}", v0, feas)
 
@@ -135,12 +214,19 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
 def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
                  ) -> np.ndarray:
     """``points`` input values (SI) from ``input_range[0]`` to ``input_range[1]``."""
-    x = np.linspace(*input_range, points)
-    return exact_degrees(x) if linkage.driver_is_revolute else x
+    return range_grid(linkage, input_range, points).values()
+
+
+def range_grid(linkage: Linkage, input_range: tuple[float, float], points: int
+               ) -> InputGrid:
+    """:func:`range_values` as an :class:`InputGrid`."""
+    return InputGrid("linspace", float(input_range[0]), float(input_range[1]), points,
+                     linkage.driver_is_revolute)
 
 
 def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
-                feasible: list | None = None, crossings: list | None = None) -> pd.DataFrame:
+                feasible: list | None = None, crossings: list | None = None,
+                facts=None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
 
     * ``singular``: the loop Jacobian's determinant changes sign (located on the solver
@@ -160,24 +246,25 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
       (:func:`analytic.refine.least_transmission`).
 
     Inputs are in the frame's units (deg or m); a full cycle's are wrapped into one
-    turn from its first value.
+    turn from its first value.  ``facts``: what is read of the series
+    (:mod:`analytic.sweep_facts`; default :class:`ArrayFacts` of ``kin``'s arrays, a
+    streamed sweep's gathered block by block).
     """
     topo = linkage.topo
     rev = linkage.driver_is_revolute
-    x = kin.value
+    F = ArrayFacts(linkage, kin, None) if facts is None else facts
+    n = F.n
     conv = np.degrees if rev else (lambda v: v)
     rows = []
-    for v in sign_changes(linkage, x, kin.determinant, periodic,
-                          lambda k: (k.determinant, np.full(k.n, np.nan))):
+    for v in F.det_roots(periodic):
         rows.append(("singular", "loop Jacobian", float(conv(v)),
                      "determinant changes sign: dead centre or change point"))
-    hi = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
-    for i in hi:
-        rows.append(("singular", "loop Jacobian", float(conv(x[i])),
-                     f"condition number {kin.condition[i]:.3g}"))
+    for xi, ci in F.singular():
+        rows.append(("singular", "loop Jacobian", float(conv(xi)),
+                     f"condition number {ci:.3g}"))
     # rates at a singular sample are not determined by the input: no limits from them
     # (analytic.refine.turning_points: the regular samples bracket, the solver locates)
-    turns = turning_points(linkage, kin, periodic)
+    turns = F.turns(periodic)
     size = size_of(topo)
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
@@ -196,41 +283,42 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
-    if not periodic and feasible is not None and len(x):
+    if not periodic and feasible is not None and n:
         for lo, hi in feasible:
             for end in (lo, hi):
-                if np.min(np.abs(x - end)) <= 1e-3 * max(hi - lo, 1e-300) and \
+                if F.distance(end) <= 1e-3 * max(hi - lo, 1e-300) and \
                         is_input_limit(linkage, end):
                     rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
                                  "input limit position: the loops cannot close beyond it "
                                  "on this branch (the drive effort grows without bound "
                                  "toward it)"))
+    xmin, xmax = F.bounds if n else (math.nan, math.nan)
     for c in crossings or []:
-        if len(x) and np.min(x) - eps <= c.value <= np.max(x) + eps:
+        if n and xmin - eps <= c.value <= xmax + eps:
             mode = parallelogram_mode(linkage, c.value + math.copysign(
                 1e-3, c.value - linkage.mech.driver.value))
             rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
                          c.describe(fmt).split(": ", 1)[1]
                          + (f"; beyond it the linkage is {mode}" if mode else "")))
     trace = linkage.positions.trace
-    if trace is not None and len(x):
+    if trace is not None and n:
         for xc in trace.crossings:
             shifts = [0.0] if trace.period is None else \
-                trace.period * np.arange(np.floor((np.min(x) - xc) / trace.period),
-                                         np.ceil((np.max(x) - xc) / trace.period) + 1)
+                trace.period * np.arange(np.floor((xmin - xc) / trace.period),
+                                         np.ceil((xmax - xc) / trace.period) + 1)
             for v in xc + np.asarray(shifts):
-                if np.min(x) - eps <= v <= np.max(x) + eps:
+                if xmin - eps <= v <= xmax + eps:
                     rows.append(("change_point", "loop Jacobian", float(conv(v)),
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
                                  "the branch whose velocity is continuous)"))
-    for jn, least, at, raw in least_transmission(linkage, kin, periodic):
+    for jn, least, at, raw in F.transmission(periodic):
         rows.append(("min_transmission", jn, float(conv(at)),
                      f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
                      f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
     ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
-    if periodic and rev and len(ev) and len(x):
-        a = float(np.degrees(x[0]))
+    if periodic and rev and len(ev) and n:
+        a = float(np.degrees(F.x_at([0])[0]))
         ev["input"] = a + np.mod(ev["input"].to_numpy() - a, 360.0)
     if len(ev):
         ev["input"] = np.round(ev["input"].to_numpy(dtype=float), 9) + 0.0
