@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import AssemblyError, LinkageError
-from .kinematics import Kinematics, Linkage
+from .kin_result import Kinematics
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
@@ -171,7 +171,7 @@ def input_degrees(values: np.ndarray) -> np.ndarray:
     return np.where(np.radians(r) == v, r, np.degrees(v))
 
 
-def input_values(linkage: Linkage, points: int, start: float | None = None
+def input_values(linkage, points: int, start: float | None = None
                  ) -> tuple[np.ndarray, bool, list]:
     """The sweep's input values: a full turn from ``start`` (default the reference
     angle) when the crank can turn fully, else the feasible interval of the assembled
@@ -181,7 +181,7 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
     return grid.values(), full, feas
 
 
-def input_grid(linkage: Linkage, points: int, start: float | None = None
+def input_grid(linkage, points: int, start: float | None = None
                ) -> tuple[InputGrid, bool, list]:
     """:func:`input_values` as an :class:`InputGrid` (values made block by block)."""
     v0 = linkage.mech.driver.value
@@ -211,20 +211,20 @@ def input_grid(linkage: Linkage, points: int, start: float | None = None
                         f"feasible range {feas}", v0, feas)
 
 
-def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
+def range_values(linkage, input_range: tuple[float, float], points: int
                  ) -> np.ndarray:
     """``points`` input values (SI) from ``input_range[0]`` to ``input_range[1]``."""
     return range_grid(linkage, input_range, points).values()
 
 
-def range_grid(linkage: Linkage, input_range: tuple[float, float], points: int
+def range_grid(linkage, input_range: tuple[float, float], points: int
                ) -> InputGrid:
     """:func:`range_values` as an :class:`InputGrid`."""
     return InputGrid("linspace", float(input_range[0]), float(input_range[1]), points,
                      linkage.driver_is_revolute)
 
 
-def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
+def find_events(linkage, kin: Kinematics, periodic: bool,
                 feasible: list | None = None, crossings: list | None = None,
                 facts=None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
@@ -325,7 +325,7 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
     return ev.sort_values("input", kind="stable").reset_index(drop=True) if len(ev) else ev
 
 
-def is_input_limit(linkage: Linkage, end: float) -> bool:
+def is_input_limit(linkage, end: float) -> bool:
     """Whether the end ``end`` (SI) of a feasible range is a limit position of the input
     (the loops cannot close beyond it), not merely the end of the interval searched
     (:func:`analytic.positions.input_span`: one turn, or +-2 sizes for a slider)."""
@@ -382,7 +382,7 @@ def nearest_event(result: SweepResult, at: float, kinds=None) -> NearestEvent | 
                         float(d[k]))
 
 
-def parallelogram_mode(linkage: Linkage, value: float) -> str | None:
+def parallelogram_mode(linkage, value: float) -> str | None:
     """For a four-bar whose opposite links are equal (a change-point linkage of the
     parallelogram family): ``"a parallelogram"`` when, at the input ``value`` on the
     continued branch, each link is parallel to its opposite, ``"an anti-parallelogram"``
@@ -419,7 +419,7 @@ def parallelogram_mode(linkage: Linkage, value: float) -> str | None:
     return "a parallelogram" if parallel else "an anti-parallelogram"
 
 
-def grashof(linkage: Linkage) -> str | None:
+def grashof(linkage) -> str | None:
     """Grashof classification of a four-bar (four bodies, four revolute joints).
 
     Returns e.g. ``"Grashof crank-rocker"``, ``"Grashof double-crank"``,
@@ -461,7 +461,7 @@ def _wrap_deg(a: np.ndarray) -> np.ndarray:
     return 180.0 - np.mod(180.0 - d, 360.0)
 
 
-def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFrame:
+def to_frame(linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFrame:
     """The sweep table (columns in the module docstring)."""
     mech, topo = linkage.mech, linkage.topo
     rev = linkage.driver_is_revolute
@@ -522,7 +522,7 @@ def _unbounded(frc: Forces, i: int) -> list[str]:
                   if not np.isfinite(m[i]) and k not in out]
 
 
-def singular_notes(linkage: Linkage, kin: Kinematics, frc: Forces | None,
+def singular_notes(linkage, kin: Kinematics, frc: Forces | None,
                    singular: np.ndarray) -> list[str]:
     """What the sweep writes at its singular samples, one note per kind of sample."""
     if not singular.size:
@@ -578,7 +578,7 @@ def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.D
     return ev.sort_values("input", kind="stable").reset_index(drop=True)
 
 
-def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
+def sweep(linkage, points: int = 360, forces: bool | None = None,
           values: np.ndarray | None = None, start: float | None = None,
           velocity: float | None = None, input_range: tuple[float, float] | None = None
           ) -> SweepResult:
