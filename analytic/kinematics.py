@@ -31,6 +31,16 @@ from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
 
 
+class _ForcesGuess:
+    """Marks a kinematics result whose pass also wrote the forces unasked
+    (:meth:`Linkage._forces_guess`): ``used`` once :meth:`Linkage.forces` reads them."""
+
+    __slots__ = ("used",)
+
+    def __init__(self):
+        self.used = False
+
+
 class Linkage:
     """A compiled mechanism: topology, loop equations and position solver.
 
@@ -126,7 +136,11 @@ class Linkage:
         fk = fused_dispatch(self, 1 if values is None else np.size(values))
         if fk is not None and (fk.with_forces or not forces):
             # the fused kernel (analytic/fused.py): the same numbers, one pass
-            kin = fk.kinematics(values, velocity, acceleration, "flag", branch, forces, joints)
+            guess = None if forces or not fk.with_forces else self._forces_guess()
+            kin = fk.kinematics(values, velocity, acceleration, "flag", branch,
+                                forces or guess is not None, joints)
+            if guess is not None:
+                kin._forces_guess = guess
             if not kin._fused_singular:  # singular samples are the numpy path's to treat
                 return kin
         d = self.mech.driver
@@ -258,9 +272,33 @@ class Linkage:
         return self.positions.feasible()
 
     # convenience wrappers ----------------------------------------------------
+    def _forces_guess(self):
+        """Whether the kernel's kinematics pass should write the forces too: yes while
+        the caller asks for the forces of what it gets (``forces(kinematics(x))``, the
+        second call on is one pass), until a result's forces go unused (then the
+        kinematics pass writes none again).  Returns the new result's mark (its
+        ``used`` set by :meth:`forces`), or ``None``."""
+        d = self.__dict__
+        if not d.get("_forces_follow"):
+            return None
+        last = d.get("_forces_last")
+        if last is not None and not last.used:  # the last guess was wasted: stop
+            d["_forces_follow"], d["_forces_last"] = False, None
+            return None
+        d["_forces_last"] = mark = _ForcesGuess()
+        return mark
+
     def forces(self, kin: Kinematics):
-        """Kinetostatic solution for a :class:`Kinematics` (see :mod:`analytic.kinetostatics`)."""
+        """Kinetostatic solution for a :class:`Kinematics` (see :mod:`analytic.kinetostatics`).
+        Of a result of the fused kernel: the forces its pass wrote (:meth:`solve`, or
+        :meth:`kinematics` once forces have followed kinematics: see
+        :meth:`_forces_guess`), else one more pass writing only the forces."""
         if getattr(kin, "_fused_kernel", None) is not None:  # the kernel's forces pass
+            d = kin.__dict__
+            if d.get("_fused_forces") is None:  # asked for after a kinematics-only pass
+                self.__dict__.update(_forces_follow=True, _forces_last=None)
+            elif d.get("_forces_guess") is not None:
+                d["_forces_guess"].used = True
             return kin._fused_kernel.forces(kin)
         from .kinetostatics import solve_forces
         return solve_forces(self, kin)
