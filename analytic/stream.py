@@ -192,7 +192,10 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         input_grid,
         nearest_event,
         range_grid,
+        singular_notes,
+        singular_records,
         to_frame,
+        unbounded_events,
     )
     from .sweep_facts import StreamFacts
     if points < 2:
@@ -209,11 +212,13 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
     ends = [e for r in feas for e in r] if not full else []
     facts = StreamFacts(linkage, grid, vel, d.acceleration, forces, ends, _power_terms)
     balance = StreamedForces() if forces else None
+    records = []  # the singular samples (analytic.sweep.singular_records)
     try:
         with _Writer(path, parquet) as out:
             for a, kin, frc in evaluate_blocked(linkage, grid, vel, None, forces, block):
                 out.write(convert(to_frame(linkage, kin, frc)), a == 0)
                 facts.feed(kin, frc)
+                records += singular_records(kin, frc)
                 if frc is not None:
                     balance.feed(frc)
     except BrokenPipeError:  # the reader stopped (| head): xval ends quietly, not an error
@@ -228,7 +233,7 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
             facts.refeed(kin)
         facts.finish_refeed()
     lo, hi = facts.bounds
-    notes = []
+    notes = singular_notes(linkage, records, forces)
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
@@ -240,7 +245,8 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
     kin = StreamedKinematics(linkage, facts.n, facts)
-    events = find_events(linkage, kin, full, None if full else feas, crossings, facts)
+    events = unbounded_events(linkage, records, find_events(
+        linkage, kin, full, None if full else feas, crossings, facts))
     res = SweepResult(kin, balance, None, events, full, feas, grashof(linkage), notes,
                       crossings)
     res.summary = summarise(res, nearest_event)

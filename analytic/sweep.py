@@ -522,54 +522,64 @@ def _unbounded(frc: Forces, i: int) -> list[str]:
                   if not np.isfinite(m[i]) and k not in out]
 
 
-def singular_notes(linkage, kin: Kinematics, frc: Forces | None,
-                   singular: np.ndarray) -> list[str]:
-    """What the sweep writes at its singular samples, one note per kind of sample."""
+def singular_records(kin: Kinematics, frc: Forces | None) -> list[tuple[float, int, list]]:
+    """The singular samples of ``kin`` (condition number at least
+    :data:`SINGULAR_CONDITION`): ``(input SI, singular status, joints whose force is
+    unbounded there)`` each, in order (a streamed sweep gathers them block by block)."""
+    singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
     if not singular.size:
         return []
     st = singular_status(kin, frc)
+    return [(float(kin.value[i]), int(st[i]),
+             _unbounded(frc, i) if frc is not None and st[i] == UNBOUNDED_FORCES else [])
+            for i in singular]
+
+
+def singular_notes(linkage, records: list, forces: bool) -> list[str]:
+    """What the sweep writes at its singular samples (:func:`singular_records`), one
+    note per kind of sample."""
+    if not records:
+        return []
     conv = math.degrees if linkage.driver_is_revolute else float
     unit = "deg" if linkage.driver_is_revolute else "m"
 
-    def at(idx):
-        return ", ".join(f"{conv(kin.value[i]):.6g}" for i in idx[:6]) + \
-            (", ..." if len(idx) > 6 else "") + f" {unit}"
+    def at(rows):
+        return ", ".join(f"{conv(r[0]):.6g}" for r in rows[:6]) + \
+            (", ..." if len(rows) > 6 else "") + f" {unit}"
     notes = []
-    lim = singular[st[singular] == LIMIT]
-    if lim.size:
-        notes.append(f"{lim.size} sample(s) at singular positions the linkage passes through "
+    lim = [r for r in records if r[1] == LIMIT]
+    if lim:
+        notes.append(f"{len(lim)} sample(s) at singular positions the linkage passes through "
                      f"({at(lim)}): every value there is its limit along the branch "
                      "(column singular = 1)")
-    unb = singular[st[singular] == UNBOUNDED_FORCES]
-    if unb.size:
-        joints = sorted({j for i in unb for j in _unbounded(frc, i)})
-        notes.append(f"{unb.size} sample(s) at change points ({at(unb)}): the rates, drive "
+    unb = [r for r in records if r[1] == UNBOUNDED_FORCES]
+    if unb:
+        joints = sorted({j for r in unb for j in r[2]})
+        notes.append(f"{len(unb)} sample(s) at change points ({at(unb)}): the rates, drive "
                      "effort and power are their limits along the branch; the force at "
                      f"joint(s) {', '.join(joints)} is unbounded there (the links are "
                      "collinear and the load has a component in the motion they leave free: "
                      "the force grows as 1/distance, with opposite signs either side), its "
                      "cells left empty (column singular = 2)")
-    und = singular[st[singular] == UNDETERMINED]
-    if und.size:
-        notes.append(f"{und.size} sample(s) at singular positions the linkage does not pass "
+    und = [r for r in records if r[1] == UNDETERMINED]
+    if und:
+        notes.append(f"{len(und)} sample(s) at singular positions the linkage does not pass "
                      f"through smoothly ({at(und)}: a dead centre, a limit position, or a "
                      "change point where the branch followed has a kink, as when the "
                      "reference value sits on one): the rates"
-                     + (" and forces" if frc is not None else "") + " are not determined by "
+                     + (" and forces" if forces else "") + " are not determined by "
                      "the input there, cells left empty (column singular = 3)")
     return notes
 
 
-def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.DataFrame:
-    """``unbounded_force`` events at the samples whose joint forces have no limit."""
-    if frc is None or not singular.size:
-        return events
-    st = singular_status(kin, frc)
+def unbounded_events(linkage, records: list, events: pd.DataFrame) -> pd.DataFrame:
+    """``unbounded_force`` events at the samples whose joint forces have no limit
+    (:func:`singular_records`)."""
     conv = math.degrees if linkage.driver_is_revolute else float
-    rows = [("unbounded_force", ", ".join(_unbounded(frc, i)), float(conv(kin.value[i])),
+    rows = [("unbounded_force", ", ".join(r[2]), float(conv(r[0])),
              "joint force unbounded at this change point (grows as 1/distance, opposite "
              "signs either side); drive effort and power finite (their limits)")
-            for i in singular[st[singular] == UNBOUNDED_FORCES]]
+            for r in records if r[1] == UNBOUNDED_FORCES]
     if not rows:
         return events
     ev = pd.concat([events, pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])],
@@ -616,13 +626,13 @@ def sweep(linkage, points: int = 360, forces: bool | None = None,
     else:
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")
-    singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
     if forces is None:
         forces = linkage.mech.has_mass
     # at singular samples the solver gives the limits along the branch, or NaN where
     # there is none (analytic.singular); the notes, the events and the rows say which
     frc = linkage.forces(kin) if forces else None
-    notes = singular_notes(linkage, kin, frc, singular)
+    records = singular_records(kin, frc)
+    notes = singular_notes(linkage, records, frc is not None)
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
@@ -635,7 +645,7 @@ def sweep(linkage, points: int = 360, forces: bool | None = None,
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
     events = find_events(linkage, kin, full, None if full else feas, crossings)
-    events = _unbounded_events(linkage, kin, frc, singular, events)
+    events = unbounded_events(linkage, records, events)
     res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
                       full, feas, grashof(linkage), notes, crossings)
     res.summary = summarise(res, nearest_event)

@@ -137,6 +137,7 @@ def test_extremes_are_argmin_and_argmax(seed):
 @pytest.mark.parametrize("case, start", [
     ("seed-four-bar", None), ("quick-return", 0.0), ("offset-slider-crank", None),
     ("six-bar", 0.0), ("hibbeler-16-30", None), ("inverted-slider-crank", None),
+    ("parallelogram-four-bar", 0.0), ("near-toggle-four-bar", None),
     (str(BUGS / "limited-sweep-zeroed-forces.toml"), None)])
 @pytest.mark.parametrize("block", [7, 64])
 def test_streamed_events_and_summary_are_the_whole_sweeps(case, start, block):
@@ -147,6 +148,7 @@ def test_streamed_events_and_summary_are_the_whole_sweeps(case, start, block):
     whole = lk.sweep(n, start=start)
     got = sweep_csv(lk, n, io.StringIO(), start=start, block=block)
     pd.testing.assert_frame_equal(got.events, whole.events)
+    assert got.notes == whole.notes
     assert got.summary.lines() == whole.summary.lines()
     # rounding level, from a path that may differ (kernel blocks, numpy whole): both tiny
     pb = (got.summary.power_balance, whole.summary.power_balance)
