@@ -89,7 +89,7 @@ class Summary:
     #: rates and forces are not determined by the input: left out of the peak effort
     singular_samples: int = 0
     #: power balance error over the regular samples, relative to the size of the power
-    #: terms (:func:`_power_scale`)
+    #: terms (the peak of each body's m |v| |a| + I |omega alpha|, or of the drive and load powers)
     power_balance: float | None = None
 
     def lines(self) -> list[str]:
@@ -256,6 +256,9 @@ def summarise(result, nearest_event=None) -> Summary:
     eff = F.effort()
     if eff is not None and summ.singular_samples < n:
         _peak_effort(summ, result, F, eff, lk, periodic, conv, nearest_event)
+        # relative to the size of the terms the balance sums, not to its net rate (a
+        # linkage of constant kinetic energy, a parallelogram at constant speed, has a
+        # net rate of 0: relative to that, rounding would look large)
         res, terms, power, load = F.power_peaks(_power_terms)
         peak = max(terms, power, load)
         summ.power_balance = float(res / (peak if peak > 0 else 1e-300))
