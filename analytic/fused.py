@@ -28,18 +28,24 @@ joint points), about 600 B for a four-bar.
 from __future__ import annotations
 
 import functools
-import hashlib
 import importlib.util
 import math
 import os
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from .errors import AssemblyError, SingularConfigurationError
+from .kernels.cache import (  # noqa: F401 - cache_dir and module_name: the module's API
+    _MODULES,
+    _load,
+    cache_dir,
+    mark_ready,
+    module_name,
+    on_disk,
+)
 from .tolerances import SINGULAR_CONDITION
 
 #: how many suspect (near-singular) configurations one call records; past it the
@@ -49,7 +55,6 @@ SUSPECT_CAP = 4096
 #: process: module name -> ``[(how, seconds), ...]``, ``how`` "compiled" or "loaded"
 #: (one entry per module: the kernel takes one set of argument types, see :func:`_arg`)
 COMPILE_LOG: dict[str, list[tuple[str, float]]] = {}
-_MODULES: dict[str, object] = {}
 
 
 def enabled() -> bool:
@@ -62,76 +67,6 @@ def enabled() -> bool:
 @functools.cache
 def _have_numba() -> bool:
     return importlib.util.find_spec("numba") is not None
-
-
-def cache_dir() -> Path:
-    """Where generated kernel modules and numba's compiled cache live:
-    ``$XVAL_KERNEL_CACHE``, else ``$XDG_CACHE_HOME/linkage-xval/kernels``."""
-    d = os.environ.get("XVAL_KERNEL_CACHE")
-    if not d:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(Path.home(), ".cache")
-        d = os.path.join(base, "linkage-xval", "kernels")
-    p = Path(d)
-    p.mkdir(parents=True, exist_ok=True)
-    return p
-
-
-def module_name(source: str) -> str:
-    """The generated module's name: its content hash."""
-    return "xval_kernel_" + hashlib.sha256(source.encode()).hexdigest()[:20]
-
-
-def write_source(source: str) -> Path:
-    """The generated module's file (written once under its content hash; numba keys its
-    on-disk cache on the file's time stamp, so an unchanged file is never rewritten)."""
-    path = cache_dir() / f"{module_name(source)}.py"
-    if not path.is_file() or path.read_text() != source:
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(source)
-        os.replace(tmp, path)
-    return path
-
-
-def _load(source: str):
-    """Import the generated module (imports numba)."""
-    name = module_name(source)
-    if name in _MODULES:
-        return _MODULES[name]
-    path = write_source(source)
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    _MODULES[name] = mod
-    return mod
-
-
-def mark_ready(name: str, fn) -> None:
-    """Record that ``fn`` (a kernel's dispatcher, after a call) is in numba's on-disk
-    cache: ``<name>.ready`` holds the path of numba's index file, which
-    :func:`on_disk` checks (an emptied numba cache makes the marker stale, not wrong)."""
-    try:
-        index = os.path.abspath(fn._cache._cache_file._index_path)  # numba 0.5x-0.6x
-    except AttributeError:
-        return
-    if os.path.exists(index):
-        marker = cache_dir() / f"{name}.ready"
-        tmp = marker.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(index)
-        os.replace(tmp, marker)
-
-
-def on_disk(name: str) -> bool:
-    """Whether the kernel module ``name`` is compiled in numba's on-disk cache (a
-    process then loads it instead of compiling it)."""
-    try:
-        index = (cache_dir() / f"{name}.ready").read_text()
-    except OSError:
-        return False
-    numba_dir = os.environ.get("NUMBA_CACHE_DIR")
-    if numba_dir and not index.startswith(os.path.abspath(numba_dir)):
-        return False  # compiled into another numba cache than this process reads
-    return os.path.exists(index)
 
 
 def _arg(a: np.ndarray) -> np.ndarray:
@@ -365,14 +300,14 @@ class FusedKernel:
         lk = self.lk
         if bad < 0 and (not lk.topo.n_loops or not len(values) or worst <= lk.positions.tol):
             return  # the common case: nothing to raise
-        from . import positions as P
+        from .positions import _fmt_value, _infeasible
         if bad >= 0:
-            raise P._infeasible(lk.topo, float(values[bad]))
+            raise _infeasible(lk.topo, float(values[bad]))
         tol = lk.positions.tol
         if lk.topo.n_loops and len(values) and not worst <= tol:
             raise AssemblyError(
                 f"mechanism {lk.mech.name!r}: loop residual {worst:.3g} m "
-                f"at driver = {P._fmt_value(lk.topo, float(values[worst_i]))} exceeds "
+                f"at driver = {_fmt_value(lk.topo, float(values[worst_i]))} exceeds "
                 f"{tol:.3g} m", float(values[worst_i]))
 
     def _singular(self, values, susp, A, on_singular):
@@ -436,7 +371,7 @@ class FusedKernel:
         return kin, frc
 
     def _wrap(self, values, vel, acc, out, branch, forces):
-        from .kinematics import Kinematics
+        from .kin_result import Kinematics
         trans = [(name, out["trv"][:, 2 * d], out["trv"][:, 2 * d + 1])
                  for d, name in enumerate(self.trans_names)]
         jp = {j: out["jp"][:, j] for j in range(self.J)}
@@ -461,7 +396,7 @@ class FusedKernel:
         path's singular treatment).  ``forces``: the same pass writes the forces too
         (kept on the result for :meth:`forces`: ``_fused_forces``); ``joints``: and
         every joint's point (``joint_point``), so neither costs another pass."""
-        from .kinematics import CompactKinematics
+        from .kin_result import CompactKinematics
         values, vel, acc = self._inputs(values, velocity, acceleration)
         if forces:
             self._require_mass()
@@ -485,7 +420,7 @@ class FusedKernel:
     def deferred(self, kin) -> dict:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
         full pass at its inputs."""
-        from .kinematics import DEFERRED
+        from .kin_result import DEFERRED
         full, _ = self.solve(kin.value, *_rates(kin), "flag", kin._fused_branch)
         return {k: getattr(full, k) for k in DEFERRED}
 

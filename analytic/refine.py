@@ -215,37 +215,52 @@ def turning_points(linkage, kin, periodic: bool) -> dict:
 
 def _roots_together(linkage, x, periodic, series, zero: float = 0.0) -> dict:
     """The sign changes of several sampled series over the same inputs ``x``
-    (:func:`sign_brackets`), located together by one :func:`locate` (one solve a step
-    for all); a bracket the solver cannot resolve keeps the interpolated crossing, and
-    a periodic sweep's roots are wrapped into its turn ``[x[0], x[0] + period)``."""
+    (:func:`sign_brackets`), located together by :func:`locate_brackets`."""
     period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    keys, lo, hi, guess = [], [], [], []
+    brackets = {}
     for key, (y, scale, _) in series.items():
         y = np.asarray(y, float)
-        for i, k in sign_brackets(x, y, periodic, scale):
-            x1 = x[k] if k > i else x[k] + period
+        brackets[key] = [(x[i], x[k] if k > i else x[k] + period, y[i], y[k])
+                         for i, k in sign_brackets(x, y, periodic, scale)]
+    return locate_brackets(linkage, brackets, {k: r for k, (_, _, r) in series.items()},
+                           float(x[0]), period, zero)
+
+
+def locate_brackets(linkage, brackets: dict, rates: dict, x0: float, period: float,
+                    zero: float = 0.0) -> dict:
+    """The roots in the brackets ``{key: [(x_i, x_k, y_i, y_k), ...]}`` (the sampled
+    series ``y`` changes sign from ``x_i`` to ``x_k``; ``x_k`` one ``period`` on for
+    the pair that closes a periodic sweep), each of its series' ``rates[key]``, located
+    together by one :func:`locate` (one solve a step for all); a bracket the solver
+    cannot resolve keeps the interpolated crossing, and a periodic sweep's roots
+    (``period > 0``) are wrapped into its turn ``[x0, x0 + period)``.  A streamed
+    sweep finds its brackets block by block (:mod:`analytic.sweep_facts`)."""
+    keys, lo, hi, guess = [], [], [], []
+    for key, found in brackets.items():
+        for xi, x1, yi, yk in found:
             keys.append(key)
-            lo.append(min(x[i], x1))  # inputs given in decreasing order too
-            hi.append(max(x[i], x1))
-            guess.append(x[i] + (x1 - x[i]) * y[i] / (y[i] - y[k]))
-    out = {k: [] for k in series}
+            lo.append(min(xi, x1))  # inputs given in decreasing order too
+            hi.append(max(xi, x1))
+            guess.append(xi + (x1 - xi) * yi / (yi - yk))
+    out = {k: [] for k in brackets}
     if not keys:
         return out
-    idx = np.array([list(series).index(k) for k in keys])
-    rates = [r for _, _, r in series.values()]
+    order = list(brackets)
+    idx = np.array([order.index(k) for k in keys])
+    rate_of = [rates[k] for k in order]
 
     def rate(kn, ids):  # each bracket's own series, from one solve of all of them
         sel = idx[ids]
         g, dg = np.empty(kn.n), np.empty(kn.n)
         for r in np.unique(sel):
-            gi, di = rates[r](kn)
+            gi, di = rate_of[r](kn)
             g[sel == r], dg[sel == r] = np.asarray(gi)[sel == r], np.asarray(di)[sel == r]
         return g, dg
     rate.per_bracket = True
     got = locate(linkage, np.array(lo), np.array(hi), rate, np.full(len(lo), zero))
     v = np.where(np.isfinite(got), got, np.array(guess))
-    if periodic:
-        v = x[0] + np.mod(v - x[0], period)
+    if period:
+        v = x0 + np.mod(v - x0, period)
     for key, u in zip(keys, v, strict=True):
         out[key].append(float(u))
     return out
@@ -283,33 +298,46 @@ def _least_transmission(linkage, kin, periodic: bool) -> list:
     tr = kin.transmission
     if not tr or not n:
         return []
-    probe = None
-    out = []
+    least = []
     for jn, mu in tr.items():
         mu = np.asarray(mu, float)
-        folded = np.minimum(mu, 180.0 - mu)
-        i = int(np.argmin(folded))
-        at, least, raw = float(x[i]), float(folded[i]), float(mu[i])
+        i = int(np.argmin(np.minimum(mu, 180.0 - mu)))
+        least.append((jn, i, float(mu[i])))
+    return locate_least_transmission(linkage, least, n, lambda idx: x[np.asarray(idx)],
+                                     periodic)
+
+
+def locate_least_transmission(linkage, least: list, n: int, x_at, periodic: bool) -> list:
+    """:func:`least_transmission` from each dyad's least sample ``(joint, index, raw
+    deg)`` (the first where the folded angle is least) of ``n``; ``x_at(indices)``:
+    the sweep's inputs at those indices (SI).  A streamed sweep finds the least samples
+    block by block (:mod:`analytic.sweep_facts`)."""
+    probe = None
+    out = []
+    for jn, i, raw in least:
+        at, least_ = float(x_at([i])[0]), min(raw, 180.0 - raw)
         if n >= 3 and (periodic or 0 < i < n - 1):
             if probe is None:  # configurations spread over the sweep, to tell the bodies
-                probe = unit_rate_kinematics(linkage, x[np.linspace(0, n - 1, 9).astype(int)])
+                probe = unit_rate_kinematics(linkage,
+                                             x_at(np.linspace(0, n - 1, 9).astype(int)))
                 vecs = {name: (e1, e2) for name, e1, e2 in probe.transmission_vectors}
             e1, e2 = vecs[jn]
             b1, b2 = (_rotating_body(linkage, e, probe.E) for e in (e1, e2))
-            period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-            lo = x[i - 1] if i > 0 else x[-1] - period
-            hi = x[i + 1] if i < n - 1 else x[0] + period
+            xf, x1, xl = (float(v) for v in x_at([0, 1, n - 1]))
+            period = (xl - xf) + (x1 - xf) if periodic else 0.0
+            lo = float(x_at([i - 1])[0]) if i > 0 else xl - period
+            hi = float(x_at([i + 1])[0]) if i < n - 1 else xf + period
             got = locate(linkage, np.array([min(lo, hi)]), np.array([max(lo, hi)]),
                          lambda k, b1=b1, b2=b2: (k.omega[:, b2] - k.omega[:, b1],
                                                   k.alpha[:, b2] - k.alpha[:, b1]))[0]
             if math.isfinite(got):
                 m = float(unit_rate_kinematics(linkage, np.array([got])).transmission[jn][0])
                 f = min(m, 180.0 - m)
-                if f <= least:  # the located extreme is the least (never above a sample)
-                    at, least, raw = got, f, m
+                if f <= least_:  # the located extreme is the least (never above a sample)
+                    at, least_, raw = got, f, m
                     if periodic:
-                        at = float(x[0] + np.mod(at - x[0], period))
-        out.append((jn, least, at, raw))
+                        at = float(xf + np.mod(at - xf, period))
+        out.append((jn, least_, at, raw))
     return out
 
 

@@ -29,9 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .mechanism import Revolute
-from .refine import least_transmission, peak, turning_points, unit_rate_kinematics
-from .tolerances import SINGULAR_CONDITION
+from .refine import peak, unit_rate_kinematics
+from .sweep_facts import ArrayFacts
 
 #: The peak drive effort is said to sit at an event (singular position, change point,
 #: input limit) when within this fraction of the swept range: 5 deg of a turn.
@@ -90,7 +89,7 @@ class Summary:
     #: rates and forces are not determined by the input: left out of the peak effort
     singular_samples: int = 0
     #: power balance error over the regular samples, relative to the size of the power
-    #: terms (:func:`_power_scale`)
+    #: terms (the peak of each body's m |v| |a| + I |omega alpha|, or of the drive and load powers)
     power_balance: float | None = None
 
     def lines(self) -> list[str]:
@@ -134,56 +133,61 @@ class Summary:
         return out
 
 
-def _turning_points(lk, kin, roots, value, samples, turn):
+def _turning_points(lk, F, key, roots, value, turn):
     """The limit positions ``roots`` (SI, :func:`analytic.refine.turning_points`) with
     the series' value there: ``[(input SI, value)]``, the value (``value(kinematics)``)
-    on the samples' own turn when ``turn`` (360 for an unwrapped angle in deg)."""
+    on the samples' own turn when ``turn`` (360 for an unwrapped angle in deg): the
+    turn of the sample nearest the root (``F.near``)."""
     if not roots:
         return []
     vals = np.asarray(value(unit_rate_kinematics(lk, np.array(roots))), float)
     if turn:  # on the turn of the nearest sample
-        near = np.asarray(samples)[np.argmin(np.abs(np.asarray(kin.value)[None, :]
-                                                    - np.array(roots)[:, None]), axis=1)]
+        near = F.near(key, roots)
         vals = vals + turn * np.round((near - vals) / turn)
     return list(zip(roots, vals.tolist(), strict=True))
 
 
-def _spans(x: np.ndarray, y: np.ndarray, period: float, turns=(), conv=None):
-    """Input spans of the increasing and decreasing strokes of a periodic ``y(x)``
-    with one maximum and one minimum per period: between its two limit positions
-    ``turns`` (:func:`_turning_points`), else by parabolic interpolation of the
-    samples."""
+def _vertex_x(F, st, i: int, conv) -> float:
+    """The input (frame units) of the vertex of the parabola through sample ``i`` of
+    the series ``st`` (:class:`analytic.sweep_facts.SeriesStats`) and its neighbours."""
+    (lo_i, *lo), (_, *hi) = st.low, st.high
+    a, b, c = lo if i == lo_i else hi
+    den = a - 2 * b + c
+    x0, x1, xi = (float(v) for v in conv(F.x_at([0, 1, i])))
+    h = x1 - x0
+    return xi + (0.5 * h * (a - c) / den if den != 0 else 0.0)
+
+
+def _spans(F, st, period: float, turns=(), conv=None):
+    """Input spans of the increasing and decreasing strokes of a periodic series
+    ``st`` (:class:`analytic.sweep_facts.SeriesStats`) with one maximum and one minimum
+    per period: between its two limit positions ``turns`` (:func:`_turning_points`),
+    else by parabolic interpolation of the samples."""
     if len(turns) == 2:
         (x0, y0), (x1, y1) = turns
         xmax, xmin = (x0, x1) if y0 > y1 else (x1, x0)
         inc = float(conv(xmax) - conv(xmin)) % period
         return inc, period - inc
-
-    def vertex(i):
-        n = len(y)
-        a, b, c = y[(i - 1) % n], y[i], y[(i + 1) % n]
-        den = a - 2 * b + c
-        h = x[1] - x[0]
-        return x[i] + (0.5 * h * (a - c) / den if den != 0 else 0.0)
-    xmax, xmin = vertex(int(np.argmax(y))), vertex(int(np.argmin(y)))
+    xmax, xmin = _vertex_x(F, st, st.high[0], conv), _vertex_x(F, st, st.low[0], conv)
     inc = (xmax - xmin) % period
     return inc, period - inc
 
 
-def _extremes(y: np.ndarray, periodic: bool, turns=()) -> tuple[float, float]:
-    """Least and greatest value of ``y``: of the samples and of the limit positions
-    ``turns`` located between them (:func:`_turning_points`); without those, an
-    interior extreme (or any, when periodic) is the vertex of the parabola through it
-    and its neighbours, which removes the sampling error (O(h^2)) of the plain min/max."""
+def _extremes(st, periodic: bool, turns=()) -> tuple[float, float]:
+    """Least and greatest value of the series ``st``
+    (:class:`analytic.sweep_facts.SeriesStats`): of the samples and of the limit
+    positions ``turns`` located between them (:func:`_turning_points`); without those,
+    an interior extreme (or any, when periodic) is the vertex of the parabola through
+    it and its neighbours, which removes the sampling error (O(h^2)) of the plain
+    min/max."""
     if len(turns):
         v = [t[1] for t in turns]
-        return min(float(np.min(y)), min(v)), max(float(np.max(y)), max(v))
+        return min(st.low[1], min(v)), max(st.high[1], max(v))
     out = []
-    n = len(y)
-    for i, sgn in ((int(np.argmin(y)), -1), (int(np.argmax(y)), 1)):
-        v = float(y[i])
+    n = st.n
+    for (i, b, a, c), sgn in ((st.low, -1), (st.high, 1)):
+        v = float(b)
         if n >= 3 and (periodic or 0 < i < n - 1):
-            a, b, c = y[(i - 1) % n], y[i], y[(i + 1) % n]
             den = a - 2 * b + c
             if den * sgn < 0:
                 v = float(b - (a - c) ** 2 / (8 * den))
@@ -191,132 +195,120 @@ def _extremes(y: np.ndarray, periodic: bool, turns=()) -> tuple[float, float]:
     return out[0], out[1]
 
 
-def _reversals(y: np.ndarray) -> int:
-    d = np.diff(np.concatenate([y, y[:1]]))
-    peak = np.max(np.abs(d)) if len(d) else 0.0
-    s = np.sign(d[np.abs(d) > 1e-9 * peak]) if peak > 0 else np.array([])
-    return int(np.sum(s != np.roll(s, 1))) if len(s) else 0
-
-
 def summarise(result, nearest_event=None) -> Summary:
     """The :class:`Summary` of a :class:`analytic.sweep.SweepResult`; ``nearest_event``
-    (:func:`analytic.sweep.nearest_event`) names the event beside the peak effort."""
+    (:func:`analytic.sweep.nearest_event`) names the event beside the peak effort.  The
+    series are read through ``result.kinematics.facts`` where a streamed sweep gathered
+    them (:class:`analytic.sweep_facts.StreamFacts`), else from the arrays."""
     kin = result.kinematics
     lk = kin.linkage
+    F = getattr(kin, "facts", None) or ArrayFacts(lk, kin, result.forces)
     mech, topo = lk.mech, lk.topo
     rev = lk.driver_is_revolute
     unit = "deg" if rev else "m"
     conv = np.degrees if rev else (lambda v: np.asarray(v, float))
-    x = conv(kin.value)
-    summ = Summary(unit, float(x[0]) if len(x) else math.nan,
-                   float(x[-1]) if len(x) else math.nan, result.full_cycle,
-                   float(conv(mech.driver.value)),
-                   constant_speed=bool(np.all(kin.acceleration == 0)))
-    if not len(x):
+    n = F.n
+    ends = conv(F.x_at([0, -1])) if n else (math.nan, math.nan)
+    summ = Summary(unit, float(ends[0]), float(ends[1]), result.full_cycle,
+                   float(conv(mech.driver.value)), constant_speed=F.constant_speed)
+    if not n:
         return summ
     period = 360.0 if rev else None
     periodic = result.full_cycle and rev
-    for j in topo.prismatic:
-        if j == topo.driver_joint:
+    moving = F.moving()
+    turns_all = F.turns(periodic)
+    for key, st in moving.items():
+        if key[0] == "slider":
+            jn = key[1]
+            turns = _turning_points(lk, F, key, turns_all[("slider", jn)],
+                                    lambda k, jn=jn: k.slider(jn)[0], None)
+            lo, hi = _extremes(st, periodic, turns)
+            sk = dict(kind="slider", name=jn, low=lo, high=hi, travel=hi - lo)
+            if periodic and st.reversals == 2:
+                inc, dec = _spans(F, st, period, turns, conv)
+                slow, quick, dirn = (inc, dec, "increasing") if inc >= dec else \
+                    (dec, inc, "decreasing")
+                sk.update(slow_span=slow, quick_span=quick, slow_direction=f"(s {dirn})")
+            summ.strokes.append(Stroke(**sk))
+    for key, st in moving.items():
+        if key[0] != "rocker":
             continue
-        jn = topo.joint_names[j]
-        s = kin.slider(jn)[0]
-        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[("slider", jn)],
-                                lambda k, jn=jn: k.slider(jn)[0], s, None)
-        lo, hi = _extremes(s, periodic, turns)
-        st = dict(kind="slider", name=jn, low=lo, high=hi, travel=hi - lo)
-        if periodic and _reversals(s) == 2:
-            inc, dec = _spans(x, s, period, turns, conv)
-            slow, quick, dirn = (inc, dec, "increasing") if inc >= dec else \
-                (dec, inc, "decreasing")
-            st.update(slow_span=slow, quick_span=quick, slow_direction=f"(s {dirn})")
-        summ.strokes.append(Stroke(**st))
-    dj = mech.driver_joint
-    driven = {dj.body_a, dj.body_b} - {mech.ground}
-    for jt in mech.joints:
-        if not _is_revolute(jt) or mech.ground not in jt.bodies or jt.name == dj.name:
-            continue
-        body = jt.body_b if jt.body_a == mech.ground else jt.body_a
-        if body in driven:
-            continue
-        b = topo.body_names.index(body)
-        th = np.degrees(kin.theta[:, b])
-        net = th[-1] + (th[-1] - th[-2]) - th[0] if len(th) > 1 else 0.0
+        b = key[1]
+        body = topo.body_names[b]
+        net = st.last + (st.last - st.second_last) - st.first if st.n > 1 else 0.0
         if periodic and abs(net) > 180.0:
             summ.strokes.append(Stroke("rocker", body, math.nan, math.nan, math.nan, True))
             continue
-        turns = _turning_points(lk, kin, turning_points(lk, kin, periodic)[
-            ("group", int(topo.group_of[b]))], lambda k, b=b: np.degrees(k.theta[:, b]),
-            th, 360.0)
-        lo, hi = _extremes(th, periodic, turns)
-        st = dict(kind="rocker", name=body, low=lo, high=hi, travel=hi - lo)
-        if periodic and _reversals(th) == 2:
-            inc, dec = _spans(x, th, period, turns, conv)
+        turns = _turning_points(lk, F, key, turns_all[("group", int(topo.group_of[b]))],
+                                lambda k, b=b: np.degrees(k.theta[:, b]), 360.0)
+        lo, hi = _extremes(st, periodic, turns)
+        sk = dict(kind="rocker", name=body, low=lo, high=hi, travel=hi - lo)
+        if periodic and st.reversals == 2:
+            inc, dec = _spans(F, st, period, turns, conv)
             slow, quick, dirn = (inc, dec, "ccw") if inc >= dec else (dec, inc, "cw")
-            st.update(slow_span=slow, quick_span=quick, slow_direction=f"({dirn})")
-        summ.strokes.append(Stroke(**st))
-    for jn, least, at, _ in least_transmission(lk, kin, periodic):
+            sk.update(slow_span=slow, quick_span=quick, slow_direction=f"({dirn})")
+        summ.strokes.append(Stroke(**sk))
+    for jn, least, at, _ in F.transmission(periodic):
         summ.transmission.append(TransmissionSummary(jn, least, float(conv(at)),
                                                      90.0 - least))
     # forces at a singular sample are not determined by the motion: left out
-    regular = kin.condition < SINGULAR_CONDITION
-    summ.singular_samples = int(np.sum(~regular))
-    if result.forces is not None and regular.any():
-        frc = result.forces
-        eff = np.where(regular, np.abs(frc.effort), np.nan)
-        if np.any(np.isfinite(eff)):
-            i = int(np.nanargmax(eff))
-            summ.effort_name = "drive torque" if rev else "drive force"
-            summ.effort_unit = "N m" if rev else "N"
-            summ.peak_effort, summ.peak_effort_at = float(eff[i]), float(x[i])
-            got = _located_peak(lk, kin, eff, i, periodic)
-            if got is not None and got[1] >= summ.peak_effort:
-                summ.peak_effort, summ.peak_effort_at = got[1], float(conv(got[0]))
-            if nearest_event is not None:
-                ev = nearest_event(result, float(x[i]),
-                                   kinds=("singular", "change_point", "input_limit"))
-                span = 360.0 if periodic else float(np.ptp(x))
-                if ev is not None and ev.distance <= NEAR_EVENT * span:
-                    summ.peak_event = ev
-        summ.power_balance = float(np.max(np.abs(frc.power_residual[regular]))
-                                   / _power_scale(kin, frc, regular))
+    summ.singular_samples = len(F.singular())
+    eff = F.effort()
+    if eff is not None and summ.singular_samples < n:
+        _peak_effort(summ, result, F, eff, lk, periodic, conv, nearest_event)
+        # relative to the size of the terms the balance sums, not to its net rate (a
+        # linkage of constant kinetic energy, a parallelogram at constant speed, has a
+        # net rate of 0: relative to that, rounding would look large)
+        res, terms, power, load = F.power_peaks(_power_terms)
+        peak = max(terms, power, load)
+        summ.power_balance = float(res / (peak if peak > 0 else 1e-300))
     return summ
 
 
-def _located_peak(lk, kin, eff: np.ndarray, i: int, periodic: bool):
-    """The peak drive effort next to the largest sample ``i``, located on the solver
-    between its neighbours (:func:`analytic.refine.peak`) at the sweep's own input rates:
-    ``(input SI, |effort|)``; ``None`` at an end of a limited sweep or beside a singular
-    sample (where the largest sample is what the table shows)."""
-    n = len(eff)
+def _peak_effort(summ, result, F, eff, lk, periodic, conv, nearest_event):
+    """The peak drive effort over the regular samples, located between them."""
+    i, v, prev, nxt = eff.high
+    if not math.isfinite(v):
+        return
+    rev = lk.driver_is_revolute
+    summ.effort_name = "drive torque" if rev else "drive force"
+    summ.effort_unit = "N m" if rev else "N"
+    xi = float(conv(F.x_at([i])[0]))
+    summ.peak_effort, summ.peak_effort_at = v, xi
+    got = _located_peak(lk, F, eff, periodic)
+    if got is not None and got[1] >= summ.peak_effort:
+        summ.peak_effort, summ.peak_effort_at = got[1], float(conv(got[0]))
+    if nearest_event is not None:
+        ev = nearest_event(result, xi, kinds=("singular", "change_point", "input_limit"))
+        lo, hi = F.bounds
+        span = 360.0 if periodic else float(conv(hi) - conv(lo))
+        if ev is not None and ev.distance <= NEAR_EVENT * span:
+            summ.peak_event = ev
+
+
+def _located_peak(lk, F, eff, periodic: bool):
+    """The peak drive effort next to the largest sample (``eff.high``), located on the
+    solver between its neighbours (:func:`analytic.refine.peak`) at the sweep's own input
+    rates: ``(input SI, |effort|)``; ``None`` at an end of a limited sweep or beside a
+    singular sample (where the largest sample is what the table shows)."""
+    n = eff.n
+    i, _, prev, nxt = eff.high
     if n < 3 or not (periodic or 0 < i < n - 1) or \
-            not (np.isfinite(eff[i - 1]) and np.isfinite(eff[(i + 1) % n])):
+            not (np.isfinite(prev) and np.isfinite(nxt)):
         return None
-    x = np.asarray(kin.value, float)
-    period = (x[-1] - x[0]) + (x[1] - x[0]) if periodic else 0.0
-    lo = x[i - 1] if i > 0 else x[-1] - period
-    hi = x[i + 1] if i < n - 1 else x[0] + period
-    vel, acc = float(kin.velocity[i]), float(kin.acceleration[i])
+    x0, x1, xl = (float(v) for v in F.x_at([0, 1, n - 1]))
+    period = (xl - x0) + (x1 - x0) if periodic else 0.0
+    lo = float(F.x_at([i - 1])[0]) if i > 0 else xl - period
+    hi = float(F.x_at([i + 1])[0]) if i < n - 1 else x0 + period
+    vel, acc = F.rates_at(i)
 
     def value(t):
         k = lk.kinematics(t, np.full(len(t), vel), np.full(len(t), acc), on_singular="flag")
         return np.abs(lk.forces(k).effort)
     got = peak(lk, lo, hi, value)
     if got is not None and periodic:
-        got = (float(x[0] + np.mod(got[0] - x[0], period)), got[1])
+        got = (float(x0 + np.mod(got[0] - x0, period)), got[1])
     return got
-
-
-def _power_scale(kin, frc, regular) -> float:
-    """The size of the terms the power balance sums: the peak over the regular samples
-    of each body's m |v| |a| + I |omega alpha| summed, or of the drive and load powers when
-    larger.  (A linkage whose kinetic energy is constant, such as a parallelogram at
-    constant speed, has a net rate of zero: relative to that, rounding looks large.)"""
-    terms = kin.series(_power_terms)[regular]  # a streamed sweep's: block by block
-    peak = max(float(np.max(terms)) if terms.size else 0.0,
-               float(np.max(np.abs(frc.power[regular]))),
-               float(np.max(np.abs(frc.load_power[regular]))))
-    return peak if peak > 0 else 1e-300
 
 
 def _power_terms(kin) -> np.ndarray:
@@ -330,7 +322,3 @@ def _power_terms(kin) -> np.ndarray:
         terms += body.mass * (np.abs(v) * np.abs(a))
         terms += (body.inertia or 0.0) * np.abs(kin.omega[:, b] * kin.alpha[:, b])
     return terms
-
-
-def _is_revolute(jt) -> bool:
-    return isinstance(jt, Revolute)

@@ -29,6 +29,7 @@ Columns of :attr:`SweepResult.frame` (SI unless the name says otherwise)
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -36,13 +37,13 @@ import numpy as np
 import pandas as pd
 
 from .errors import AssemblyError, LinkageError
-from .kinematics import Kinematics, Linkage
+from .kin_result import Kinematics
 from .kinetostatics import Forces
 from .mechanism import Prismatic, Revolute
 from .positions import input_span, size_of
-from .refine import least_transmission, sign_changes, turning_points
 from .singular import LIMIT, REGULAR, UNBOUNDED_FORCES, UNDETERMINED
 from .summary import summarise
+from .sweep_facts import ArrayFacts
 from .tolerances import SINGULAR_CONDITION
 
 
@@ -68,19 +69,24 @@ class SweepResult:
         return nearest_event(self, at, kinds)
 
 
-def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf
-                  ) -> np.ndarray:
+def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.inf,
+                  snap: bool | None = None) -> np.ndarray:
     """Input angles (rad) moved to values whose degree value, printed in full, reads back
     as the same angle (``radians(degrees(v)) == v``; :func:`input_degrees` prints it):
     to the nearest 1e-10 deg where the grid is coarse enough that this cannot reorder
     it or leave ``[lo, hi]`` (``359``, not ``358.99999999999994``), else by a few ulps.
-    A row of the table is then solved at exactly the input it prints."""
+    A row of the table is then solved at exactly the input it prints.  ``snap``: whether
+    the grid is that coarse (default: decided from ``values``; a block of a longer grid
+    passes the whole grid's answer, :meth:`InputGrid.snaps`).  Each value's result
+    depends on that answer and on the value alone."""
     v = np.asarray(values, float).copy()
     if not len(v):
         return v
     d = np.degrees(v)
     r = np.radians(np.round(d, 10))
-    if len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8:
+    if snap is None:
+        snap = len(v) < 2 or np.min(np.abs(np.diff(d))) > 1e-8
+    if snap:
         v = np.where((r >= lo) & (r <= hi), r, v)
     for _ in range(8):  # radians(degrees(.)) reaches a fixed point in 1-2 steps
         w = np.radians(np.degrees(v))
@@ -91,6 +97,72 @@ def exact_degrees(values: np.ndarray, lo: float = -math.inf, hi: float = math.in
     return v
 
 
+@dataclass(frozen=True)
+class InputGrid:
+    """A sweep's input values (SI), made block by block without holding them all:
+    ``a + 2 pi i / n`` over a full turn (``kind="turn"``, ``a`` the start) or
+    ``np.linspace(a, b, n)`` (``"linspace"``), moved to printable angles by
+    :func:`exact_degrees` within ``[lo, hi]`` when ``exact`` (a revolute input).
+    :meth:`block` gives the same numbers as :meth:`values` (``tests/analytic/
+    test_sweep.py`` checks it), 8 bytes per value of the block only."""
+
+    kind: str
+    a: float
+    b: float
+    n: int
+    exact: bool
+    lo: float = -math.inf
+    hi: float = math.inf
+
+    def _raw(self, i: int, k: int) -> np.ndarray:
+        if self.kind == "turn":
+            return self.a + 2 * math.pi * np.arange(i, k) / self.n
+        # np.linspace's own arithmetic (numpy >= 1.20): i * step + start, the end exact
+        y = np.arange(i, k, dtype=float)
+        y *= (self.b - self.a) / (self.n - 1)
+        y += self.a
+        if k == self.n and k > i and self.n > 1:
+            y[-1] = self.b
+        return y
+
+    @functools.cached_property
+    def snaps(self) -> bool:
+        """:func:`exact_degrees`'s decision for the whole grid (the least spacing in
+        degrees above 1e-8), block by block with the step across each boundary."""
+        if self.n < 2:
+            return True
+        least, prev = math.inf, None
+        for i in range(0, self.n, GRID_BLOCK):
+            d = np.degrees(self._raw(i, min(self.n, i + GRID_BLOCK)))
+            if prev is not None:
+                d = np.concatenate(([prev], d))
+            least = min(least, float(np.min(np.abs(np.diff(d)))) if len(d) > 1 else least)
+            prev = d[-1]
+        return least > 1e-8
+
+    def block(self, i: int, k: int) -> np.ndarray:
+        """Values ``i`` to ``k - 1``."""
+        x = self._raw(i, k)
+        return exact_degrees(x, self.lo, self.hi, self.snaps) if self.exact else x
+
+    def at(self, idx) -> np.ndarray:
+        """The values at the indices ``idx`` (negative from the end)."""
+        idx = np.asarray(idx, int) % self.n
+        return np.array([self.block(int(j), int(j) + 1)[0] for j in idx])
+
+    def values(self) -> np.ndarray:
+        """Every value at once (as the in-memory sweep takes them)."""
+        if self.kind == "turn":
+            x = self.a + 2 * math.pi * np.arange(self.n) / self.n
+        else:
+            x = np.linspace(self.a, self.b, self.n)
+        return exact_degrees(x, self.lo, self.hi) if self.exact else x
+
+
+#: values per block where :class:`InputGrid` scans its spacing
+GRID_BLOCK = 1 << 16
+
+
 def input_degrees(values: np.ndarray) -> np.ndarray:
     """The input column of a revolute driver, deg: ``values`` (rad) in degrees, to 1e-10
     deg where that reads back as the same angle, else in full (17 digits)."""
@@ -99,18 +171,25 @@ def input_degrees(values: np.ndarray) -> np.ndarray:
     return np.where(np.radians(r) == v, r, np.degrees(v))
 
 
-def input_values(linkage: Linkage, points: int, start: float | None = None
+def input_values(linkage, points: int, start: float | None = None
                  ) -> tuple[np.ndarray, bool, list]:
     """The sweep's input values: a full turn from ``start`` (default the reference
     angle) when the crank can turn fully, else the feasible interval of the assembled
     branch holding the reference value (on the Newton path, the traced branch between
     its limit positions), so the sweep ends near the limit positions."""
+    grid, full, feas = input_grid(linkage, points, start)
+    return grid.values(), full, feas
+
+
+def input_grid(linkage, points: int, start: float | None = None
+               ) -> tuple[InputGrid, bool, list]:
+    """:func:`input_values` as an :class:`InputGrid` (values made block by block)."""
     v0 = linkage.mech.driver.value
     feas = linkage.feasible_ranges()
-    if linkage.driver_is_revolute and len(feas) == 1 and \
-            feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
+    rev = linkage.driver_is_revolute
+    if rev and len(feas) == 1 and feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9):
         a = v0 if start is None else start
-        return exact_degrees(a + 2 * math.pi * np.arange(points) / points), True, feas
+        return InputGrid("turn", a, a + 2 * math.pi, points, True), True, feas
     for lo, hi in feas:
         if lo <= v0 <= hi:
             # stay a hair inside the limit positions, where the Jacobian is singular:
@@ -118,29 +197,36 @@ def input_values(linkage: Linkage, points: int, start: float | None = None
             # of a linkage with a link 1e-6 of the others)
             for frac in (1e-6, 1e-5, 1e-4, 1e-3):
                 pad = frac * (hi - lo)
-                x = np.linspace(lo + pad, hi - pad, points)
+                ends = InputGrid("linspace", lo + pad, hi - pad, points, False).at([0, -1])
                 try:
-                    ends = linkage.kinematics(x[[0, -1]], on_singular="flag", limits=False)
+                    kin = linkage.kinematics(ends, on_singular="flag", limits=False)
                 except LinkageError:
                     continue
-                if np.all(ends.condition < SINGULAR_CONDITION):
+                if np.all(kin.condition < SINGULAR_CONDITION):
                     break
-            if linkage.driver_is_revolute:  # printable inputs, still half the pad inside
-                x = exact_degrees(x, lo + pad / 2, hi - pad / 2)
-            return x, False, feas
+            # printable inputs (revolute), still half the pad inside
+            return InputGrid("linspace", lo + pad, hi - pad, points, rev, lo + pad / 2,
+                             hi - pad / 2), False, feas
     raise AssemblyError(f"mechanism {linkage.mech.name!r}: the reference input is not in a "
                         f"feasible range {feas}", v0, feas)
 
 
-def range_values(linkage: Linkage, input_range: tuple[float, float], points: int
+def range_values(linkage, input_range: tuple[float, float], points: int
                  ) -> np.ndarray:
     """``points`` input values (SI) from ``input_range[0]`` to ``input_range[1]``."""
-    x = np.linspace(*input_range, points)
-    return exact_degrees(x) if linkage.driver_is_revolute else x
+    return range_grid(linkage, input_range, points).values()
 
 
-def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
-                feasible: list | None = None, crossings: list | None = None) -> pd.DataFrame:
+def range_grid(linkage, input_range: tuple[float, float], points: int
+               ) -> InputGrid:
+    """:func:`range_values` as an :class:`InputGrid`."""
+    return InputGrid("linspace", float(input_range[0]), float(input_range[1]), points,
+                     linkage.driver_is_revolute)
+
+
+def find_events(linkage, kin: Kinematics, periodic: bool,
+                feasible: list | None = None, crossings: list | None = None,
+                facts=None) -> pd.DataFrame:
     """Singular (dead-centre / change-point) and limit positions over a sweep.
 
     * ``singular``: the loop Jacobian's determinant changes sign (located on the solver
@@ -160,24 +246,25 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
       (:func:`analytic.refine.least_transmission`).
 
     Inputs are in the frame's units (deg or m); a full cycle's are wrapped into one
-    turn from its first value.
+    turn from its first value.  ``facts``: what is read of the series
+    (:mod:`analytic.sweep_facts`; default :class:`ArrayFacts` of ``kin``'s arrays, a
+    streamed sweep's gathered block by block).
     """
     topo = linkage.topo
     rev = linkage.driver_is_revolute
-    x = kin.value
+    F = ArrayFacts(linkage, kin, None) if facts is None else facts
+    n = F.n
     conv = np.degrees if rev else (lambda v: v)
     rows = []
-    for v in sign_changes(linkage, x, kin.determinant, periodic,
-                          lambda k: (k.determinant, np.full(k.n, np.nan))):
+    for v in F.det_roots(periodic):
         rows.append(("singular", "loop Jacobian", float(conv(v)),
                      "determinant changes sign: dead centre or change point"))
-    hi = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
-    for i in hi:
-        rows.append(("singular", "loop Jacobian", float(conv(x[i])),
-                     f"condition number {kin.condition[i]:.3g}"))
+    for xi, ci in F.singular():
+        rows.append(("singular", "loop Jacobian", float(conv(xi)),
+                     f"condition number {ci:.3g}"))
     # rates at a singular sample are not determined by the input: no limits from them
     # (analytic.refine.turning_points: the regular samples bracket, the solver locates)
-    turns = turning_points(linkage, kin, periodic)
+    turns = F.turns(periodic)
     size = size_of(topo)
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
@@ -196,48 +283,49 @@ def find_events(linkage: Linkage, kin: Kinematics, periodic: bool,
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
     eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
-    if not periodic and feasible is not None and len(x):
+    if not periodic and feasible is not None and n:
         for lo, hi in feasible:
             for end in (lo, hi):
-                if np.min(np.abs(x - end)) <= 1e-3 * max(hi - lo, 1e-300) and \
+                if F.distance(end) <= 1e-3 * max(hi - lo, 1e-300) and \
                         is_input_limit(linkage, end):
                     rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
                                  "input limit position: the loops cannot close beyond it "
                                  "on this branch (the drive effort grows without bound "
                                  "toward it)"))
+    xmin, xmax = F.bounds if n else (math.nan, math.nan)
     for c in crossings or []:
-        if len(x) and np.min(x) - eps <= c.value <= np.max(x) + eps:
+        if n and xmin - eps <= c.value <= xmax + eps:
             mode = parallelogram_mode(linkage, c.value + math.copysign(
                 1e-3, c.value - linkage.mech.driver.value))
             rows.append(("change_point", ", ".join(c.joints), float(conv(c.value)),
                          c.describe(fmt).split(": ", 1)[1]
                          + (f"; beyond it the linkage is {mode}" if mode else "")))
     trace = linkage.positions.trace
-    if trace is not None and len(x):
+    if trace is not None and n:
         for xc in trace.crossings:
             shifts = [0.0] if trace.period is None else \
-                trace.period * np.arange(np.floor((np.min(x) - xc) / trace.period),
-                                         np.ceil((np.max(x) - xc) / trace.period) + 1)
+                trace.period * np.arange(np.floor((xmin - xc) / trace.period),
+                                         np.ceil((xmax - xc) / trace.period) + 1)
             for v in xc + np.asarray(shifts):
-                if np.min(x) - eps <= v <= np.max(x) + eps:
+                if xmin - eps <= v <= xmax + eps:
                     rows.append(("change_point", "loop Jacobian", float(conv(v)),
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
                                  "the branch whose velocity is continuous)"))
-    for jn, least, at, raw in least_transmission(linkage, kin, periodic):
+    for jn, least, at, raw in F.transmission(periodic):
         rows.append(("min_transmission", jn, float(conv(at)),
                      f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
                      f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
     ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
-    if periodic and rev and len(ev) and len(x):
-        a = float(np.degrees(x[0]))
+    if periodic and rev and len(ev) and n:
+        a = float(np.degrees(F.x_at([0])[0]))
         ev["input"] = a + np.mod(ev["input"].to_numpy() - a, 360.0)
     if len(ev):
         ev["input"] = np.round(ev["input"].to_numpy(dtype=float), 9) + 0.0
     return ev.sort_values("input", kind="stable").reset_index(drop=True) if len(ev) else ev
 
 
-def is_input_limit(linkage: Linkage, end: float) -> bool:
+def is_input_limit(linkage, end: float) -> bool:
     """Whether the end ``end`` (SI) of a feasible range is a limit position of the input
     (the loops cannot close beyond it), not merely the end of the interval searched
     (:func:`analytic.positions.input_span`: one turn, or +-2 sizes for a slider)."""
@@ -294,7 +382,7 @@ def nearest_event(result: SweepResult, at: float, kinds=None) -> NearestEvent | 
                         float(d[k]))
 
 
-def parallelogram_mode(linkage: Linkage, value: float) -> str | None:
+def parallelogram_mode(linkage, value: float) -> str | None:
     """For a four-bar whose opposite links are equal (a change-point linkage of the
     parallelogram family): ``"a parallelogram"`` when, at the input ``value`` on the
     continued branch, each link is parallel to its opposite, ``"an anti-parallelogram"``
@@ -331,7 +419,7 @@ def parallelogram_mode(linkage: Linkage, value: float) -> str | None:
     return "a parallelogram" if parallel else "an anti-parallelogram"
 
 
-def grashof(linkage: Linkage) -> str | None:
+def grashof(linkage) -> str | None:
     """Grashof classification of a four-bar (four bodies, four revolute joints).
 
     Returns e.g. ``"Grashof crank-rocker"``, ``"Grashof double-crank"``,
@@ -373,7 +461,7 @@ def _wrap_deg(a: np.ndarray) -> np.ndarray:
     return 180.0 - np.mod(180.0 - d, 360.0)
 
 
-def to_frame(linkage: Linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFrame:
+def to_frame(linkage, kin: Kinematics, frc: Forces | None) -> pd.DataFrame:
     """The sweep table (columns in the module docstring)."""
     mech, topo = linkage.mech, linkage.topo
     rev = linkage.driver_is_revolute
@@ -434,54 +522,64 @@ def _unbounded(frc: Forces, i: int) -> list[str]:
                   if not np.isfinite(m[i]) and k not in out]
 
 
-def singular_notes(linkage: Linkage, kin: Kinematics, frc: Forces | None,
-                   singular: np.ndarray) -> list[str]:
-    """What the sweep writes at its singular samples, one note per kind of sample."""
+def singular_records(kin: Kinematics, frc: Forces | None) -> list[tuple[float, int, list]]:
+    """The singular samples of ``kin`` (condition number at least
+    :data:`SINGULAR_CONDITION`): ``(input SI, singular status, joints whose force is
+    unbounded there)`` each, in order (a streamed sweep gathers them block by block)."""
+    singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
     if not singular.size:
         return []
     st = singular_status(kin, frc)
+    return [(float(kin.value[i]), int(st[i]),
+             _unbounded(frc, i) if frc is not None and st[i] == UNBOUNDED_FORCES else [])
+            for i in singular]
+
+
+def singular_notes(linkage, records: list, forces: bool) -> list[str]:
+    """What the sweep writes at its singular samples (:func:`singular_records`), one
+    note per kind of sample."""
+    if not records:
+        return []
     conv = math.degrees if linkage.driver_is_revolute else float
     unit = "deg" if linkage.driver_is_revolute else "m"
 
-    def at(idx):
-        return ", ".join(f"{conv(kin.value[i]):.6g}" for i in idx[:6]) + \
-            (", ..." if len(idx) > 6 else "") + f" {unit}"
+    def at(rows):
+        return ", ".join(f"{conv(r[0]):.6g}" for r in rows[:6]) + \
+            (", ..." if len(rows) > 6 else "") + f" {unit}"
     notes = []
-    lim = singular[st[singular] == LIMIT]
-    if lim.size:
-        notes.append(f"{lim.size} sample(s) at singular positions the linkage passes through "
+    lim = [r for r in records if r[1] == LIMIT]
+    if lim:
+        notes.append(f"{len(lim)} sample(s) at singular positions the linkage passes through "
                      f"({at(lim)}): every value there is its limit along the branch "
                      "(column singular = 1)")
-    unb = singular[st[singular] == UNBOUNDED_FORCES]
-    if unb.size:
-        joints = sorted({j for i in unb for j in _unbounded(frc, i)})
-        notes.append(f"{unb.size} sample(s) at change points ({at(unb)}): the rates, drive "
+    unb = [r for r in records if r[1] == UNBOUNDED_FORCES]
+    if unb:
+        joints = sorted({j for r in unb for j in r[2]})
+        notes.append(f"{len(unb)} sample(s) at change points ({at(unb)}): the rates, drive "
                      "effort and power are their limits along the branch; the force at "
                      f"joint(s) {', '.join(joints)} is unbounded there (the links are "
                      "collinear and the load has a component in the motion they leave free: "
                      "the force grows as 1/distance, with opposite signs either side), its "
                      "cells left empty (column singular = 2)")
-    und = singular[st[singular] == UNDETERMINED]
-    if und.size:
-        notes.append(f"{und.size} sample(s) at singular positions the linkage does not pass "
+    und = [r for r in records if r[1] == UNDETERMINED]
+    if und:
+        notes.append(f"{len(und)} sample(s) at singular positions the linkage does not pass "
                      f"through smoothly ({at(und)}: a dead centre, a limit position, or a "
                      "change point where the branch followed has a kink, as when the "
                      "reference value sits on one): the rates"
-                     + (" and forces" if frc is not None else "") + " are not determined by "
+                     + (" and forces" if forces else "") + " are not determined by "
                      "the input there, cells left empty (column singular = 3)")
     return notes
 
 
-def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.DataFrame:
-    """``unbounded_force`` events at the samples whose joint forces have no limit."""
-    if frc is None or not singular.size:
-        return events
-    st = singular_status(kin, frc)
+def unbounded_events(linkage, records: list, events: pd.DataFrame) -> pd.DataFrame:
+    """``unbounded_force`` events at the samples whose joint forces have no limit
+    (:func:`singular_records`)."""
     conv = math.degrees if linkage.driver_is_revolute else float
-    rows = [("unbounded_force", ", ".join(_unbounded(frc, i)), float(conv(kin.value[i])),
+    rows = [("unbounded_force", ", ".join(r[2]), float(conv(r[0])),
              "joint force unbounded at this change point (grows as 1/distance, opposite "
              "signs either side); drive effort and power finite (their limits)")
-            for i in singular[st[singular] == UNBOUNDED_FORCES]]
+            for r in records if r[1] == UNBOUNDED_FORCES]
     if not rows:
         return events
     ev = pd.concat([events, pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])],
@@ -490,7 +588,7 @@ def _unbounded_events(linkage, kin, frc, singular, events: pd.DataFrame) -> pd.D
     return ev.sort_values("input", kind="stable").reset_index(drop=True)
 
 
-def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
+def sweep(linkage, points: int = 360, forces: bool | None = None,
           values: np.ndarray | None = None, start: float | None = None,
           velocity: float | None = None, input_range: tuple[float, float] | None = None
           ) -> SweepResult:
@@ -528,13 +626,13 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
     else:
         values, full, feas = input_values(linkage, points, start)
     kin = linkage.kinematics(values, velocity, on_singular="flag")
-    singular = np.flatnonzero(~(kin.condition < SINGULAR_CONDITION))
     if forces is None:
         forces = linkage.mech.has_mass
     # at singular samples the solver gives the limits along the branch, or NaN where
     # there is none (analytic.singular); the notes, the events and the rows say which
     frc = linkage.forces(kin) if forces else None
-    notes = singular_notes(linkage, kin, frc, singular)
+    records = singular_records(kin, frc)
+    notes = singular_notes(linkage, records, frc is not None)
     if auto and not full and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
@@ -547,7 +645,7 @@ def sweep(linkage: Linkage, points: int = 360, forces: bool | None = None,
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
     events = find_events(linkage, kin, full, None if full else feas, crossings)
-    events = _unbounded_events(linkage, kin, frc, singular, events)
+    events = unbounded_events(linkage, records, events)
     res = SweepResult(kin, frc, to_frame(linkage, kin, frc), events,
                       full, feas, grashof(linkage), notes, crossings)
     res.summary = summarise(res, nearest_event)

@@ -22,9 +22,13 @@ Methods (configurations per second, min and median over the repeats):
   effort and the power terms, in the same pass (:meth:`analytic.fused.FusedKernel.state`);
 * ``fused_..._preallocated``: the same into outputs allocated once (blocked
   evaluation reuses its outputs so; fresh outputs pay the kernel's page faults);
-* ``linkage_kinematics_forces``: ``Linkage.forces(Linkage.kinematics(x))`` through the
-  front door (``XVAL_FUSED=always``: the kernel at every size): the full
-  :class:`Kinematics` and :class:`Forces` objects (two passes of the kernel);
+* ``linkage_kinematics``, ``linkage_solve``, ``linkage_kinematics_forces``: through the
+  front door (the kernel at every size once loaded): ``Linkage.kinematics(x)``,
+  ``Linkage.solve(x)`` and ``Linkage.forces(Linkage.kinematics(x))``, the last one pass
+  of the kernel from its second call on (the kinematics pass writes the forces while
+  the caller reads them: ``Linkage._forces_guess``).  Each has its own ``Linkage``, as
+  a caller repeating one call has (one ``Linkage`` that alternates kinematics-only
+  and kinematics + forces calls pays one extra pass at each switch);
 * ``numpy_kinematics_forces``: the same on the numpy path (``XVAL_FUSED=0``), up to
   360k points (at 3.6M it holds several GB).
 
@@ -127,6 +131,8 @@ def load() -> str:
 def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
     x = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
     lk4, lk6 = Linkage(load_case("seed-four-bar")), Linkage(load_case("six-bar"))
+    # the front door's calls, each on its own Linkage (see the module docstring)
+    lk_k, lk_s, lk_kf = (Linkage(load_case("seed-four-bar")) for _ in range(3))
     fk4, fk6 = FusedKernel(lk4), FusedKernel(lk6)
     fns = {"hand_kinematics": lambda: hand_four_bar(x)}
     if with_pylinkage:
@@ -143,9 +149,9 @@ def methods(n: int, with_pylinkage: bool, numpy_path: bool) -> dict:
         "fused_kinematics_preallocated": lambda: fk4.state(x, level=2, out=out2),
         "fused_kinematics_forces_preallocated": lambda: fk4.state(x, level=3, out=out3),
         "six_bar_fused_kinematics_forces": lambda: fk6.state(x, level=3),
-        "linkage_kinematics": lambda: lk4.kinematics(x),
-        "linkage_solve": lambda: lk4.solve(x),
-        "linkage_kinematics_forces": lambda: lk4.forces(lk4.kinematics(x)),
+        "linkage_kinematics": lambda: lk_k.kinematics(x),
+        "linkage_solve": lambda: lk_s.solve(x),
+        "linkage_kinematics_forces": lambda: lk_kf.forces(lk_kf.kinematics(x)),
     })
     if numpy_path:
         def numpy_kf():

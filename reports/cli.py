@@ -208,9 +208,15 @@ def cmd_solve(args) -> int:
 def cmd_sweep(args) -> int:
     from .cli_paths import check_outputs, write_csv
     from .display_units import DisplayUnits, convert_frame
-    check_outputs([("--csv", args.csv)], [("the case file", args.case)])
+    parquet = getattr(args, "parquet", None)
+    if parquet == "-":
+        raise opt.UsageError("argument --parquet: '-' is not accepted: a Parquet file is "
+                             "written with its index at the end; give a file name")
+    check_outputs([("--csv", args.csv), ("--parquet", parquet)],
+                  [("the case file", args.case)])
     mech = load_case(args.case)
-    streamed = bool(args.csv) and args.points > STREAM_POINTS  # written block by block
+    # written block by block: a large CSV, and Parquet always
+    streamed = bool(parquet) or (bool(args.csv) and args.points > STREAM_POINTS)
     opt.check_sweep_points(args.points, len(mech.bodies) + len(mech.joints), streamed)
     lk = Linkage(mech, branch_rule=args.branch_rule)
     kw = {"velocity": args.omega}
@@ -225,9 +231,9 @@ def cmd_sweep(args) -> int:
         kw["start"] = 0.0  # the table and the events run from 0 to 360 deg
     units = DisplayUnits.parse(getattr(args, "units", None))
     rev_ = isinstance(mech.driver_joint, Revolute)
-    r = sweep_csv(lk, args.points, getattr(args, "stdout", sys.stdout) if args.csv == "-" else
-                  args.csv, convert=lambda f: convert_frame(f, units, rev_), **kw) \
-        if streamed else lk.sweep(args.points, **kw)
+    out = parquet or (getattr(args, "stdout", sys.stdout) if args.csv == "-" else args.csv)
+    r = sweep_csv(lk, args.points, out, convert=lambda f: convert_frame(f, units, rev_),
+                  parquet=bool(parquet), **kw) if streamed else lk.sweep(args.points, **kw)
     if args.csv and not streamed:  # display units at the edge, round-off noise shown as 0
         table = convert_frame(r.frame, units, isinstance(mech.driver_joint, Revolute))
         write_csv(table, args.csv, getattr(args, "stdout", sys.stdout))
@@ -236,7 +242,7 @@ def cmd_sweep(args) -> int:
              else "feasible range only")
           + (f", {r.grashof}" if r.grashof else ""))
     say = _paragraph_printer()
-    if args.csv:
+    if args.csv or parquet:
         say(f"table {units.header()}; the events and summary below in SI, angles in deg")
     elif getattr(args, "units", None):
         say("--units applies to the --csv table; the events and summary below are in SI, "
@@ -254,8 +260,9 @@ def cmd_sweep(args) -> int:
         say(line)
     if r.summary.power_balance is not None:  # over the regular samples
         print(f"power balance error {r.summary.power_balance:.2g} (relative)")
-    if args.csv and args.csv != "-":
-        print(f"wrote {args.csv}")
+    for written in (args.csv, parquet):
+        if written and written != "-":
+            print(f"wrote {written}")
     return 0
 
 
@@ -307,9 +314,13 @@ def register(sub) -> None:
     s.add_argument("case", help="built-in case name or TOML file")
     s.add_argument("--points", type=opt.sweep_points, default=360,
                    help=f"sweep points, 2 to {opt.MAX_SWEEP_POINTS}")
-    s.add_argument("--csv", type=opt.output_file,
-                   help="write the table to this CSV file ('-': standard output, the "
-                        "summary then goes to standard error)")
+    table = s.add_mutually_exclusive_group()
+    table.add_argument("--csv", type=opt.output_file,
+                       help="write the table to this CSV file ('-': standard output, the "
+                            "summary then goes to standard error)")
+    table.add_argument("--parquet", type=opt.output_file, metavar="FILE",
+                       help="write the table to this Parquet file instead (the same "
+                            "columns and numbers, written block by block; for large sweeps)")
     s.add_argument("--omega", type=opt.rate,
                    help="input velocity, rad/s (or m/s); default the description's")
     s.add_argument("--range", type=float, nargs=2, metavar=("FROM", "TO"),

@@ -4,7 +4,7 @@
 specialisation (:meth:`analytic.fused.FusedKernel.sample_args`, a call at no
 configurations) and starts ``python -m analytic.kernels.background MODULE ARGS`` in its
 own session: it compiles the kernel into numba's on-disk cache and marks it ready
-(:func:`analytic.fused.mark_ready`), so the next call that finds it loads it in a
+(:func:`analytic.kernels.cache.mark_ready`), so the next call that finds it loads it in a
 fraction of a second.  The process outlives the one that started it (a command that
 solved one point still leaves the kernel compiled for the next).  One per structure
 and process; none while a ``<name>.compiling`` marker younger than :data:`STALE_S` says
@@ -28,7 +28,7 @@ _STARTED: dict[str, subprocess.Popen | None] = {}
 
 def start(fk) -> bool:
     """Start compiling ``fk``'s kernel in the background; whether a process started."""
-    from ..fused import cache_dir, write_source
+    from .cache import cache_dir, write_source
     name = fk.name
     if name in _STARTED:
         p = _STARTED[name]
@@ -71,7 +71,7 @@ def start(fk) -> bool:
 
 
 def _main(module: str, args: str) -> int:
-    from ..fused import _load, mark_ready
+    from .cache import _load, mark_ready
     name = Path(module).stem
     lock = Path(module).with_name(f"{name}.compiling")
     try:

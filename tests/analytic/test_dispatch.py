@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from analytic import Linkage, fused, load_case
+from analytic.kernels import cache
 from analytic.kinematics import CompactKinematics, Kinematics
 from tests.conftest import four_bar
 
@@ -57,6 +58,7 @@ def test_unloaded_kernel_waits_until_loading_pays(monkeypatch, tmp_path):
     monkeypatch.setenv("XVAL_KERNEL_CACHE", str(tmp_path))
     monkeypatch.setenv("XVAL_BACKGROUND_COMPILE", "0")
     monkeypatch.setattr(fused, "_MODULES", {})
+    monkeypatch.setattr(cache, "_MODULES", fused._MODULES)  # the same dict, emptied
     monkeypatch.setattr(fused, "_SPENT", {})
     lk = Linkage(four_bar(0.5, 0.12, 0.35, 0.3))
     for _ in range(3):
@@ -79,6 +81,7 @@ def test_background_compile_marks_the_kernel_ready(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "n"))
     monkeypatch.delenv("XVAL_BACKGROUND_COMPILE", raising=False)
     monkeypatch.setattr(fused, "_MODULES", {})
+    monkeypatch.setattr(cache, "_MODULES", fused._MODULES)  # the same dict, emptied
     from analytic.kernels import background
     monkeypatch.setattr(background, "_STARTED", {})
     lk = Linkage(four_bar(0.45, 0.1, 0.35, 0.3))

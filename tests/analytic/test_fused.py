@@ -297,3 +297,37 @@ def test_compact_kinematics_defers_the_same_numbers(case, monkeypatch):
     assert max(errs.values()) <= 1.0, errs
     with pytest.raises(AttributeError):
         kin.no_such_array  # noqa: B018 - the error, not a fill
+
+
+@pytest.mark.parametrize("case", ["seed-four-bar", "six-bar"])
+def test_forces_of_kinematics_is_one_pass(case, monkeypatch):
+    """``lk.forces(lk.kinematics(x))``, the call a user makes: from its second call on,
+    the kinematics pass writes the forces too (one kernel pass for both), the same
+    forces as a forces-only pass; once a result's forces go unused, kinematics alone
+    is one pass of kinematics again (issue 23, item 2)."""
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    lk = Linkage(load_case(case))
+    x = input_values(lk, POINTS)[0]
+    fk = kernel_for(lk)
+    levels = []
+    run = fk.run
+
+    def counted(*a, **k):
+        levels.append(a[5] if len(a) > 5 else k.get("level", 3))
+        return run(*a, **k)
+    monkeypatch.setattr(fk, "run", counted)
+    frc1 = lk.forces(lk.kinematics(x))  # first call: kinematics, then a forces pass
+    assert levels == [2, 3]
+    levels.clear()
+    kin2 = lk.kinematics(x)
+    frc2 = lk.forces(kin2)
+    assert levels == [3]  # one pass for both
+    for a, b in ((frc1.effort, frc2.effort), (frc1.power, frc2.power)):
+        np.testing.assert_allclose(b, a, rtol=0, atol=AGREEMENT * np.max(np.abs(a)))
+    for jn, F in frc1.joint_force.items():
+        np.testing.assert_allclose(frc2.joint_force[jn], F, rtol=0,
+                                   atol=AGREEMENT * np.max(np.abs(F)))
+    levels.clear()
+    lk.kinematics(x)  # forces written, never read: the guess stops
+    lk.kinematics(x)
+    assert levels == [3, 2]
