@@ -188,6 +188,27 @@ class _Shadow:
         return getattr(self._lk, name)
 
 
+def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
+    """The solver's change points (:meth:`analytic.Linkage.branch_crossings`: where
+    dyads meet, including those where the loop Jacobian's determinant touches zero
+    without changing sign, as the N four-bar's 40 windows at once) crossed by the
+    integrated coordinate between the segment's steps: ``[(t, detail)]``."""
+    out = []
+    ts = seg.ts
+    lo, hi = float(np.min(q)), float(np.max(q))
+    for c in seg.lk.branch_crossings(lo, hi):
+        v = c.value
+        for i in np.flatnonzero((q[:-1] - v) * (q[1:] - v) <= 0):
+            if q[i] == q[i + 1]:
+                continue
+            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1], xtol=1e-14)
+            if not any(abs(tc - t) < 1e-12 for t, _ in out):
+                out.append((tc, f"change point at {seg.joint!r} = {v:.12g} crossed "
+                                f"({len(c.joints)} dyads meet: {', '.join(c.joints[:4])}"
+                                f"{', ...' if len(c.joints) > 4 else ''})"))
+    return out
+
+
 def find_events(traj: FreeTrajectory) -> list[Event]:
     """Switches, singular crossings, joint limit positions and turning points, located
     to ~1e-13 s by root-finding on the dense output between the integrator's steps."""
@@ -206,8 +227,13 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
         def g_det(t, seg=seg):
             return float(coefficients(seg.lk, seg.sol(t)[0]).kin.determinant[0])
 
+        crossed = _change_points(seg, q[0])
+        for tc, detail in crossed:
+            events.append(Event(tc, "singular", seg.joint, detail))
         for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
             tc = brentq(g_det, ts[i], ts[i + 1], xtol=1e-14)
+            if any(abs(tc - t) < 1e-9 for t, _ in crossed):
+                continue  # the same change point, listed with its dyads
             events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
                                 "(dead centre or change point) crossed"))
         for j in range(len(names)):
