@@ -20,7 +20,6 @@ import numpy as np
 from .linalg import cmatmul, solve_small
 from .topology import Topology
 
-
 #: Size of the dense term-to-Jacobian maps (terms x loops x unknowns) above which
 #: :meth:`LoopEquations.jacobian` uses sparse ones.
 _DENSE_LIMIT = 200_000

@@ -67,8 +67,9 @@ def _revolute_pairs(lk):
     if got is None:
         names = lk.topo.body_names
         rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
-        ia = np.array([names.index(j.body_a) if r else 0 for j, r in zip(lk.mech.joints, rev, strict=True)], int)
-        ib = np.array([names.index(j.body_b) if r else 0 for j, r in zip(lk.mech.joints, rev, strict=True)], int)
+        pairs = [(names.index(j.body_a), names.index(j.body_b)) if r else (0, 0)
+                 for j, r in zip(lk.mech.joints, rev, strict=True)]
+        ia, ib = (np.array(c, int) for c in zip(*pairs, strict=True))
         got = lk._free_pairs = (rev, ia, ib)
     return got
 

@@ -16,7 +16,14 @@ import pytest
 
 from analytic import load_case
 from analytic.cases import free_case_names
-from analytic.motion_spec import FreeMotion, JointDamper, JointSpring, Motor, PointDamper, PointSpring
+from analytic.motion_spec import (
+    FreeMotion,
+    JointDamper,
+    JointSpring,
+    Motor,
+    PointDamper,
+    PointSpring,
+)
 from analytic.toml_io import mechanism_from_dict, mechanism_to_toml
 
 #: rad -> deg -> rad: a few units of double rounding on angles of a few radians.
