@@ -155,6 +155,8 @@ class BranchSchedule:
 
     @cached_property
     def _has_equal_rrr(self) -> bool:
+        """Whether an RRR dyad has two equal links (a rhombus window can fold at zero
+        base: its change points are decided one dyad at a time, see :meth:`_touch`)."""
         th, E, O, _, _ = self.cf.run(np.array([self.reference]), self.signs0)
         return any(True for _ in self._equal_rrr(E, O))
 
@@ -208,7 +210,8 @@ class BranchSchedule:
             c = self._decide_memo[key]
             return Crossing(t, c.joints, c.before, c.after, c.rule, c.jump)
         joints = tuple(self.dyad_joints[k] for k in dyads)
-        if self.rule == "continuous" and (len(dyads) > _JOINT_DECISION or self._has_equal_rrr):
+        if self.rule == "continuous" and (len(dyads) > _JOINT_DECISION
+                                          or self._has_equal_rrr):
             c = self._decide_one_by_one(t, signs, dyads, d, joints)
             self._decide_memo[key] = c
             return c
@@ -294,7 +297,14 @@ class BranchSchedule:
                 rules.append(rule)
         rule = "velocity" if all(r == "velocity" for r in rules) else \
             "held: continuity cannot decide"
-        return Crossing(t, joints, tuple(signs), tuple(s), rule, 0.0)
+        jump = 0.0
+        if tuple(s) != tuple(signs):  # what holding every sign would have cost
+            right, _ = self._pose(t + d * np.array([h, 2 * h]), signs)
+            dr = right[1] - right[0]
+            dr[:B] = (dr[:B] + math.pi) % (2 * math.pi) - math.pi
+            scale = max(float(np.max(np.abs(slope_l))), 1e-300)
+            jump = float(np.max(np.abs(dr / h - slope_l))) / scale
+        return Crossing(t, joints, tuple(signs), tuple(s), rule, jump)
 
     # --- the walk -----------------------------------------------------------------
     def _next(self, x: float, signs, d: int):
