@@ -35,6 +35,9 @@ from .topology import Topology
 
 #: Samples per turn (or span) searched for the discriminants' minima.
 _SAMPLES = 3600
+#: Most dyads touching at one change point whose sign combinations :meth:`decide`
+#: compares jointly (2^n); beyond, one dyad at a time.
+_JOINT_DECISION = 8
 
 
 @dataclass(frozen=True)
@@ -106,7 +109,7 @@ class BranchSchedule:
         else:
             lo, hi = input_span(self.topo)
         x = np.linspace(lo, hi, _SAMPLES + 1)
-        disc = self.cf.run(x, signs)[3]
+        disc = self._touch(x, signs)
         found = []
         for k in range(disc.shape[1]):
             d = disc[:, k]
@@ -119,9 +122,12 @@ class BranchSchedule:
             # candidate minima near zero; the refined minimum decides.  A double root's
             # sampled minimum is up to curvature * (spacing / 2)^2 ~ 1e-6 curvature; 0.1
             # admits curvatures to 1e5 (an RRR discriminant's grows with L1 / L2)
-            for i in np.flatnonzero((d <= prev) & (d <= nxt) & (np.abs(d) < 1e-1)):
+            # strict on one side: a dyad flat at zero over a stretch (a rhombus window
+            # folded onto its base, on a held branch past a change point) is no minimum
+            strict = (d < prev) | (d < nxt)
+            for i in np.flatnonzero((d <= prev) & (d <= nxt) & strict & (np.abs(d) < 1e-1)):
                 xm = self._refine_min(x[i], x[1] - x[0], signs, k)
-                dm = float(self.cf.run(np.array([xm]), signs)[3][0, k])
+                dm = float(self._touch(np.array([xm]), signs)[0, k])
                 if abs(dm) <= CHANGE_POINT_DISC:
                     found.append((xm, k))
         out: dict[float, set] = {}
@@ -133,13 +139,53 @@ class BranchSchedule:
         self._touch_memo[signs] = res
         return res
 
+    def _touch(self, x: np.ndarray, signs) -> np.ndarray:
+        """``(N, K)``: per dyad, the quantity whose touching zero is a change point: its
+        relative discriminant (a toggle), and for an RRR dyad of two equal links also
+        its squared base length relative to ``(L1 + L2)^2``: where the base shrinks to
+        zero the two links fold onto each other and the two assemblies meet (a rhombus
+        window of the IFToMM N four-bar at the horizontal)."""
+        th, E, O, disc, _ = self.cf.run(x, signs)
+        disc = disc.copy()
+        for k, (P1, P3, scale) in self._equal_rrr(E, O):
+            d = P3 - P1
+            base2 = (d.real ** 2 + d.imag ** 2) / scale
+            disc[:, k] = np.where(base2 == 0.0, 0.0, np.minimum(disc[:, k], base2))
+        return disc
+
+    @cached_property
+    def _has_equal_rrr(self) -> bool:
+        """Whether an RRR dyad has two equal links (a rhombus window can fold at zero
+        base: its change points are decided one dyad at a time, see :meth:`_touch`)."""
+        th, E, O, _, _ = self.cf.run(np.array([self.reference]), self.signs0)
+        return any(True for _ in self._equal_rrr(E, O))
+
+    def _equal_rrr(self, E, O):
+        """``(column, P1, P3, (L1 + L2)^2)`` of each RRR dyad of equal links."""
+        topo, cf = self.topo, self.cf
+        col = -1
+        for st in topo.plan:
+            if st.kind not in ("RRR", "RRP", "RPR", "PRP"):
+                continue
+            col += 1
+            if st.kind != "RRR":
+                continue
+            (x1, x2), (j1, j2, j3) = st.bodies, st.joints
+            L1, L2 = abs(cf.at[j2, x1] - cf.at[j1, x1]), abs(cf.at[j3, x2] - cf.at[j2, x2])
+            if abs(L1 - L2) > 1e-12 * (L1 + L2):
+                continue
+            k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
+            P1 = O[:, k1] + E[:, k1] * cf.at[j1, k1]
+            P3 = O[:, k3] + E[:, k3] * cf.at[j3, k3]
+            yield col, (P1, P3, (L1 + L2) ** 2)
+
     def _refine_min(self, x0: float, dx: float, signs, k: int) -> float:
         """The minimum of dyad ``k``'s discriminant near ``x0``: vertex of a parabola
         through three samples, twice, with a shrinking spacing (a double root's
         minimum is located to ~1e-11 where sampling the values alone gives 1e-8)."""
         x = x0
         for h in (dx, 1e-3 * dx, 1e-5 * dx):
-            y = self.cf.run(np.array([x - h, x, x + h]), signs)[3][:, k]
+            y = self._touch(np.array([x - h, x, x + h]), signs)[:, k]
             den = y[0] - 2 * y[1] + y[2]
             if den > 0:
                 x = x + 0.5 * h * (y[0] - y[2]) / den
@@ -164,6 +210,11 @@ class BranchSchedule:
             c = self._decide_memo[key]
             return Crossing(t, c.joints, c.before, c.after, c.rule, c.jump)
         joints = tuple(self.dyad_joints[k] for k in dyads)
+        if self.rule == "continuous" and (len(dyads) > _JOINT_DECISION
+                                          or self._has_equal_rrr):
+            c = self._decide_one_by_one(t, signs, dyads, d, joints)
+            self._decide_memo[key] = c
+            return c
         cands = []
         for flip in itertools.product((False, True), repeat=len(dyads)):
             s = list(signs)
@@ -207,6 +258,53 @@ class BranchSchedule:
         c = Crossing(t, joints, signs, after, rule, 0.0 if after == signs else held_jump)
         self._decide_memo[key] = c
         return c
+
+    def _decide_one_by_one(self, t: float, signs, dyads, d: int, joints) -> Crossing:
+        """:meth:`decide` for many dyads touching at once (2^n combinations): each dyad,
+        in the plan's order, takes the sign whose two bodies' poses continue with the
+        velocity they had (a dyad places its bodies from bodies placed before it)."""
+        B = len(self.topo.body_names)
+        steps = [st for st in self.topo.plan if st.kind in ("RRR", "RRP", "RPR")]
+        unit = 1.0 if self.revolute else self.size
+        for h in unit * np.array([1e-4, 1e-3, 1e-2]):
+            left, dl = self._pose(t - d * np.array([2 * h, h]), signs)
+            if np.all(np.abs(dl[:, list(dyads)]) > 1e3 * TOGGLE_SNAP):
+                break
+        slope_l = (left[1] - left[0]) / h
+        s = list(signs)
+        rules = []
+        # every dyad, not only those found touching: past a change point the held
+        # branch of a later dyad is not the linkage's (a folded rhombus window may sit
+        # at zero base all along it), so its own touches say nothing
+        for k in range(len(steps)):
+            cols = [c for b in steps[k].bodies for c in (b, B + b, 2 * B + b)]
+            jumps = []
+            for sg in (s[k], -s[k]):
+                s[k] = sg
+                right, disc = self._pose(t + d * np.array([h, 2 * h]), s)
+                dr = right[1] - right[0]
+                dr[:B] = (dr[:B] + math.pi) % (2 * math.pi) - math.pi
+                bad = disc.size and np.any(disc[:, k] < -TOGGLE_SNAP)
+                jumps.append(math.inf if bad else
+                             float(np.max(np.abs(dr[cols] / h - slope_l[cols]))))
+            s[k] = -s[k]  # back to the held sign
+            if jumps[1] < CONTINUITY_RATIO * jumps[0]:
+                s[k], rule = -s[k], "velocity"
+            else:
+                rule = "velocity" if jumps[0] <= CONTINUITY_RATIO * jumps[1] else \
+                    "held: continuity cannot decide"
+            if k in dyads or s[k] != signs[k]:
+                rules.append(rule)
+        rule = "velocity" if all(r == "velocity" for r in rules) else \
+            "held: continuity cannot decide"
+        jump = 0.0
+        if tuple(s) != tuple(signs):  # what holding every sign would have cost
+            right, _ = self._pose(t + d * np.array([h, 2 * h]), signs)
+            dr = right[1] - right[0]
+            dr[:B] = (dr[:B] + math.pi) % (2 * math.pi) - math.pi
+            scale = max(float(np.max(np.abs(slope_l))), 1e-300)
+            jump = float(np.max(np.abs(dr / h - slope_l))) / scale
+        return Crossing(t, joints, tuple(signs), tuple(s), rule, jump)
 
     # --- the walk -----------------------------------------------------------------
     def _next(self, x: float, signs, d: int):

@@ -357,8 +357,14 @@ def choose_branches(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, 
     """The dyad branch signs whose pose at ``value`` lies nearest the hints.
 
     Without hints the all-(+1) combination is taken when it closes.  Scores are
-    relative to the mechanism's size, so the choice is the same at any scale.
+    relative to the mechanism's size, so the choice is the same at any scale.  With
+    more than :data:`_JOINT_CHOICE` dyads (2^n combinations) the signs are chosen one
+    dyad at a time in the plan's order, each nearest the hints on the two bodies it
+    places (a dyad places its bodies from bodies placed before it, so this is the
+    same choice wherever each dyad's bodies carry hints).
     """
+    if cf.n_branch > _JOINT_CHOICE:
+        return _choose_one_by_one(topo, cf, value)
     best, best_score = None, math.inf
     for signs in itertools.product((1, -1), repeat=cf.n_branch):
         th, E, O, disc, _ = cf.run(np.array([value]), signs)
@@ -371,6 +377,38 @@ def choose_branches(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, 
     if best is None:
         raise _infeasible(topo, value)
     return best
+
+
+#: Most dyads whose sign combinations :func:`choose_branches` enumerates jointly.
+_JOINT_CHOICE = 12
+
+
+def branching_steps(topo: Topology) -> list:
+    """The plan's steps that carry a branch sign (RRR, RRP, RPR), in sign order."""
+    return [st for st in topo.plan if st.kind in ("RRR", "RRP", "RPR")]
+
+
+def _choose_one_by_one(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, ...]:
+    """Dyad signs chosen in plan order, each by the hints on its own two bodies."""
+    signs = [1] * cf.n_branch
+    v = np.array([value])
+    disc_steps = [st for st in topo.plan if st.kind in ("RRR", "RRP", "RPR", "PRP")]
+    for k, st in enumerate(branching_steps(topo)):
+        col = disc_steps.index(st)
+        names = {topo.body_names[b] for b in st.bodies}
+        scores = []
+        for sg in (1, -1):
+            signs[k] = sg
+            th, E, O, disc, _ = cf.run(v, signs)
+            labels, d = hint_distances(topo, th, E, O)
+            mine = [i for i, lab in enumerate(labels)
+                    if lab.partition(".")[0].removesuffix(" angle") in names]
+            ok = not disc[0, col] < -TOGGLE_SNAP
+            scores.append(float(np.sum(d[0, mine] ** 2)) if ok else math.inf)
+        if not math.isfinite(min(scores)):
+            raise _infeasible(topo, value)
+        signs[k] = 1 if scores[0] <= scores[1] + 1e-12 else -1
+    return tuple(signs)
 
 
 def _fmt_value(topo: Topology, v: float) -> str:

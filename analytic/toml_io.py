@@ -18,6 +18,7 @@ for a complete example.  Units in a file:
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from pathlib import Path
@@ -458,6 +459,8 @@ def mechanism_to_toml(mech: Mechanism) -> str:
     deg = math.degrees
     out = [f"name = {q(mech.name)}", f"ground = {q(mech.ground)}",
            f"gravity = {pair(mech.gravity)}"]
+    if mech.description:  # a TOML basic string: JSON's escapes are TOML's
+        out.insert(1, f"description = {json.dumps(mech.description, ensure_ascii=False)}")
     if mech.loops is not None:
         out.append("loops = [" + ", ".join("[" + ", ".join(q(n) for n in lp) + "]"
                                            for lp in mech.loops) + "]")
@@ -487,6 +490,8 @@ def mechanism_to_toml(mech: Mechanism) -> str:
         if ld.point is not None:
             out.append(f"point = {q(ld.point)}")
         out += [f"force = {pair(ld.force)}", f"torque = {f(ld.torque)}"]
+    if mech.motion is not None:
+        out += _motion_toml(mech, f, q)
     a = mech.assembly
     if a.points or a.angles:
         out += ["", "[assembly]"]
@@ -497,3 +502,44 @@ def mechanism_to_toml(mech: Mechanism) -> str:
             out.append("angles = { " + ", ".join(f"{q(k)} = {f(deg(v))}"
                                                   for k, v in a.angles.items()) + " }")
     return "\n".join(out) + "\n"
+
+
+def _motion_toml(mech: Mechanism, f, q) -> list[str]:
+    """The ``[motion]``, ``[[springs]]``, ``[[dampers]]`` and ``[[motors]]`` lines of
+    :func:`mechanism_to_toml` (SI lengths, degrees for angles, rad/s)."""
+    fm = mech.motion
+    deg = math.degrees
+
+    def rev(name: str) -> bool:
+        return isinstance(mech.joint(name), Revolute)
+
+    out = ["", "[motion]", f"joint = {q(fm.joint)}",
+           f"value = {f(deg(fm.value) if rev(fm.joint) else fm.value)}",
+           f"rate = {f(fm.rate)}", f"duration = {f(fm.duration)}", f"samples = {fm.samples}"]
+    for el in fm.springs + fm.dampers:
+        spring = isinstance(el, PointSpring | JointSpring)
+        out += ["", "[[springs]]" if spring else "[[dampers]]"]
+        if isinstance(el, PointSpring | PointDamper):
+            out += [f"bodies = [{q(el.body_a)}, {q(el.body_b)}]",
+                    f"points = [{q(el.point_a)}, {q(el.point_b)}]"]
+        else:
+            out.append(f"joint = {q(el.joint)}")
+        if not spring:
+            out.append(f"coefficient = {f(el.coefficient)}")
+            continue
+        out.append(f"stiffness = {f(el.stiffness)}")
+        if isinstance(el, PointSpring):
+            out.append(f"free_length = {f(el.free_length)}")
+        elif rev(el.joint):
+            out.append(f"free_angle = {f(deg(el.free_value))}")
+        else:
+            out.append(f"free_length = {f(el.free_value)}")
+    for mo in fm.motors:
+        out += ["", "[[motors]]", f"joint = {q(mo.joint)}"]
+        if mo.times:
+            out.append("table = [" + ", ".join(f"[{f(t)}, {f(e)}]"
+                                               for t, e in zip(mo.times, mo.efforts,
+                                                               strict=True)) + "]")
+        else:
+            out.append(f"effort = {f(mo.effort)}")
+    return out

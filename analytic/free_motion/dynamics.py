@@ -50,21 +50,28 @@ def coefficients(lk, q) -> Coefficients:
     """The solver's kinematics at ``q`` (scalar or ``(N,)``) with ``q' = 1, q'' = 0``."""
     q = np.atleast_1d(np.asarray(q, float))
     kin = lk.kinematics(q, 1.0, 0.0, on_singular="flag")
-    topo = lk.topo
-    cols = [], [], []
-    for jt in lk.mech.joints:
-        if isinstance(jt, Revolute):
-            a, b = topo.body_names.index(jt.body_a), topo.body_names.index(jt.body_b)
-            for out, arr in zip(cols, (kin.theta, kin.omega, kin.alpha), strict=True):
-                out.append(arr[:, b] - arr[:, a])
-        else:
-            for out, arr in zip(cols, kin.slider(jt.name), strict=True):
-                out.append(arr)
-    x, x_q, x_qq = (np.stack(c, axis=1) for c in cols)
+    rev, ia, ib = _revolute_pairs(lk)
+    x, x_q, x_qq = (arr[:, ib] - arr[:, ia] for arr in (kin.theta, kin.omega, kin.alpha))
+    for k in np.flatnonzero(~rev):
+        x[:, k], x_q[:, k], x_qq[:, k] = kin.slider(lk.mech.joints[k].name)
     # the integrated coordinate is q itself (the solver may wrap its angle)
     k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
     x[:, k] = q
     return Coefficients(kin, x, x_q, x_qq)
+
+
+def _revolute_pairs(lk):
+    """Per joint: revolute or not, and the body indices of its two bodies (revolute;
+    0 for a prismatic joint), cached on the linkage."""
+    got = getattr(lk, "_free_pairs", None)
+    if got is None:
+        names = lk.topo.body_names
+        rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
+        pairs = [(names.index(j.body_a), names.index(j.body_b)) if r else (0, 0)
+                 for j, r in zip(lk.mech.joints, rev, strict=True)]
+        ia, ib = (np.array(c, int) for c in zip(*pairs, strict=True))
+        got = lk._free_pairs = (rev, ia, ib)
+    return got
 
 
 def unwrap_to(x: np.ndarray, ref: np.ndarray, revolute: np.ndarray) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The IFToMM multibody benchmark problems as descriptions (the shipped case files).
 
 A02, the N four-bar mechanism, has N as a parameter: :func:`n_four_bar_toml` writes its
-description for any N; ``analytic/cases/iftomm-a02-n-four-bar.toml`` is its text for the
+description for any N; ``analytic/cases/free/iftomm-a02-n-four-bar.toml`` is its text for the
 published N = 40 (a test checks they agree).  Source of the definition: IFToMM
 benchmark library (Gonzalez, Dopico, Lugris, Cuadrado, "A benchmarking system for MBS
 simulation software", Multibody System Dynamics 16, 2006;

@@ -147,16 +147,20 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     scale = joint_scale(mech)
     m0 = replace(mech, driver=Driver(fm.joint, fm.value, fm.rate))
     lk = Linkage(m0)
-    co = coefficients(lk, fm.value)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a dead centre: checked below
+        co = coefficients(lk, fm.value)
     x0 = co.x[0]
     y = np.array([fm.value, fm.rate, 0.0, 0.0, 0.0])
-    tm0 = terms(lk, co, x0[None], fm.rate, 0.0)
-    if not tm0.M[0] > 0:
-        raise NoInertiaError(_no_inertia(lk, fm.value))
-    e_scale = _energy_scale(mech, tm0, size)
     t, segs, switches = 0.0, [], []
-    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
     closed = _closed_form_joints(mech)
+    if not np.all(np.isfinite(co.x_q)):  # released at a singular position of its joint
+        lk, y, co = _start_elsewhere(lk, co, y, scale, closed, size, switches)
+        x0 = co.x[0]
+    tm0 = terms(lk, co, x0[None], y[1], 0.0)
+    if not tm0.M[0] > 0:
+        raise NoInertiaError(_no_inertia(lk, float(y[0])))
+    e_scale = _energy_scale(mech, tm0, size)
+    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
     x_ref = x0
     while True:
         sysm = _System(lk, x_ref, scale)
@@ -191,6 +195,40 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         sysm.last = x_ref
         r = sysm.ratios(float(y[0]))
         lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+
+
+def _start_elsewhere(lk, co, y, scale, closed, size, switches):
+    """The initial joint's coordinate is singular at the initial pose (a slider at a
+    dead centre: the other joints' rates per unit of its rate are infinite).  At rest
+    the motion starts in the best-conditioned other joint's coordinate (a switch at
+    t = 0); moving, the state is impossible (the joint cannot move there)."""
+    mech = lk.mech
+    jn0 = mech.driver.joint
+    if y[1] != 0.0:
+        raise LinkageError(f"mechanism {mech.name!r}: [motion] joint {jn0!r} = {y[0]:.6g} is "
+                           f"a singular position of its coordinate (a dead centre: it cannot "
+                           f"move there), so its rate must be 0, got {y[1]:.6g}")
+    best = None
+    for j, jt in enumerate(mech.joints):
+        if jt.name == jn0:
+            continue
+        try:
+            new = Linkage(rebased(mech, jt.name, co.x[0, j], co.kin))
+            co2 = coefficients(new, co.x[0, j])
+        except LinkageError:
+            continue
+        r = np.abs(co2.x_q[0]) * scale / scale[j]
+        if not np.all(np.isfinite(r)) or _pose_gap(co.kin, co2.kin, size) > SWITCH_POSE:
+            continue
+        key = (not closed[j], float(np.max(r)))
+        if best is None or key < best[0]:
+            best = (key, new, co2, jt.name, co.x[0, j])
+    if best is None:
+        raise LinkageError(f"mechanism {mech.name!r}: no joint's coordinate is regular at the "
+                           f"initial pose ({jn0!r} = {y[0]:.6g})")
+    _, new, co2, jn, v = best
+    switches.append((0.0, jn0, jn))
+    return new, np.array([v, 0.0, 0.0, 0.0, 0.0]), co2
 
 
 def _closed_form_joints(mech) -> np.ndarray:

@@ -26,8 +26,9 @@ from .integrate import Segment
 
 @dataclass(frozen=True)
 class Event:
-    """Something met along the run: ``kind`` is ``switch``, ``singular``, ``limit`` or
-    ``turn``; ``t`` s; ``joint`` the joint concerned; ``detail`` in words."""
+    """Something met along the run: ``kind`` is ``switch``, ``singular``, ``limit``,
+    ``turn`` or ``stop`` (released at rest where nothing moves it, e.g. a dead centre:
+    the motion stops); ``t`` s; ``joint`` the joint concerned; ``detail`` in words."""
 
     t: float
     kind: str
@@ -188,12 +189,61 @@ class _Shadow:
         return getattr(self._lk, name)
 
 
+#: A run whose integrated rate stays below this (rad/s, or m/s per mechanism size)
+#: from a release at rest has stopped: nothing moves it (rounding-level forces at an
+#: unstable equilibrium move it by less than this over the run).
+STOP_RATE = 1e-12
+
+
+def _stopped(traj: FreeTrajectory) -> Event | None:
+    """A ``stop`` event at t = 0 when the linkage, released at rest, never moves: an
+    equilibrium, or a dead centre no force moves it from (then the released joint's
+    coordinate is singular there and the run starts in another one)."""
+    from ..mechanism import mechanism_size
+    size = mechanism_size(traj.mech.bodies) or 1.0
+    peak = 0.0
+    for seg in traj.segments:
+        rev = isinstance(seg.lk.mech.driver_joint, Revolute)
+        peak = max(peak, float(np.max(np.abs(seg.sol(seg.ts)[1]))) / (1.0 if rev else size))
+    if not peak <= STOP_RATE:
+        return None
+    fm = traj.mech.motion
+    where = (f"at a dead centre of joint {fm.joint!r} (its coordinate is singular there)"
+             if traj.switches and traj.switches[0][0] == 0.0 else "in equilibrium")
+    return Event(0.0, "stop", fm.joint, f"released at rest {where}: the motion stops "
+                 f"(rates stay below {STOP_RATE:g} over {traj.duration:g} s)")
+
+
+def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
+    """The solver's change points (:meth:`analytic.Linkage.branch_crossings`: where
+    dyads meet, including those where the loop Jacobian's determinant touches zero
+    without changing sign, as the N four-bar's 40 windows at once) crossed by the
+    integrated coordinate between the segment's steps: ``[(t, detail)]``."""
+    out = []
+    ts = seg.ts
+    lo, hi = float(np.min(q)), float(np.max(q))
+    for c in seg.lk.branch_crossings(lo, hi):
+        v = c.value
+        for i in np.flatnonzero((q[:-1] - v) * (q[1:] - v) <= 0):
+            if q[i] == q[i + 1]:
+                continue
+            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1], xtol=1e-14)
+            if not any(abs(tc - t) < 1e-12 for t, _ in out):
+                out.append((tc, f"change point at {seg.joint!r} = {v:.12g} crossed "
+                                f"({len(c.joints)} dyads meet: {', '.join(c.joints[:4])}"
+                                f"{', ...' if len(c.joints) > 4 else ''})"))
+    return out
+
+
 def find_events(traj: FreeTrajectory) -> list[Event]:
     """Switches, singular crossings, joint limit positions and turning points, located
     to ~1e-13 s by root-finding on the dense output between the integrator's steps."""
     events = [Event(t, "switch", b, f"integrated coordinate {a!r} -> {b!r}")
               for t, a, b in traj.switches]
     names = traj.joints
+    stop = _stopped(traj)
+    if stop is not None:
+        return events + [stop]
     for seg in traj.segments:
         ts = seg.ts
         if len(ts) < 2:
@@ -206,8 +256,13 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
         def g_det(t, seg=seg):
             return float(coefficients(seg.lk, seg.sol(t)[0]).kin.determinant[0])
 
+        crossed = _change_points(seg, q[0])
+        for tc, detail in crossed:
+            events.append(Event(tc, "singular", seg.joint, detail))
         for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
             tc = brentq(g_det, ts[i], ts[i + 1], xtol=1e-14)
+            if any(abs(tc - t) < 1e-9 for t, _ in crossed):
+                continue  # the same change point, listed with its dyads
             events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
                                 "(dead centre or change point) crossed"))
         for j in range(len(names)):
