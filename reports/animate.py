@@ -61,6 +61,7 @@ class Frames:
     rates: np.ndarray | None = None          # (F,) prescribed rate, rad/s or m/s
     accelerations: np.ndarray | None = None  # (F,) prescribed acceleration
     convention: object = None     # analytic.input_display.InputConvention of the input
+    free_joint: str | None = None  # a free run's [motion] joint: values, rates are its own
 
     @property
     def n(self) -> int:
@@ -365,6 +366,8 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
 def info_text(fr: Frames, i: int, conv) -> str:
     """The text box of frame ``i``: the input (the one display convention), its
     prescribed rate (and acceleration) there, the time along the motion."""
+    if fr.free_joint is not None:  # a free run: its [motion] joint and the clock
+        return free_info_text(fr, i)
     from analytic.input_display import input_text
     d = fr.mech.driver
     u = "rad/s" if fr.revolute else "m/s"
@@ -374,6 +377,17 @@ def info_text(fr: Frames, i: int, conv) -> str:
     if acc:
         line += f", {acc:.4g} {u[:-2]}/s^2"
     return f"{line}\nt = {fr.times[i]:.4f} s   frame {i + 1}/{fr.n}"
+
+
+def free_info_text(fr: Frames, i: int) -> str:
+    """The text box of a free run's frame: its ``[motion]`` joint's coordinate and rate
+    there, and the clock."""
+    if fr.revolute:
+        v = f"{math.degrees(float(fr.values[i])):.4f} deg, {fr.rates[i]:.4g} rad/s"
+    else:
+        v = f"{float(fr.values[i]):.6g} m, {fr.rates[i]:.4g} m/s"
+    return (f"free motion: {fr.free_joint} = {v}\n"
+            f"t = {fr.times[i]:.6g} s of {fr.times[-1]:.6g} s   frame {i + 1}/{fr.n}")
 
 
 def _axes(fr: Frames, title: str, dpi: int):
@@ -612,6 +626,12 @@ def cmd_animate(args) -> int:
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
                               "write .gif or .html instead (or install ffmpeg)")
     mech = load_case(args.case)
+    from .free_plots import FreeOptionError, is_free
+    if is_free(mech, args.free, args.driven):
+        return _animate_free(args, mech)
+    if args.duration is not None:
+        raise FreeOptionError("option --duration is for free motion (a description with "
+                              "[motion]); a prescribed animation runs one cycle")
     # the compiled linkage (analytic solution + simulation tree): the frames' times come
     # from the engines' plan where the input does not turn fully
     tree = compile_linkage(mech)
@@ -643,10 +663,41 @@ def cmd_animate(args) -> int:
     return 0
 
 
+def _animate_free(args, mech) -> int:
+    """The free motion of ``[motion]``: poses at ``--frames`` evenly spaced times from 0
+    to the duration, with the clock."""
+    from analytic.free_motion import simulate
+
+    from .free_plots import FreeOptionError, free_frames, swing_note
+    if args.engine:
+        raise FreeOptionError(f"option --engine: {mech.name!r} is animated in free motion (its "
+                              "[motion] table), which draws no engine run; add --driven for "
+                              "the prescribed cycle")
+    traj = simulate(mech, args.duration)
+    fr = free_frames(traj, args.frames, args.forces)
+    an = build_animation(fr, f"{mech.name}: free motion, {traj.duration:g} s "
+                             f"({len(traj.events)} events)")
+    write(an, args.out, args.fps)
+    note = swing_note(traj, traj.duration / (fr.n - 1), "frames")
+    if note:
+        print("note:", note)
+    print(f"wrote {args.out} (free motion, {fr.n} frames every "
+          f"{traj.duration / (fr.n - 1):.4g} s over {traj.duration:g} s)")
+    return 0
+
+
 def register(sub) -> None:
     from . import cli_options as opt
-    s = sub.add_parser("animate", help="the linkage moving through a cycle (GIF, MP4, HTML)")
+    s = sub.add_parser("animate", help="the linkage moving through a cycle, or its free "
+                       "motion (GIF, MP4, HTML)")
     s.add_argument("case", help="built-in case name or TOML file")
+    mode = s.add_mutually_exclusive_group()
+    mode.add_argument("--free", action="store_true",
+                      help="animate the free motion of the description's [motion] table (the "
+                           "default when it has one): poses at evenly spaced times, clock shown")
+    mode.add_argument("--driven", action="store_true",
+                      help="animate the prescribed cycle of [driver] even when the "
+                           "description has a [motion] table")
     s.add_argument("--out", type=opt.output_file, help="F.gif, F.mp4 (needs ffmpeg) or F.html")
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
@@ -654,7 +705,14 @@ def register(sub) -> None:
     s.add_argument("--forces", action="store_true",
                    help="joint forces as arrows on one scale, with a key")
     s.add_argument("--frames", type=opt.int_range(36, 720, "frames per cycle"),
-                   default=FRAMES, help=f"frames per cycle, 36 to 720 (default {FRAMES})")
+                   default=FRAMES, help=f"frames per cycle (free motion: over the run), 36 "
+                                        f"to 720 (default {FRAMES})")
+    from analytic.motion_spec import MAX_DURATION
+
+    from .simulate_cmd import MIN_DURATION
+    s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
+                   help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
+                        "(default the description's)")
     s.add_argument("--fps", type=opt.int_range(1, 60, "frames per second"), default=24,
                    help="frames per second, 1 to 60 (default 24)")
     s.set_defaults(func=cmd_animate)
