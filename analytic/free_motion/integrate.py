@@ -116,8 +116,9 @@ def _no_inertia(lk, q: float, t: float | None = None, ratio: float | None = None
     return (f"{mech.source + ': ' if mech.source else ''}mechanism {mech.name!r}: no inertia "
             f"in the moving coordinate at joint {mech.driver.joint!r} = {shown}"
             f"{'' if t is None else f' (t = {t:.6g} s)'}: the generalized inertia M(q) {how}; "
-            f"the bodies with mass {massive} stand still there, massless bodies: {massless}; "
-            "free motion needs inertia all along the motion")
+            + (f"the bodies with mass {massive} stand still there, massless bodies: "
+               f"{massless}" if massive else f"no moving body has mass: {massless}")
+            + "; free motion needs inertia all along the motion")
 
 
 def joint_scale(mech) -> np.ndarray:
