@@ -15,6 +15,10 @@ drawn over the analytic ones, dashed in the engine's colour: a drifting loop sho
 gap.  Engine and analytic poses go through the same drawing function
 (:func:`body_outlines`), so what differs on screen differs in the numbers.
 
+A description with a ``[motion]`` table is animated in free motion (``--driven``: its
+prescribed cycle instead): the poses at evenly spaced times from 0 to the duration
+(:func:`reports.free_plots.free_frames`), drawn by the same functions, with the clock.
+
 Writers: GIF through Pillow, MP4 through ffmpeg (where it is on PATH; else one line,
 status 2), HTML as one self-contained page (matplotlib's ``to_jshtml``).
 """
@@ -666,14 +670,12 @@ def cmd_animate(args) -> int:
 def _animate_free(args, mech) -> int:
     """The free motion of ``[motion]``: poses at ``--frames`` evenly spaced times from 0
     to the duration, with the clock."""
-    from analytic.free_motion import simulate
-
-    from .free_plots import FreeOptionError, free_frames, swing_note
+    from .free_plots import FreeOptionError, free_frames, swing_note, trajectory
     if args.engine:
         raise FreeOptionError(f"option --engine: {mech.name!r} is animated in free motion (its "
                               "[motion] table), which draws no engine run; add --driven for "
                               "the prescribed cycle")
-    traj = simulate(mech, args.duration)
+    traj = trajectory(mech, args.duration)
     fr = free_frames(traj, args.frames, args.forces)
     an = build_animation(fr, f"{mech.name}: free motion, {traj.duration:g} s "
                              f"({len(traj.events)} events)")

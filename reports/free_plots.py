@@ -68,6 +68,18 @@ def parse_free_what(text: str | None) -> list[str]:
     return list(dict.fromkeys(words))
 
 
+def trajectory(mech, duration: float | None = None):
+    """:func:`analytic.free_motion.simulate` of ``mech`` (``duration`` s, default the
+    description's), with a spinner and the elapsed time on a terminal's standard error
+    after a few seconds (a long run is not a hang)."""
+    from analytic.free_motion import simulate
+
+    from .progress import engine_progress
+    T = mech.motion.duration if duration is None else duration
+    with engine_progress(f"free motion: {mech.name}, {T:g} s"):
+        return simulate(mech, duration)
+
+
 def sample_times(traj, n: int) -> np.ndarray:
     """``n`` evenly spaced times from 0 to the duration (s): ``xval simulate``'s."""
     return np.linspace(0.0, traj.duration, n)
@@ -281,4 +293,4 @@ def free_frames(traj, frames: int, forces: bool = False):
 
 __all__ = ["EVENT_WORDS", "FREE_DEFAULT_WHAT", "FREE_WHAT", "FreeOptionError", "draw_free",
            "free_figures", "free_frames", "free_poses", "is_free",
-           "motion_header", "parse_free_what", "sample_times", "swing_note"]
+           "motion_header", "parse_free_what", "sample_times", "swing_note", "trajectory"]

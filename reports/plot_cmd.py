@@ -11,6 +11,10 @@ Without ``--engine`` the analytic lines follow :func:`cycle_plan`: the sweep's i
 over the full turn (or the feasible range) at the description's constant rate; a driver
 that accelerates is placed by the engines' own sampling plan instead.  With
 ``--engine`` the lines follow the runs, exactly as in the report.
+
+A description with a ``[motion]`` table is plotted in free motion (``--driven``: its
+prescribed cycle instead; ``--free`` insists): :mod:`reports.free_plots` draws the
+trajectory of ``xval simulate`` (same ``--duration`` and ``--samples``) against time.
 """
 
 from __future__ import annotations
@@ -263,7 +267,6 @@ def _driven_plot(args, mech, units):
 def _free_plot(args, mech, units):
     """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
     evenly spaced times (``xval simulate``'s samples)."""
-    from analytic.free_motion import simulate
     from analytic.motion_spec import MAX_SAMPLES
 
     from . import cli_options as opt
@@ -276,7 +279,7 @@ def _free_plot(args, mech, units):
     if args.samples is not None:
         _option_range("--samples", opt.int_range(2, MAX_SAMPLES), args.samples)
     what = fp.parse_free_what(args.what)
-    traj = simulate(mech, args.duration)
+    traj = fp.trajectory(mech, args.duration)
     n = args.samples or mech.motion.samples
     smp = traj.at(fp.sample_times(traj, n), forces="forces" in what)
     figs, notes = fp.free_figures(mech, traj, smp, what, units)
