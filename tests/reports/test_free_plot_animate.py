@@ -219,6 +219,33 @@ def test_animate_free_html_with_forces(tmp_path):
     assert "<script" in html and "font-awesome" not in html
 
 
+def test_animate_forces_are_the_pin_reaction(traj):
+    """The arrows' forces: the ground's pin force on the link, m (a_G - g), by hand from
+    the independent angle, its rate and th'' = -g cos(th) / l."""
+    fr = free_plots.free_frames(traj, 36, forces=True)
+    t = fr.times
+    J = I_G + M * L * L
+    sol = solve_ivp(lambda _, y: [y[1], -M * G * L * math.cos(y[0]) / J], (0.0, t[-1]),
+                    [0.0, 0.0], method="Radau", rtol=1e-12, atol=1e-14, t_eval=t)
+    th, w = sol.y
+    a = -M * G * L * np.cos(th) / J
+    aG = L * np.stack([-w ** 2 * np.cos(th) - a * np.sin(th),
+                       -w ** 2 * np.sin(th) + a * np.cos(th)], axis=1)
+    F = M * (aG - np.array([0.0, -G]))
+    assert np.max(np.abs(fr.forces["O"] - F)) <= 1e-6  # N, of ~30 N at the bottom
+
+
+def test_show_without_display_writes_then_says_so(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+    out = tmp_path / "s.png"
+    code, _ = run("plot", "iftomm-a01-pendulum", "--duration", "0.3", "--samples", "4",
+                  "--show", "--out", str(out))
+    err = capsys.readouterr().err
+    assert code == 2 and out.is_file() and err.count("\n") == 1 and "no display" in err
+
+
 # ============================================================================ bad options
 BAD = [
     (["plot", "iftomm-a01-pendulum", "--engine", "mujoco"],
