@@ -236,6 +236,16 @@ def _option_range(option: str, parse, value) -> None:
         raise UsageError(f"argument {option}: {e} (see 'xval plot --help')") from None
 
 
+def _integer(text: str) -> int:
+    """An integer option whose range depends on the motion plotted (checked by
+    :func:`_option_range` once the description is read)."""
+    import argparse
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+
+
 def _driven_plot(args, mech, units):
     """``(draw, summary, notes)`` of the prescribed cycle (with engine runs)."""
     from . import cli_options as opt
@@ -335,10 +345,10 @@ def register(sub) -> None:
                    help="output file; .png, .svg or .pdf (default <case>-plot.png; free "
                         "motion <case>-free-plot.png)")
     s.add_argument("--show", action="store_true", help="open a window (needs a display)")
-    s.add_argument("--revolutions", type=opt.int_range(-2 ** 62, 2 ** 62),
+    s.add_argument("--revolutions", type=_integer,
                    help="engine revolutions (the last is plotted; default 2; not in free "
                         "motion)")
-    s.add_argument("--samples", type=opt.int_range(-2 ** 62, 2 ** 62),
+    s.add_argument("--samples", type=_integer,
                    help="engine samples per revolution (default 36); free motion: samples "
                         "of the trajectory, 2 to 1000000 (default the description's)")
     from analytic.motion_spec import MAX_DURATION
