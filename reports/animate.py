@@ -17,7 +17,7 @@ gap.  Engine and analytic poses go through the same drawing function
 
 A description with a ``[motion]`` table is animated in free motion (``--driven``: its
 prescribed cycle instead): the poses at evenly spaced times from 0 to the duration
-(:func:`reports.free_plots.free_frames`), drawn by the same functions, with the clock.
+(:func:`free_frames`), drawn by the same functions, with the clock.
 
 Writers: GIF through Pillow, MP4 through ffmpeg (where it is on PATH; else one line,
 status 2), HTML as one self-contained page (matplotlib's ``to_jshtml``).
@@ -128,6 +128,24 @@ def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False,
                                              np.asarray(kin.origin, float)),
                   forces=frc, revolute=linkage.driver_is_revolute, rates=rate,
                   accelerations=acc, convention=convention_of(linkage))
+
+
+def free_frames(traj, frames: int, forces: bool = False):
+    """:class:`Frames` at ``frames`` evenly spaced times from 0 to the
+    duration: the poses, the ``[motion]`` joint's coordinate and rate, and with
+    ``forces`` the joint reactions (N, by body_a on body_b)."""
+    from analytic.mechanism import Revolute
+
+    from .free_plots import free_poses, sample_times
+    mech = traj.mech
+    t = sample_times(traj, frames)
+    smp = traj.at(t, forces=forces)
+    k = traj.joints.index(mech.motion.joint)
+    theta, origin = free_poses(traj, t)
+    return Frames(mech, smp.x[:, k], t, Poses("analytic", theta, origin),
+                  forces=dict(smp.reactions) if forces else None,
+                  revolute=isinstance(mech.joints[k], Revolute), rates=smp.xd[:, k],
+                  accelerations=smp.xdd[:, k], free_joint=mech.motion.joint)
 
 
 def engine_pose_arrays(run_, tree) -> tuple[np.ndarray, np.ndarray]:
@@ -670,7 +688,7 @@ def cmd_animate(args) -> int:
 def _animate_free(args, mech) -> int:
     """The free motion of ``[motion]``: poses at ``--frames`` evenly spaced times from 0
     to the duration, with the clock."""
-    from .free_plots import FreeOptionError, free_frames, swing_note, trajectory
+    from .free_plots import FreeOptionError, swing_note, trajectory
     if args.engine:
         raise FreeOptionError(f"option --engine: {mech.name!r} is animated in free motion (its "
                               "[motion] table), which draws no engine run; add --driven for "
@@ -720,6 +738,6 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_animate)
 
 
-__all__ = ["Animator", "Frames", "Poses", "analytic_frames", "body_outlines",
+__all__ = ["Animator", "Frames", "Poses", "analytic_frames", "body_outlines", "free_frames",
            "build_animation", "cmd_animate", "engine_poses", "frame_inputs", "frames_rgb",
            "joint_positions", "register", "write", "write_gif"]

@@ -10,9 +10,9 @@ panels are :class:`reports.case_figures.CurveFigure` objects drawn by the report
 :class:`reports.display_units.DisplayUnits`; the events get a strip of their own where
 each one is marked, and lines across the panels when they are few.
 
-The animation's frames are the bodies' poses at evenly spaced times, from the same
-solver calls that give the samples (:func:`free_poses`), drawn by
-:func:`reports.animate.build_animation` like a prescribed run's, with the clock.
+The animation's frames (:func:`reports.animate.free_frames`) are the bodies' poses at
+evenly spaced times, from the same solver calls that give the samples
+(:func:`free_poses`), drawn like a prescribed run's, with the clock.
 """
 
 from __future__ import annotations
@@ -275,22 +275,6 @@ def free_poses(traj, times) -> tuple[np.ndarray, np.ndarray]:
     return theta, origin
 
 
-def free_frames(traj, frames: int, forces: bool = False):
-    """:class:`reports.animate.Frames` at ``frames`` evenly spaced times from 0 to the
-    duration: the poses, the ``[motion]`` joint's coordinate and rate, and with
-    ``forces`` the joint reactions (N, by body_a on body_b)."""
-    from .animate import Frames, Poses
-    mech = traj.mech
-    t = sample_times(traj, frames)
-    smp = traj.at(t, forces=forces)
-    k = traj.joints.index(mech.motion.joint)
-    theta, origin = free_poses(traj, t)
-    return Frames(mech, smp.x[:, k], t, Poses("analytic", theta, origin),
-                  forces=dict(smp.reactions) if forces else None,
-                  revolute=isinstance(mech.joints[k], Revolute), rates=smp.xd[:, k],
-                  accelerations=smp.xdd[:, k], free_joint=mech.motion.joint)
-
-
 __all__ = ["EVENT_WORDS", "FREE_DEFAULT_WHAT", "FREE_WHAT", "FreeOptionError", "draw_free",
-           "free_figures", "free_frames", "free_poses", "is_free",
+           "free_figures", "free_poses", "is_free",
            "motion_header", "parse_free_what", "sample_times", "swing_note", "trajectory"]

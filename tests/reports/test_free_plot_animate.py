@@ -24,7 +24,7 @@ from analytic import load_case
 from analytic.cases import case_path
 from analytic.free_motion import simulate
 from reports import free_plots
-from reports.animate import body_outlines, world
+from reports.animate import body_outlines, free_frames, world
 
 from .cli_run import run
 
@@ -195,7 +195,7 @@ def test_animate_free_frames_are_the_trajectory(tmp_path, traj):
                      "--frames", "36", "--out", str(out))
     assert code == 0 and "free motion, 36 frames" in text, text
     assert Image.open(out).n_frames == 36
-    fr = free_plots.free_frames(traj, 36)
+    fr = free_frames(traj, 36)
     t = np.linspace(0.0, DURATION, 36)
     assert np.array_equal(fr.times, t)
     th = pendulum_angle(t)
@@ -222,7 +222,7 @@ def test_animate_free_html_with_forces(tmp_path):
 def test_animate_forces_are_the_pin_reaction(traj):
     """The arrows' forces: the ground's pin force on the link, m (a_G - g), by hand from
     the independent angle, its rate and th'' = -g cos(th) / l."""
-    fr = free_plots.free_frames(traj, 36, forces=True)
+    fr = free_frames(traj, 36, forces=True)
     t = fr.times
     J = I_G + M * L * L
     sol = solve_ivp(lambda _, y: [y[1], -M * G * L * math.cos(y[0]) / J], (0.0, t[-1]),
