@@ -206,3 +206,37 @@ def _check_motor(mech, m: Motor, duration: float, where: str) -> None:
     if m.times[0] > 0 or m.times[-1] < duration:
         raise DescriptionError(f"the table covers t = {m.times[0]:g} to {m.times[-1]:g} s; "
                                f"it must cover the run, 0 to {duration:g} s", where)
+
+
+def check_duration(mech, duration: float) -> None:
+    """A run of ``duration`` s other than the description's (``xval simulate
+    --duration``): in range, and covered by every motor table (a table is never
+    extrapolated); :class:`DescriptionError` naming the file and the motor."""
+    if not (isinstance(duration, int | float) and 0 < duration <= MAX_DURATION):
+        raise DescriptionError(f"duration = {duration!r} s is out of range: the accepted "
+                               f"range is 0 < duration <= {MAX_DURATION:g} s", mech.source)
+    for i, m in enumerate(mech.motion.motors):
+        if m.times and m.times[-1] < duration:
+            raise DescriptionError(f"the table covers t = {m.times[0]:g} to {m.times[-1]:g} s; "
+                                   f"it must cover the run, 0 to {duration:g} s (the duration "
+                                   "asked)", _w(mech, f"motor {i}"))
+
+
+def unreachable(mech, err) -> DescriptionError:
+    """The one line of an initial state the loops cannot reach: ``err`` the solver's
+    :class:`analytic.errors.AssemblyError` at ``[motion]``'s joint and value, said as
+    the description's ``[motion]`` (not a driver), with the feasible ranges it found."""
+    from .mechanism import Revolute
+    fm: FreeMotion = mech.motion
+    rev = isinstance(next(j for j in mech.joints if j.name == fm.joint), Revolute)
+
+    def shown(v: float) -> str:
+        return f"{math.degrees(v):.6g} deg" if rev else f"{v:.6g} m"
+
+    feas = getattr(err, "feasible", None)
+    rng = (f"the feasible range(s) of joint {fm.joint!r}: "
+           + ", ".join(f"[{shown(a)}, {shown(b)}]" for a, b in feas) if feas
+           else "no assembly was found at that value")
+    return DescriptionError(f"the initial state cannot be reached: the loops cannot close "
+                            f"at joint {fm.joint!r} = {shown(fm.value)}; {rng}",
+                            _w(mech, "[motion]"))

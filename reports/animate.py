@@ -15,6 +15,10 @@ drawn over the analytic ones, dashed in the engine's colour: a drifting loop sho
 gap.  Engine and analytic poses go through the same drawing function
 (:func:`body_outlines`), so what differs on screen differs in the numbers.
 
+A description with a ``[motion]`` table is animated in free motion (``--driven``: its
+prescribed cycle instead): the poses at evenly spaced times from 0 to the duration
+(:func:`free_frames`), drawn by the same functions, with the clock.
+
 Writers: GIF through Pillow, MP4 through ffmpeg (where it is on PATH; else one line,
 status 2), HTML as one self-contained page (matplotlib's ``to_jshtml``).
 """
@@ -61,6 +65,7 @@ class Frames:
     rates: np.ndarray | None = None          # (F,) prescribed rate, rad/s or m/s
     accelerations: np.ndarray | None = None  # (F,) prescribed acceleration
     convention: object = None     # analytic.input_display.InputConvention of the input
+    free_joint: str | None = None  # a free run's [motion] joint: values, rates are its own
 
     @property
     def n(self) -> int:
@@ -123,6 +128,24 @@ def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False,
                                              np.asarray(kin.origin, float)),
                   forces=frc, revolute=linkage.driver_is_revolute, rates=rate,
                   accelerations=acc, convention=convention_of(linkage))
+
+
+def free_frames(traj, frames: int, forces: bool = False):
+    """:class:`Frames` at ``frames`` evenly spaced times from 0 to the
+    duration: the poses, the ``[motion]`` joint's coordinate and rate, and with
+    ``forces`` the joint reactions (N, by body_a on body_b)."""
+    from analytic.mechanism import Revolute
+
+    from .free_plots import free_poses, sample_times
+    mech = traj.mech
+    t = sample_times(traj, frames)
+    smp = traj.at(t, forces=forces)
+    k = traj.joints.index(mech.motion.joint)
+    theta, origin = free_poses(traj, t)
+    return Frames(mech, smp.x[:, k], t, Poses("analytic", theta, origin),
+                  forces=dict(smp.reactions) if forces else None,
+                  revolute=isinstance(mech.joints[k], Revolute), rates=smp.xd[:, k],
+                  accelerations=smp.xdd[:, k], free_joint=mech.motion.joint)
 
 
 def engine_pose_arrays(run_, tree) -> tuple[np.ndarray, np.ndarray]:
@@ -365,6 +388,8 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
 def info_text(fr: Frames, i: int, conv) -> str:
     """The text box of frame ``i``: the input (the one display convention), its
     prescribed rate (and acceleration) there, the time along the motion."""
+    if fr.free_joint is not None:  # a free run: its [motion] joint and the clock
+        return free_info_text(fr, i)
     from analytic.input_display import input_text
     d = fr.mech.driver
     u = "rad/s" if fr.revolute else "m/s"
@@ -374,6 +399,17 @@ def info_text(fr: Frames, i: int, conv) -> str:
     if acc:
         line += f", {acc:.4g} {u[:-2]}/s^2"
     return f"{line}\nt = {fr.times[i]:.4f} s   frame {i + 1}/{fr.n}"
+
+
+def free_info_text(fr: Frames, i: int) -> str:
+    """The text box of a free run's frame: its ``[motion]`` joint's coordinate and rate
+    there, and the clock."""
+    if fr.revolute:
+        v = f"{math.degrees(float(fr.values[i])):.4f} deg, {fr.rates[i]:.4g} rad/s"
+    else:
+        v = f"{float(fr.values[i]):.6g} m, {fr.rates[i]:.4g} m/s"
+    return (f"free motion: {fr.free_joint} = {v}\n"
+            f"t = {fr.times[i]:.6g} s of {fr.times[-1]:.6g} s   frame {i + 1}/{fr.n}")
 
 
 def _axes(fr: Frames, title: str, dpi: int):
@@ -612,6 +648,12 @@ def cmd_animate(args) -> int:
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
                               "write .gif or .html instead (or install ffmpeg)")
     mech = load_case(args.case)
+    from .free_plots import FreeOptionError, is_free
+    if is_free(mech, args.free, args.driven):
+        return _animate_free(args, mech)
+    if args.duration is not None:
+        raise FreeOptionError("option --duration is for free motion (a description with "
+                              "[motion]); a prescribed animation runs one cycle")
     # the compiled linkage (analytic solution + simulation tree): the frames' times come
     # from the engines' plan where the input does not turn fully
     tree = compile_linkage(mech)
@@ -643,10 +685,39 @@ def cmd_animate(args) -> int:
     return 0
 
 
+def _animate_free(args, mech) -> int:
+    """The free motion of ``[motion]``: poses at ``--frames`` evenly spaced times from 0
+    to the duration, with the clock."""
+    from .free_plots import FreeOptionError, swing_note, trajectory
+    if args.engine:
+        raise FreeOptionError(f"option --engine: {mech.name!r} is animated in free motion (its "
+                              "[motion] table), which draws no engine run; add --driven for "
+                              "the prescribed cycle")
+    traj = trajectory(mech, args.duration)
+    fr = free_frames(traj, args.frames, args.forces)
+    an = build_animation(fr, f"{mech.name}: free motion, {traj.duration:g} s "
+                             f"({len(traj.events)} events)")
+    write(an, args.out, args.fps)
+    note = swing_note(traj, traj.duration / (fr.n - 1), "frames")
+    if note:
+        print("note:", note)
+    print(f"wrote {args.out} (free motion, {fr.n} frames every "
+          f"{traj.duration / (fr.n - 1):.4g} s over {traj.duration:g} s)")
+    return 0
+
+
 def register(sub) -> None:
     from . import cli_options as opt
-    s = sub.add_parser("animate", help="the linkage moving through a cycle (GIF, MP4, HTML)")
+    s = sub.add_parser("animate", help="the linkage moving through a cycle, or its free "
+                       "motion (GIF, MP4, HTML)")
     s.add_argument("case", help="built-in case name or TOML file")
+    mode = s.add_mutually_exclusive_group()
+    mode.add_argument("--free", action="store_true",
+                      help="animate the free motion of the description's [motion] table (the "
+                           "default when it has one): poses at evenly spaced times, clock shown")
+    mode.add_argument("--driven", action="store_true",
+                      help="animate the prescribed cycle of [driver] even when the "
+                           "description has a [motion] table")
     s.add_argument("--out", type=opt.output_file, help="F.gif, F.mp4 (needs ffmpeg) or F.html")
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
@@ -654,12 +725,19 @@ def register(sub) -> None:
     s.add_argument("--forces", action="store_true",
                    help="joint forces as arrows on one scale, with a key")
     s.add_argument("--frames", type=opt.int_range(36, 720, "frames per cycle"),
-                   default=FRAMES, help=f"frames per cycle, 36 to 720 (default {FRAMES})")
+                   default=FRAMES, help=f"frames per cycle (free motion: over the run), 36 "
+                                        f"to 720 (default {FRAMES})")
+    from analytic.motion_spec import MAX_DURATION
+
+    from .simulate_cmd import MIN_DURATION
+    s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
+                   help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
+                        "(default the description's)")
     s.add_argument("--fps", type=opt.int_range(1, 60, "frames per second"), default=24,
                    help="frames per second, 1 to 60 (default 24)")
     s.set_defaults(func=cmd_animate)
 
 
-__all__ = ["Animator", "Frames", "Poses", "analytic_frames", "body_outlines",
+__all__ = ["Animator", "Frames", "Poses", "analytic_frames", "body_outlines", "free_frames",
            "build_animation", "cmd_animate", "engine_poses", "frame_inputs", "frames_rgb",
            "joint_positions", "register", "write", "write_gif"]

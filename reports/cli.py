@@ -290,8 +290,10 @@ COMMANDS = {
     "compare": ("reports.cli_engines", "run engines and compare with the analytic solution"),
     "baseline": ("reports.cli_engines", "record engine errors, later check them for drift"),
     "report": ("reports.cli_engines", "the validation report (HTML, Markdown, CSV)"),
-    "plot": ("reports.plot_cmd", "full-cycle curves of one linkage (engines optional)"),
-    "animate": ("reports.animate", "the linkage moving through a cycle (GIF, MP4, HTML)"),
+    "plot": ("reports.plot_cmd", "full-cycle curves of one linkage (engines optional), or "
+             "its free motion against time"),
+    "animate": ("reports.animate", "the linkage moving through a cycle, or its free motion "
+                "(GIF, MP4, HTML)"),
     "view": ("reports.view_cmd", "MuJoCo's viewer on the linkage (needs a display)"),
     "simulate": ("reports.simulate_cmd", "free motion: the exact released trajectory"),
 }

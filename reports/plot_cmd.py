@@ -11,6 +11,10 @@ Without ``--engine`` the analytic lines follow :func:`cycle_plan`: the sweep's i
 over the full turn (or the feasible range) at the description's constant rate; a driver
 that accelerates is placed by the engines' own sampling plan instead.  With
 ``--engine`` the lines follow the runs, exactly as in the report.
+
+A description with a ``[motion]`` table is plotted in free motion (``--driven``: its
+prescribed cycle instead; ``--free`` insists): :mod:`reports.free_plots` draws the
+trajectory of ``xval simulate`` (same ``--duration`` and ``--samples``) against time.
 """
 
 from __future__ import annotations
@@ -183,6 +187,7 @@ def check_out(out: str | None, formats=FORMATS) -> None:
 def cmd_plot(args) -> int:
     from analytic import load_case
 
+    from . import free_plots
     from .display_units import DisplayUnits
     check_out(args.out)
     if args.show:
@@ -190,23 +195,14 @@ def cmd_plot(args) -> int:
         if not ok and not args.out:
             raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
     mech = load_case(args.case)
+    free = free_plots.is_free(mech, args.free, args.driven)
     from .cli_paths import check_outputs, safe_stem
     # the default name is made safe from the description's (never '../x' or '/x')
-    out = args.out or (None if args.show else f"{safe_stem(mech.name)}-plot.png")
+    stem = f"{safe_stem(mech.name)}-{'free-' if free else ''}plot.png"
+    out = args.out or (None if args.show else stem)
     check_outputs([("--out" if args.out else "the figure", out)], [("the case file", args.case)])
-    what = parse_what(args.what)
     units = DisplayUnits.parse(args.units)
-    engines, settings = [], {}
-    if args.engine:
-        from .verdict_runs import engine_list, settings_for
-        engines = engine_list(args.engine)
-        settings = settings_for(engines)
-    quiet = tuple(what) if args.what == DEFAULT_WHAT else ()  # no notes for the default
-    figs, err, runs, notes = case_figures(mech, what, engines, settings, args.revolutions,
-                                          args.samples, quiet)
-    title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
-                                " (markers; errors in the last row)" if runs else
-                                "; no engine run (add --engine for markers)"))
+    make, summary, notes = (_free_plot if free else _driven_plot)(args, mech, units)
     cannot_show = None
     if args.show:
         ok, why = has_display()
@@ -216,7 +212,7 @@ def cmd_plot(args) -> int:
             _interactive_backend()  # before the figure exists, so it gets a window
         except NoDisplay as e:
             cannot_show = e
-    fig = draw(figs, err, units, title, motion_line(mech, runs, units))
+    fig = make()
     for n in notes:
         print("note:", n)
     if out:
@@ -225,14 +221,90 @@ def cmd_plot(args) -> int:
             fig.savefig(out, dpi=DPI, bbox_inches="tight")
         except OSError as e:
             raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
-        print(f"wrote {out} ({len(figs)} panels{', with ' + ', '.join(runs) if runs else ''}; "
-              f"{units.header()})")
+        print(f"wrote {out} ({summary}; {units.header()})")
     if cannot_show is not None:
         raise NoDisplay(f"{cannot_show}; the figure was written to {out}")
     if args.show:
         import matplotlib.pyplot as plt
         plt.show()  # pragma: no cover - needs a display
     return 0
+
+
+def _option_range(option: str, parse, value) -> None:
+    """``value`` of ``option`` through the argparse type ``parse``: one line if refused."""
+    import argparse
+
+    from .cli_options import UsageError
+    try:
+        parse(str(value))
+    except argparse.ArgumentTypeError as e:
+        raise UsageError(f"argument {option}: {e} (see 'xval plot --help')") from None
+
+
+def _integer(text: str) -> int:
+    """An integer option whose range depends on the motion plotted (checked by
+    :func:`_option_range` once the description is read)."""
+    import argparse
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+
+
+def _driven_plot(args, mech, units):
+    """``(draw, summary, notes)`` of the prescribed cycle (with engine runs)."""
+    from . import cli_options as opt
+    from .free_plots import FreeOptionError
+    if args.duration is not None:
+        raise FreeOptionError("option --duration is for free motion (a description with "
+                              "[motion]); the prescribed cycle's length is --revolutions")
+    if args.samples is not None:
+        _option_range("--samples", opt.samples, args.samples)
+    if args.revolutions is not None:
+        _option_range("--revolutions", opt.revolutions, args.revolutions)
+    what = parse_what(args.what)
+    engines, settings = [], {}
+    if args.engine:
+        from .verdict_runs import engine_list, settings_for
+        engines = engine_list(args.engine)
+        settings = settings_for(engines)
+    quiet = tuple(what) if args.what is None else ()  # no notes for the default
+    figs, err, runs, notes = case_figures(mech, what, engines, settings,
+                                          args.revolutions, args.samples, quiet)
+    title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
+                                " (markers; errors in the last row)" if runs else
+                                "; no engine run (add --engine for markers)"))
+    summary = f"{len(figs)} panels{', with ' + ', '.join(runs) if runs else ''}"
+    return (lambda: draw(figs, err, units, title, motion_line(mech, runs, units))), \
+        summary, notes
+
+
+def _free_plot(args, mech, units):
+    """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
+    evenly spaced times (``xval simulate``'s samples)."""
+    from analytic.motion_spec import MAX_SAMPLES
+
+    from . import cli_options as opt
+    from . import free_plots as fp
+    for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions")):
+        if given is not None:
+            raise fp.FreeOptionError(
+                f"option {option}: {mech.name!r} is plotted in free motion (its [motion] "
+                f"table), which draws no engine run; add --driven for the prescribed cycle")
+    if args.samples is not None:
+        _option_range("--samples", opt.int_range(2, MAX_SAMPLES), args.samples)
+    what = fp.parse_free_what(args.what)
+    traj = fp.trajectory(mech, args.duration)
+    n = args.samples or mech.motion.samples
+    smp = traj.at(fp.sample_times(traj, n), forces="forces" in what)
+    figs, notes = fp.free_figures(mech, traj, smp, what, units)
+    note = fp.swing_note(traj, traj.duration / (n - 1), "samples")
+    notes += [note] if note else []
+    title = f"{mech.name}: free motion (the description's [motion]; --driven: the prescribed cycle)"
+    header = fp.motion_header(mech, traj, n, units)
+    summary = (f"free motion, {len(figs)} panels and the events, {n} samples over "
+               f"{traj.duration:g} s")
+    return (lambda: fp.draw_free(figs, traj, title, header, units)), summary, notes
 
 
 def _interactive_backend() -> None:  # pragma: no cover - needs a display
@@ -254,22 +326,41 @@ def _interactive_backend() -> None:  # pragma: no cover - needs a display
 
 def register(sub) -> None:
     from . import cli_options as opt
-    s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional)")
+    from .free_plots import FREE_DEFAULT_WHAT, FREE_WHAT
+    s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional), or "
+                       "its free motion against time")
     s.add_argument("case", help="built-in case name or TOML file")
-    s.add_argument("--what", default=DEFAULT_WHAT,
-                   help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT})")
-    from sim_models.engine_run import RunRequest
+    mode = s.add_mutually_exclusive_group()
+    mode.add_argument("--free", action="store_true",
+                      help="plot the free motion of the description's [motion] table (the "
+                           "default when it has one): joint coordinates, energies and "
+                           "events against time, as xval simulate computes them")
+    mode.add_argument("--driven", action="store_true",
+                      help="plot the prescribed cycle of [driver] even when the description "
+                           "has a [motion] table")
+    s.add_argument("--what",
+                   help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT}); free "
+                        f"motion: {', '.join(FREE_WHAT)} (default {FREE_DEFAULT_WHAT})")
     from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
                    help="overlay this engine's run (markers) and plot its error below")
     s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.add_argument("--out", type=opt.output_file,
-                   help="output file; .png, .svg or .pdf (default <case>-plot.png)")
+                   help="output file; .png, .svg or .pdf (default <case>-plot.png; free "
+                        "motion <case>-free-plot.png)")
     s.add_argument("--show", action="store_true", help="open a window (needs a display)")
-    s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
-                   help="engine revolutions (the last is plotted)")
-    s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
-                   help="engine samples per revolution")
+    s.add_argument("--revolutions", type=_integer,
+                   help="engine revolutions (the last is plotted; default 2; not in free "
+                        "motion)")
+    s.add_argument("--samples", type=_integer,
+                   help="engine samples per revolution (default 36); free motion: samples "
+                        "of the trajectory, 2 to 1000000 (default the description's)")
+    from analytic.motion_spec import MAX_DURATION
+
+    from .simulate_cmd import MIN_DURATION
+    s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
+                   help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
+                        "(default the description's)")
     s.set_defaults(func=cmd_plot)
 
 

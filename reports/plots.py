@@ -348,6 +348,16 @@ def curve_plot(fig_data) -> bytes:
     return _png(fig)  # a tight box: the legend at the right and the notes fit
 
 
+#: Event marks' colours by a word of their kind (a prescribed plot's limit and singular
+#: positions and change points; a free run's coordinate switches and turning points too).
+EVENT_COLOURS = {"limit": "red", "switch": "tab:green", "turning": "tab:brown"}
+
+
+def event_colour(kind: str) -> str:
+    """The colour of an event mark of ``kind`` (purple: singular positions and others)."""
+    return next((c for w, c in EVENT_COLOURS.items() if w in kind), "purple")
+
+
 def draw_curve_axes(ax, fig_data) -> None:
     """:func:`curve_plot` onto the axes ``ax`` (``xval plot`` stacks several)."""
     d = fig_data
@@ -378,8 +388,7 @@ def draw_curve_axes(ax, fig_data) -> None:
     for kind, xv in d.events:
         lab = kind if kind not in seen else None
         seen.add(kind)
-        ax.axvline(xv, color="red" if "limit" in kind else "purple", lw=0.8, ls="--",
-                   label=lab)
+        ax.axvline(xv, color=event_colour(kind), lw=0.8, ls="--", label=lab)
     notes = []
     if d.feasible is not None and d.covered is not None:
         lo, hi = d.feasible

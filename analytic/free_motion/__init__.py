@@ -14,7 +14,7 @@ and coordinate switching) and :mod:`.trajectory` (sampling, events).
 from __future__ import annotations
 
 from ..errors import DescriptionError
-from ..motion_spec import MAX_DURATION
+from ..motion_spec import check_duration
 from .integrate import RTOL, integrate
 from .trajectory import Event, FreeSamples, FreeTrajectory, find_events
 
@@ -28,9 +28,8 @@ def simulate(mech, duration: float | None = None, rtol: float = RTOL,
     if mech.motion is None:
         raise DescriptionError("no [motion] table: free motion needs the initial joint, "
                                "value, rate and duration", mech.source)
-    if duration is not None and not 0 < duration <= MAX_DURATION:
-        raise DescriptionError(f"duration = {duration!r} s is out of range: the accepted "
-                               f"range is 0 < duration <= {MAX_DURATION:g} s", mech.source)
+    if duration is not None:
+        check_duration(mech, duration)  # in range, and every motor table covers it
     segs, switches = integrate(mech, duration, rtol, method)
     traj = FreeTrajectory(mech, segs, switches, rtol, method)
     traj.events = find_events(traj)

@@ -22,9 +22,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..errors import LinkageError
+from ..errors import AssemblyError, LinkageError
 from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
+from ..motion_spec import unreachable
 from .dynamics import check_masses, coefficients, terms, unwrap_to
 
 #: Relative tolerance of DOP853 (a few units of double rounding above 1e-16 so that
@@ -102,11 +103,22 @@ class _System:
     switch.direction = 1.0
 
 
-def _no_inertia(lk, q: float) -> str:
-    massless = [b.name for b in lk.mech.moving_bodies if not b.mass]
-    return (f"mechanism {lk.mech.name!r}: no inertia in the moving coordinate at joint "
-            f"{lk.mech.driver.joint!r} = {q:.6g}: the generalized inertia M(q) is 0 (massless "
-            f"bodies: {massless}); free motion needs inertia along the motion")
+def _no_inertia(lk, q: float, t: float | None = None, ratio: float | None = None) -> str:
+    """The one line of a zero generalized inertia: the file, the joint and its value (deg
+    or m), and the bodies (with mass: they all stand still there; massless)."""
+    mech = lk.mech
+    rev = isinstance(mech.driver_joint, Revolute)
+    shown = f"{math.degrees(q):.6g} deg" if rev else f"{q:.6g} m"
+    massive = [b.name for b in mech.moving_bodies if b.mass]
+    massless = [b.name for b in mech.moving_bodies if not b.mass]
+    how = "is 0" if ratio is None else (f"falls to {ratio:.2g} of its value where this "
+                                        "coordinate took over (the integration stalls)")
+    return (f"{mech.source + ': ' if mech.source else ''}mechanism {mech.name!r}: no inertia "
+            f"in the moving coordinate at joint {mech.driver.joint!r} = {shown}"
+            f"{'' if t is None else f' (t = {t:.6g} s)'}: the generalized inertia M(q) {how}; "
+            + (f"the bodies with mass {massive} stand still there, massless bodies: "
+               f"{massless}" if massive else f"no moving body has mass: {massless}")
+            + "; free motion needs inertia all along the motion")
 
 
 def joint_scale(mech) -> np.ndarray:
@@ -146,9 +158,12 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     size = mechanism_size(mech.bodies) or 1.0
     scale = joint_scale(mech)
     m0 = replace(mech, driver=Driver(fm.joint, fm.value, fm.rate))
-    lk = Linkage(m0)
-    with np.errstate(invalid="ignore", divide="ignore"):  # a dead centre: checked below
-        co = coefficients(lk, fm.value)
+    try:
+        lk = Linkage(m0)
+        with np.errstate(invalid="ignore", divide="ignore"):  # a dead centre: checked below
+            co = coefficients(lk, fm.value)
+    except AssemblyError as e:  # said as the [motion] table, not as a driver
+        raise unreachable(mech, e) from None
     x0 = co.x[0]
     y = np.array([fm.value, fm.rate, 0.0, 0.0, 0.0])
     t, segs, switches = 0.0, [], []
@@ -178,8 +193,7 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         sol = solve_ivp(sysm, (t, t_end), y, method=method, rtol=rtol, atol=atol,
                         dense_output=True, events=[sysm.switch])
         if sol.status < 0:
-            raise LinkageError(f"mechanism {mech.name!r}: the integration failed at t = "
-                               f"{sol.t[-1]:.6g} s: {sol.message}")
+            raise _failed(mech, sysm, sol, float(y[0]))
         xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)
         segs.append(Segment(lk, lk.mech.driver.joint, t, float(sol.t[-1]), sol.sol, sol.t,
                             xs, sysm.nfev))
@@ -298,3 +312,24 @@ def _energy_scale(mech, tm0, size: float) -> float:
     for ld in mech.loads:
         e += math.hypot(*ld.force) * size + abs(ld.torque)
     return e or 1.0
+
+
+#: Where the integrator gives up with the generalized inertia below this fraction of its
+#: value at the segment's start, M(q) meets zero there (it vanishes quadratically: the
+#: step size underflows ~1e-6 rad from the zero, where M is ~1e-12 of its scale).
+NO_INERTIA = 1e-8
+
+
+def _failed(mech, sysm, sol, q0: float) -> LinkageError:
+    """Why the integrator stopped (one line): a zero of M(q) (:func:`_no_inertia`, the
+    bodies named), else the integrator's own message, with the file and the time."""
+    t, q, qd = float(sol.t[-1]), float(sol.y[0, -1]), float(sol.y[1, -1])
+    m = []
+    for v in (q0, q):
+        co, x = sysm.coeffs(v)
+        m.append(float(terms(sysm.lk, co, x[None], qd, t).M[0]))
+    if m[0] > 0 and m[1] < NO_INERTIA * m[0]:
+        return NoInertiaError(_no_inertia(sysm.lk, q, t, m[1] / m[0]))
+    where = f"{mech.source}: " if mech.source else ""
+    return LinkageError(f"{where}mechanism {mech.name!r}: the integration failed at t = "
+                        f"{t:.6g} s: {sol.message}")
