@@ -222,13 +222,13 @@ def check_duration(mech, duration: float) -> None:
                                    "asked)", _w(mech, f"motor {i}"))
 
 
-def unreachable(mech, err) -> DescriptionError:
+def unreachable(mech, err, rev: bool) -> DescriptionError:
     """The one line of an initial state the loops cannot reach: ``err`` the solver's
     :class:`analytic.errors.AssemblyError` at ``[motion]``'s joint and value, said as
-    the description's ``[motion]`` (not a driver), with the feasible ranges it found."""
-    from .mechanism import Revolute
+    the description's ``[motion]`` (not a driver), with the feasible ranges it found;
+    ``rev`` whether that joint is revolute (degrees) or prismatic (metres).  The caller
+    says which: this module sits below :mod:`analytic.mechanism`."""
     fm: FreeMotion = mech.motion
-    rev = isinstance(next(j for j in mech.joints if j.name == fm.joint), Revolute)
 
     def shown(v: float) -> str:
         return f"{math.degrees(v):.6g} deg" if rev else f"{v:.6g} m"

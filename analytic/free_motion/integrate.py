@@ -163,7 +163,8 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         with np.errstate(invalid="ignore", divide="ignore"):  # a dead centre: checked below
             co = coefficients(lk, fm.value)
     except AssemblyError as e:  # said as the [motion] table, not as a driver
-        raise unreachable(mech, e) from None
+        raise unreachable(mech, e, isinstance(
+            next(j for j in mech.joints if j.name == fm.joint), Revolute)) from None
     x0 = co.x[0]
     y = np.array([fm.value, fm.rate, 0.0, 0.0, 0.0])
     t, segs, switches = 0.0, [], []
