@@ -90,8 +90,10 @@ class FreeComparison:
     ``normalised = max_abs / scale``; ``at``: the time of the maximum, s;
     ``horizon``: the first time the normalised error exceeds ``tolerance`` (``inf``:
     never within the measured run); ``measured_until``: the last sample time with a
-    finite engine value (the run's duration when all are); ``error``: the normalised
-    error at each sample (NaN where not measured)."""
+    finite engine value (the run's duration unless the run stopped); ``error``: the
+    normalised error at each sample (NaN where not measured); ``unread``: samples before
+    ``measured_until`` with no engine value (an engine that cannot read the quantity
+    there, such as PyBullet's accelerations at t = 0), left out of the maximum."""
 
     quantity: str
     family: str
@@ -106,6 +108,7 @@ class FreeComparison:
     measured_until: float
     duration: float
     error: np.ndarray = field(repr=False, compare=False)
+    unread: int = 0
 
     @property
     def measured(self) -> bool:
@@ -124,13 +127,15 @@ class FreeComparison:
                           "normalisation": self.normalisation,
                           "normalised": self.normalised, "at_s": self.at,
                           "tolerance": self.tolerance, "horizon_s": self.horizon,
-                          "measured_until_s": self.measured_until,
+                          "measured_until_s": self.measured_until, "unread": self.unread,
                           "measured": self.measured, "passed": self.passed})
 
     def __str__(self) -> str:
         verdict = "pass" if self.passed else "FAIL"
         hz = "never exceeded" if math.isinf(self.horizon) else f"exceeded from {self.horizon:.4g} s"
         stop = "" if self.measured else f"; not measured from {self.measured_until:.4g} s on"
+        if self.unread:
+            stop += f"; {self.unread} sample(s) not read by the engine"
         return (f"{self.quantity}: max error {self.max_abs:.3g} {self.unit} at {self.at:.4g} s "
                 f"({self.normalised:.3g} of {self.normalisation} {self.scale:.4g}; tolerance "
                 f"{self.tolerance:g}, {hz}{stop}) {verdict}")
@@ -183,9 +188,12 @@ def judge(quantity: str, family: str, unit: str, times, reference, test, toleran
         else:
             scale, normalisation = family_scale, f"{family} scale (own range {own:.3g})"
     finite = np.isfinite(err)
-    bad = np.flatnonzero(~finite)
-    measured_until = float(t[-1]) if not bad.size else (float(t[bad[0] - 1]) if bad[0] else
-                                                         float("-inf"))
+    # trailing NaN rows: the run stopped (not measured from there on); a NaN before the
+    # last finite sample is a value the engine does not read there (PyBullet's
+    # accelerations at t = 0, from the last velocities): counted, not a stop
+    idx = np.flatnonzero(finite)
+    measured_until = float(t[idx[-1]]) if idx.size else float("-inf")
+    unread = int(np.count_nonzero(~finite[:idx[-1] + 1])) if idx.size else 0
     with np.errstate(divide="ignore", invalid="ignore"):
         norm = err / scale if scale > 0 else np.where(err == 0, 0.0, np.inf)
     if finite.any():
@@ -196,7 +204,7 @@ def judge(quantity: str, family: str, unit: str, times, reference, test, toleran
     normalised = max_abs / scale if scale > 0 else (0.0 if max_abs == 0 else math.inf)
     return FreeComparison(quantity, family, unit, max_abs, float(scale), normalisation,
                           normalised, at, tolerance, horizon_of(t, norm, tolerance),
-                          measured_until, float(t[-1]) if len(t) else 0.0, norm)
+                          measured_until, float(t[-1]) if len(t) else 0.0, norm, unread)
 
 
 @dataclass(frozen=True)
