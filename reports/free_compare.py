@@ -273,12 +273,20 @@ class FreeVerdict:
         stop = min(c.measured_until for c in self.judged)
         return min(h, stop) if stop < self.duration else h
 
+    @property
+    def lost_by(self) -> FreeComparison | None:
+        """The judged quantity whose error exceeds its tolerance first (None: none)."""
+        first = min(self.judged, key=lambda c: c.horizon)
+        return None if math.isinf(first.horizon) else first
+
     def as_json(self) -> dict:
         return json_safe({
             "case": self.case, "engine": self.engine, "duration_s": self.duration,
             "verdict": "pass" if self.passed else "fail", "run_ok": self.run_ok,
             "reason": self.reason, "t_fail_s": self.t_fail,
-            "trusted_horizon_s": self.horizon, "worst": self.worst.quantity,
+            "trusted_horizon_s": self.horizon,
+            "lost_by": self.lost_by.quantity if self.lost_by else None,
+            "worst": self.worst.quantity,
             "worst_normalised": self.worst.normalised,
             "energy_drift": self.energy.normalised, "loop_drift": self.loop.normalised,
             "cpu_per_simulated_second": self.cpu_per_simulated_second,
@@ -427,7 +435,7 @@ def iftomm_level(max_error: float, measured: bool = True) -> str:
         return "none"
     for lim in sorted(IFTOMM_LEVELS):
         if max_error <= lim:
-            return f"{lim:g}"
+            return f"{lim:.0e}".replace("e-0", "e-")
     return "none"
 
 

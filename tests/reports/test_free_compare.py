@@ -77,7 +77,7 @@ def test_loop_drift_relative_to_size(a01):
     assert not v.passed
 
 
-@pytest.mark.parametrize(("offset", "level"), [(5e-4, "0.001"), (0.05, "0.1"),
+@pytest.mark.parametrize(("offset", "level"), [(5e-4, "1e-3"), (0.05, "1e-1"),
                                                (0.3, "none")])
 def test_iftomm_classes_from_a_known_angle_offset(a01, offset, level):
     # P1 is 1 m from the pin: an angle offset d moves it by the chord 2 sin(d / 2)
