@@ -22,27 +22,27 @@ from sim_models.free_run import FreeRequest
 
 ENGINES = free_engine_names()
 
-#: A01 (1 m pendulum released from the horizontal, 1.5 s, ~1 swing): worst angle error
-#: relative to its range.  MuJoCo RK4 at 1e-3 s: fourth order, h^4 w^5 T ~ 1e-12 x 300
-#: ~ 3e-10 (measured 1e-12); PyBullet's semi-implicit Euler is first order in h:
-#: h w^2 T ~ 1e-4 x 10 x 1.5 ~ 1.5e-3 at its 1e-4 s... (see TOL_A01 per engine);
-#: Exudyn's generalized-alpha is second order: h^2 w^3 T ~ 1e-6 x 30 ~ 3e-5.
+#: A01 (1 m pendulum released from the horizontal, 1.5 s, ~1 swing, w ~ 3.1 rad/s):
+#: worst angle error relative to its range, from each integrator's order at its
+#: recommended step h: MuJoCo RK4 (h = 5e-4 s) ~ (h w)^4 w T ~ 1e-12 (measured 3e-12 over
+#: 20 s); PyBullet's semi-implicit Euler (1e-4 s) ~ h w ~ 3e-4 (measured 7e-5);
+#: Exudyn's generalized-alpha (5e-4 s) ~ (h w)^2 w T ~ 1e-5 (measured 2e-5 over 20 s).
+#: Each tolerance is ~10x the estimate, 10-100x below a wrong model's error.
 TOL_A01 = {"mujoco": 1e-8, "pybullet": 2e-3, "exudyn": 1e-4}
 #: The released seed four-bar under gravity (1 s): loop gap relative to the size.
-#: MuJoCo's Baumgarte-stabilised connect holds it to ~1e-8 of the size (measured 3e-9),
-#: PyBullet's ERP projection to its step's drift, Exudyn's index-3 solve to Newton's
-#: tolerance.
+#: MuJoCo's Baumgarte-stabilised connect holds it to ~1e-8 (measured 2e-9 over 2 s),
+#: PyBullet's ERP projection to its step's drift (measured 7.8e-7), Exudyn's index-3
+#: solve to round-off (4e-16).
 TOL_GAP = {"mujoco": 1e-6, "pybullet": 1e-4, "exudyn": 1e-8}
-#: ... and its energy drift relative to the energy scale (conservative case).  RK4:
-#: measured 3e-8; semi-implicit Euler is symplectic for the tree but ERP removes
-#: energy with the gap; generalized-alpha at rho_inf < 1 damps the highest modes only.
+#: ... and its energy drift relative to the energy scale (conservative case; measured
+#: over 2 s: MuJoCo 2.5e-9, PyBullet 3.6e-4 (first order in h), Exudyn 5.2e-5 (the
+#: generalized-alpha's numerical dissipation, h^2)).
 TOL_ENERGY = {"mujoco": 1e-6, "pybullet": 1e-2, "exudyn": 1e-3}
 #: The start equals the reference's t = 0 state to round-off of a few angle sums.
 TOL_START = 1e-12
 #: The seed four-bar with a point spring, a joint spring, two dampers and a motor table
-#: (0.5 s): x errors relative to their range (short run, small range: MuJoCo measured
-#: 1.0e-4, its gravity-only error of ~1e-5 of a 4x larger range); the elements' signs
-#: wrong would make them O(1).
+#: (0.5 s): x errors relative to their range (MuJoCo at 1e-3 s measured 1.0e-4, PyBullet
+#: 1.5e-3, Exudyn 1e-4 over 1 s); an element with the wrong sign or size makes them O(1).
 TOL_ELEMENTS = {"mujoco": 1e-3, "pybullet": 1e-2, "exudyn": 1e-3}
 
 
@@ -123,11 +123,12 @@ def test_force_elements_follow_reference(engine, seed_elements):
 
 #: Settings far outside any stable step (a 50 ms explicit step on a four-bar whose
 #: rocker swings at ~10 rad/s): the loop opens within a few steps.  Exudyn's implicit
-#: index-3 step passes 50 ms at rho_inf 0.8; without numerical damping (rho_inf 1) its
-#: Newton fails (measured at t = 0.6 s).
+#: index-3 step passes 50 ms at rho_inf 0.8; without numerical damping (rho_inf 1) and
+#: with a loose Newton its energy explodes (measured 82.6 J against a 5.1 J scale at
+#: 0.6 s; with the default Newton tolerance it fails there after 8 s of step reductions).
 DIVERGING = {"mujoco": {"timestep": 0.05, "integrator": "Euler"},
              "pybullet": {"timestep": 0.05, "erp": 0.0},
-             "exudyn": {"timestep": 0.1, "spectral_radius": 1.0}}
+             "exudyn": {"timestep": 0.1, "spectral_radius": 1.0, "newton_tolerance": 1e-3}}
 
 
 @pytest.mark.parametrize("engine", ENGINES)
