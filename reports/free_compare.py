@@ -162,8 +162,11 @@ def horizon_of(times: np.ndarray, error: np.ndarray, tolerance: float) -> float:
 def _range(ref: np.ndarray) -> float:
     """The range of a quantity over the run: max - min, for vectors the norm of the
     per-component ranges."""
-    r = np.ptp(ref, axis=0) if len(ref) else np.zeros(1)
-    return float(np.linalg.norm(np.atleast_1d(r)))
+    if not len(ref) or not np.isfinite(ref).any():
+        return 0.0
+    with np.errstate(invalid="ignore"):  # a reaction the reference leaves NaN (singular)
+        r = np.nanmax(ref, axis=0) - np.nanmin(ref, axis=0)
+    return float(np.linalg.norm(np.nan_to_num(np.atleast_1d(r))))
 
 
 def judge(quantity: str, family: str, unit: str, times, reference, test, tolerance: float,
@@ -323,7 +326,8 @@ def _family(out: list, family: str, unit: str, t, pairs, tol: float) -> None:
     ranges = [_range(r) for _, r, _ in pairs]
     fam = max(ranges, default=0.0)
     if fam == 0.0:
-        fam = max((float(np.nanmax(np.abs(r))) for _, r, _ in pairs), default=0.0)
+        fam = max((float(np.nanmax(np.abs(r))) for _, r, _ in pairs
+                   if np.isfinite(r).any()), default=0.0)
     for name, r, x in pairs:
         out.append(judge(name, family, unit, t, r, x, tol, fam))
 
