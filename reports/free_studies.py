@@ -96,6 +96,7 @@ class FreeRow:
     wall: float
     iftomm_level: str
     position_error: float
+    timing: str = "the run's stepping loop"
 
 
 def end_error(v: FreeVerdict) -> float:
@@ -185,9 +186,36 @@ def grid_task(case: str, duration: float, engine: str, samples: int = 200,
                                 math.nan, math.nan, math.nan, 0, 0.0, "", math.nan))
             continue
         v = compare_free(run, traj, ref)
-        r = free_row(run, v)
-        rows.append(FreeRow(**{**asdict(r), "settings": label}))
+        r = asdict(free_row(run, v))
+        cpu = _best_cpu(mech, engine, run, traj)
+        if math.isfinite(cpu):
+            r.update(cpu_per_s=cpu, timing=f"best of {TIMING_REPEATS} bare stepping loops")
+        rows.append(FreeRow(**{**r, "settings": label}))
     return rows
+
+
+#: The grid's cost: the same stepping loop (FreeSession.advance) from the released
+#: state, at most this many steps, best of TIMING_REPEATS; a shared machine's other
+#: load only ever adds time, so the best of several is the loop's own cost.
+TIMING_STEPS = 2000
+TIMING_REPEATS = 3
+
+
+def _best_cpu(mech, engine: str, run, traj) -> float:
+    """Stepping CPU seconds per simulated second, best of :data:`TIMING_REPEATS` bare
+    loops of up to :data:`TIMING_STEPS` steps (NaN when it cannot be timed)."""
+    from sim_models.free_base import free_start, time_free_steps
+    from sim_models.free_engine import open_free_session
+    if not run.ok or run.steps <= 0:
+        return math.nan
+    session = open_free_session(mech, engine, run.settings)
+    try:
+        start = free_start(session.tree, traj.at(np.array([0.0]), forces=False))
+        sps = time_free_steps(session, start, float(run.timestep),
+                              min(run.steps, TIMING_STEPS), TIMING_REPEATS)
+    finally:
+        session.close()
+    return (run.steps / run.request.duration) / sps if sps > 0 else math.nan
 
 
 def _fmt(v) -> str:

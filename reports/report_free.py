@@ -129,7 +129,9 @@ def _grid(doc, g: pd.DataFrame) -> None:
     from .free_plots import work_precision_figure
     doc.h(2, "Free motion: speed against error")
     doc.p("Each engine's grid of integrators, steps and loop-constraint settings on each "
-          "case, the same stepping loop as the verdicts. Error at the end: the largest "
+          "case. Cost: the verdicts' stepping loop (FreeSession.advance) from the released "
+          f"state, best of {FS.TIMING_REPEATS} bare loops of up to {FS.TIMING_STEPS} steps "
+          "(other load on a shared machine only adds time). Error at the end: the largest "
           "joint-coordinate error at the last sample over its range; the Pareto front "
           "(labelled) holds the settings no other setting of the engine beats on both.",
           intro=True)
