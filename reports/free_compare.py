@@ -253,6 +253,9 @@ class FreeVerdict:
     settings: str
     near_event: str | None
     step_note: str | None
+    #: quantities the engine does not read at all (no value at any sample of a run that
+    #: did not stop): reported, not judged
+    not_read: tuple[str, ...] = ()
 
     @property
     def judged(self) -> tuple[FreeComparison, ...]:
@@ -295,7 +298,7 @@ class FreeVerdict:
             "cpu_per_simulated_second": self.cpu_per_simulated_second,
             "timestep": self.timestep, "integrator": self.integrator,
             "settings": self.settings, "near_event": self.near_event,
-            "step_note": self.step_note,
+            "step_note": self.step_note, "not_read": list(self.not_read),
             "iftomm": self.iftomm.as_json() if self.iftomm else None,
             "comparisons": [c.as_json() for c in self.judged]})
 
@@ -320,9 +323,17 @@ def _unwrap(a: np.ndarray) -> np.ndarray:
     return np.unwrap(a, axis=0)
 
 
-def _family(out: list, family: str, unit: str, t, pairs, tol: float) -> None:
+def _family(out: list, family: str, unit: str, t, pairs, tol: float,
+            not_read: list | None = None) -> None:
     """Append the comparisons of one family ``(name, ref, test)``; its scale is its
-    largest range (for a family that does not change at all: the largest magnitude)."""
+    largest range (for a family that does not change at all: the largest magnitude).
+    With ``not_read`` (a run that did not stop): a quantity with no engine value at any
+    sample is one the engine does not read (Exudyn's prismatic joint forces): named
+    there, not judged."""
+    if not_read is not None:
+        gone = [n for n, _, x in pairs if not np.isfinite(x).any()]
+        not_read += gone
+        pairs = [p for p in pairs if p[0] not in gone]
     ranges = [_range(r) for _, r, _ in pairs]
     fam = max(ranges, default=0.0)
     if fam == 0.0:
@@ -349,9 +360,10 @@ def energy_scale(ref) -> tuple[float, str]:
     return 1.0, "1 J (the reference has no kinetic energy and no change of potential)"
 
 
-def _quantities(run, ref, mech) -> list[FreeComparison]:
+def _quantities(run, ref, mech, not_read: list) -> list[FreeComparison]:
     t = run.times
     out: list[FreeComparison] = []
+    nr = not_read if run.ok else None
     rev = {j.name: isinstance(j, Revolute) for j in mech.joints}
     ref_j = list(ref.joints)
     by_kind = {True: ([], []), False: ([], [])}
@@ -379,12 +391,12 @@ def _quantities(run, ref, mech) -> list[FreeComparison]:
             FREE_KINEMATIC)
     _family(out, "angular acceleration", "rad/s^2", t,
             [(f"{b}.alpha", ref.alpha[:, i], run.alpha[:, k]) for k, b, i in moving],
-            FREE_DYNAMIC)
+            FREE_DYNAMIC, nr)
     if ref.reactions:
         _family(out, "reaction", "N", t,
                 [(f"{n}.force", ref.reactions[n], run.joint_force[:, k])
                  for k, n in enumerate(run.joint_names) if n in ref.reactions],
-                FREE_DYNAMIC)
+                FREE_DYNAMIC, nr)
     return out
 
 
@@ -395,7 +407,8 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
     mech = traj.mech
     ref = reference_samples(traj, run.times) if ref is None else ref
     t = np.asarray(run.times, float)
-    comps = _quantities(run, ref, mech)
+    not_read: list[str] = []
+    comps = _quantities(run, ref, mech, not_read)
     e_scale, e_name = energy_scale(ref)
     energy = judge("energy", "energy", "J", t, ref.kinetic + ref.potential,
                    np.asarray(run.kinetic) + np.asarray(run.potential), ENERGY_DRIFT,
@@ -406,7 +419,8 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
     v = FreeVerdict(run.case, run.engine, float(t[-1]) if len(t) else 0.0, t, tuple(comps),
                     energy, loop, iftomm_accuracy(run, ref, mech), bool(run.ok), run.reason,
                     run.t_fail, float(run.cpu_per_simulated_second), float(run.timestep),
-                    str(run.integrator), run.settings.describe(), None, None)
+                    str(run.integrator), run.settings.describe(), None, None,
+                    tuple(not_read))
     if v.passed:
         return v
     from dataclasses import replace
@@ -481,7 +495,8 @@ def near_free_event(v: FreeVerdict, events) -> str | None:
     kind = {"switch": "coordinate switch", "singular": "singular position crossed",
             "limit": "limit position"}[e.kind]
     side = "after" if dt >= 0 else "before"
-    return (f"the trust is lost at t = {t_lost:.4g} s ({v.worst.quantity}), {abs(dt):.3g} s "
+    who = v.lost_by.quantity if v.lost_by else "the run stopped"
+    return (f"the trust is lost at t = {t_lost:.4g} s ({who}), {abs(dt):.3g} s "
             f"{side} the reference's {kind} at t = {e.t:.6g} s ({e.joint}: {e.detail}): "
             "there the motion picks a branch or a coordinate fails, so a small engine "
             "offset becomes a large error")

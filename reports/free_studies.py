@@ -97,6 +97,7 @@ class FreeRow:
     iftomm_level: str
     position_error: float
     timing: str = "the run's stepping loop"
+    not_read: str = ""
 
 
 def end_error(v: FreeVerdict) -> float:
@@ -122,7 +123,7 @@ def free_row(run, v: FreeVerdict) -> FreeRow:
                    end_error(v), v.horizon, v.lost_by.quantity if v.lost_by else "",
                    v.energy.normalised, v.loop.normalised,
                    v.cpu_per_simulated_second, int(run.steps), float(run.wall),
-                   v.iftomm.level if v.iftomm else "", pos)
+                   v.iftomm.level if v.iftomm else "", pos, not_read=" ".join(v.not_read))
 
 
 def _reference(case: str, duration: float, samples: int):

@@ -72,7 +72,8 @@ def verdict_frame(free: dict) -> pd.DataFrame:
             "trusted horizon": _horizon(r.horizon, r.duration), "lost by": r.lost_by,
             "energy drift": r.energy_drift, "loop drift": r.loop_drift,
             "CPU s per simulated s": r.cpu_per_s, "IFToMM class": r.iftomm_level,
-            "run": "ok" if r.ok else f"stopped: {r.reason}", "settings": r.settings}
+            "run": "ok" if r.ok else f"stopped: {r.reason}",
+            "not read (not judged)": r.not_read, "settings": r.settings}
            for r in rows]
     return pd.DataFrame(out)
 
@@ -98,7 +99,7 @@ def section(doc, free: dict, quick: bool) -> None:
     if len(vt):
         doc.table(vt.drop(columns=["settings"]), "free_verdicts",
                   "free-motion verdicts at the recommended settings", data=vt,
-                  wide=("run",), fold=None)
+                  wide=("run", "not read (not judged)"), fold=None)
     for case, res in free["cases"].items():
         if not res.get("png"):
             continue

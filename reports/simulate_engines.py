@@ -144,6 +144,8 @@ def print_verdict(v, notes=()) -> None:
         print(pd.DataFrame(rows, columns=["quantity", "max_abs", "unit", "scale", "normalised",
                                           "at s", "horizon", "tolerance", "verdict"])
               .to_string(index=False))
+    if v.not_read:
+        _say(f"not read by {v.engine} (reported, not judged): {', '.join(v.not_read)}")
     for n in notes:
         _say(f"note: {n}")
     print(f"CPU {v.cpu_per_simulated_second:.3g} s per simulated second (stepping loop "

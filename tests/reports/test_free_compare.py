@@ -141,3 +141,13 @@ def test_a_sample_the_engine_does_not_read_is_not_a_stop(a01):
     alpha = next(c for c in v.comparisons if c.quantity == "link.alpha")
     assert alpha.measured and alpha.unread == 1 and alpha.passed
     assert v.passed
+
+
+def test_a_quantity_the_engine_never_reads_is_named_not_judged(a01):
+    run = synthetic_run(a01, A01_T, A01_N)
+    run.joint_force[:] = np.nan  # as Exudyn's prismatic joint forces
+    v = fc.compare_free(run, a01)
+    assert v.not_read == ("O.force",) and v.passed
+    assert "O.force" not in {c.quantity for c in v.judged}
+    stopped = synthetic_run(a01, A01_T, A01_N, stop_at=0)  # a run that stopped at once
+    assert not fc.compare_free(stopped, a01).passed
