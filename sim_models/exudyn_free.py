@@ -17,8 +17,8 @@ constraint, and the description's force elements as Exudyn's own items:
 * prismatic joints' springs, dampers and motors are not built (a refusal).
 
 Readout: positions and velocities, the integrator's own accelerations at the step end,
-revolute joint forces ``-lambda`` (as the prescribed runs); prismatic joint forces are
-not read (NaN).
+joint forces from the multipliers as the prescribed runs (revolute ``-lambda``;
+prismatic the normal force ``-l0`` along the line's normal).
 """
 
 from __future__ import annotations
@@ -243,9 +243,14 @@ class ExudynFreeSession(ExudynSession, FreeSession):
             org[b], vo[b] = xG[0, b] - r, vG[0, b] - om[0, b] * _perp(r)
         mech = st.mech
         force = np.full((len(mech.joints), 2), np.nan)
+        idx = {n: i for i, n in enumerate(st.body_names)}
         for k, jt in enumerate(mech.joints):
             if isinstance(jt, Revolute):
                 force[k] = -lam[self.joint_ae[k][:2]]
+                continue
+            # the normal force -l0 along the line's normal, as the prescribed readout
+            ang = th[0, idx[jt.guide]] + jt.direction
+            force[k] = -lam[self.joint_ae[k][0]] * np.array([-math.sin(ang), math.cos(ang)])
         fm = mech.motion
         eff = float(sum(mo.at(t) for mo in fm.motors)) if fm and fm.motors else math.nan
         return FreeRead(th[0], om[0], al[0], org, vo, force, eff)

@@ -78,6 +78,7 @@ class MujocoFreeSettings(EngineSettings):
     100 ms 2.1e-5; ``invweight_scale`` 1 (stock MuJoCo) 1.6e-3, 1e-3 1.1e-5, 1e-5
     1.2e-5.  RK4 at 5e-4 s: below that the error stops falling (the soft constraint's
     own error), so a smaller step only costs.  A01 has no loop: 1e-12 at any RK4 step.
+    ``impratio`` and ``cone`` act on friction only (contacts are off): not settings here.
     """
 
     timestep: float = 5e-4
@@ -110,6 +111,7 @@ class MujocoFreeSession(MujocoSession, FreeSession):
 
     name = "mujoco"
     settings_class = MujocoFreeSettings
+    motor_effort_source = "engine"
     native = ("gravity, point springs/dampers (spatial tendons), joint springs/dampers "
               "(fixed tendons), motors (motor actuator on a fixed tendon): MuJoCo's own; "
               "constant loads: harness (xfrc_applied each step)")

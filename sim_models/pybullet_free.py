@@ -18,7 +18,9 @@ second order; the prescribed runs step once more instead, which a free run canno
 undo).  Tree-joint forces by Newton-Euler from these accelerations and the loops'
 constraint forces (:func:`sim_models.newton_euler.reconstruct`), with the
 harness-applied element forces taken out of each subtree
-(:func:`sim_models.free_base.subtree_correction`).
+(:func:`sim_models.free_base.subtree_correction`).  At t = 0, before any step, PyBullet
+has no acceleration and no constraint force (it reads 0): alpha and the joint forces of
+that sample are NaN (not measured).
 
 Start: ``resetJointState`` to the released state, motors off.  The prescribed runs
 pre-roll because PyBullet's first step after a reset ignores the loop under the
@@ -40,7 +42,14 @@ import numpy as np
 
 from . import ranges
 from .engine_base import EngineSettings
-from .free_base import ElementLoads, FreeRead, FreeSession, FreeStart, subtree_correction
+from .free_base import (
+    ElementLoads,
+    FreeRead,
+    FreeSession,
+    FreeStart,
+    bodies_at,
+    subtree_correction,
+)
 from .newton_euler import reconstruct
 from .pybullet_engine import PybulletSettings, PybulletSim
 from .tree import SimTree
@@ -134,16 +143,10 @@ class PybulletFreeSession(FreeSession):
             self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
             self.h = h
 
-    def _bodies(self, q, qd):
-        st = self.tree
-        nt = len(st.joints)
-        th, om, _, org, vo, _ = st.propagate(q[None], qd[None], np.zeros((1, nt)))
-        return th, om, org, vo
-
     def _apply_elements(self, t: float) -> None:
         sim, p = self.sim, self.sim.p
         q, v, _, _ = sim.states()
-        th, om, org, vo = self._bodies(q, v)
+        th, om, org, vo = bodies_at(self.tree, q, v)
         F, M = self.elements.wrenches(th, om, org, vo, t)
         st = self.tree
         for b in range(len(st.body_names)):
@@ -219,7 +222,11 @@ class PybulletFreeSession(FreeSession):
         for k, jt in enumerate(st.mech.joints):
             if jt.name in F:
                 force[k] = F[jt.name][0]
-        if self.elements.any:
+        if len(vh) < 2:
+            # before the first step PyBullet has no constraint force (it reads 0) and no
+            # acceleration: not measured
+            force[:] = np.nan
+        elif self.elements.any:
             Fe, _ = self.elements.wrenches(th, om, org, vo, t)
             force = subtree_correction(st, force, Fe)
         eff = self.elements.motor_effort(t)

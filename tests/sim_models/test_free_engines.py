@@ -147,3 +147,73 @@ def test_wall_clock_limit_is_a_result(seed):
                    reference=ref)
     assert not run.ok and "wall-clock" in run.reason
     assert math.isclose(run.t_fail, 0.1)
+
+
+@pytest.mark.parametrize("name", ["iftomm-a03-andrews", "seed-four-bar", "quick-return",
+                                  "inverted-slider-crank"])
+def test_scalar_body_states_equal_propagate(name):
+    """The per-step body states of the harness (scalar) equal SimTree.propagate's."""
+    from sim_models.free_base import bodies_at
+    from sim_models.tree import SimTree
+    st = SimTree(load_case(name))
+    nt = len(st.joints)
+    rng = np.random.default_rng(7)
+    q, qd = 0.2 * rng.normal(size=nt), rng.normal(size=nt)
+    th, om, _, org, vo, _ = st.propagate(q[None], qd[None], np.zeros((1, nt)))
+    for got, want in zip(bodies_at(st, q, qd), (th, om, org, vo), strict=True):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
+
+
+def test_bare_stepping_loop_is_timed(seed):
+    """The speed study's loop: steps per second of advance() alone, from the start."""
+    from sim_models.free_base import time_free_steps
+    mech, ref = seed
+    sess = open_free_session(mech, "mujoco")
+    try:
+        start = free_start(sess.tree, ref.at(np.array([0.0]), forces=False))
+        rate = time_free_steps(sess, start, 5e-4, 200, repeats=1)
+    finally:
+        sess.close()
+    assert rate > 0 and math.isfinite(rate)
+
+
+#: The released seed slider-crank (a prismatic joint, a massless crank, a 500 N load;
+#: 0.3 s): every joint coordinate relative to its range (measured over 1 s: MuJoCo
+#: 4.8e-5, PyBullet 2.4e-2, Exudyn 2.6e-3); a slider displacement read with the wrong
+#: origin or sign would be O(1).
+TOL_SLIDER = {"mujoco": 1e-3, "pybullet": 5e-2, "exudyn": 1e-2}
+
+
+@pytest.fixture(scope="module")
+def slider_crank():
+    mech = released(load_case("seed-slider-crank"), duration=0.3)
+    return mech, simulate(mech)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_prismatic_coordinates_follow_reference(engine, slider_crank):
+    mech, ref = slider_crank
+    run = run_free(mech, engine, request=FreeRequest(0.3, samples=15), reference=ref)
+    assert run.ok, run.reason
+    s = ref.at(run.times, forces=False)
+    assert np.max(np.abs(run.x[0] - s.x[0])) < TOL_START
+    assert np.max(np.abs(run.xd[0] - s.xd[0])) < TOL_START
+    assert _rel_err(run, ref) < TOL_SLIDER[engine]
+    assert np.isfinite(run.joint_force[1:]).all()  # every joint read (t = 0: see PyBullet)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_body_angles_carry_the_reference_turns(engine):
+    """Released at 200 deg (more than half a turn from the tree's reference pose at
+    0 deg), the run's body angles are the reference's, not 2 pi off."""
+    from dataclasses import replace
+    mech = load_case("iftomm-a01-pendulum")
+    mech = replace(mech, motion=replace(mech.motion, value=math.radians(200.0),
+                                        duration=0.2))
+    ref = simulate(mech)
+    run = run_free(mech, engine, request=FreeRequest(0.2, samples=4), reference=ref)
+    s = ref.at(run.times, forces=False)
+    assert run.ok, run.reason
+    assert np.max(np.abs(run.theta[0] - s.theta[0])) < TOL_START
+    assert np.max(np.abs(run.x[0] - s.x[0])) < TOL_START
+    assert np.max(np.abs(run.theta - s.theta)) < 1e-2  # no whole turn anywhere
