@@ -48,3 +48,28 @@ def test_pareto_and_cheapest_on_a_known_grid():
     assert list(FS.pareto(g)["settings"]) == ["d", "a", "b"]
     ch = FS.cheapest(g, (1e-2, 1e-3, 1e-5)).set_index("tolerance")["settings"]
     assert ch[1e-2] == "a" and ch[1e-3] == "b" and ch[1e-5] == "none"
+
+
+class _Ex:
+    def __init__(self):
+        self.calls = []
+
+    def submit_at(self, p, fn, *args):
+        self.calls.append((p, fn.__name__, args))
+        return object()
+
+
+class _Ph:
+    def add(self, name, n):
+        pass
+
+
+def test_quick_report_runs_two_short_cases_and_no_grid():
+    ex = _Ex()
+    pending = report_free.submit(ex, True, _Ph())
+    assert [c[1] for c in ex.calls] == ["case_task", "case_task"]
+    assert {c[2][0] for c in ex.calls} == {"iftomm-a01-pendulum", "seed-four-bar"}
+    assert max(c[2][1] for c in ex.calls) <= 2.0 and len(pending) == 2
+    full = _Ex()
+    report_free.submit(full, False, _Ph())
+    assert sum(c[1] == "grid_task" for c in full.calls) == 2 * 3
