@@ -188,4 +188,4 @@ def write_ci(args, mech, results) -> None:
     given = str(getattr(args, "case", "") or "")
     file = Path(given).as_posix() if given.endswith(".toml") else ""
     write_outputs(args, f"xval simulate {mech.name}", [ci_case(r, v, file) for r, v in results],
-                  command="simulate")
+                  command="simulate", error_label="error / scale")

@@ -45,7 +45,9 @@ def test_failing_verdict_status_1_with_junit_and_summary(tmp_path):
     tc = root.find(".//testcase")
     assert tc.get("classname") == "xval.simulate.mujoco"
     assert tc.find("failure") is not None
-    assert "FAIL" in summary.read_text()
+    assert "FAIL" in summary.read_text() and "error / scale" in summary.read_text()
+    from tests.reports.test_baseline import _validate_junit  # the Jenkins xunit schema
+    _validate_junit(junit, tests=1, failures=1)
 
 
 @pytest.mark.parametrize(("args", "words"), [
