@@ -73,3 +73,31 @@ def test_quick_report_runs_two_short_cases_and_no_grid():
     full = _Ex()
     report_free.submit(full, False, _Ph())
     assert sum(c[1] == "grid_task" for c in full.calls) == 2 * 3
+
+
+class _Done:
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+class _Steps(_Ph):
+    def step(self, name, n=1):
+        pass
+
+
+def test_full_report_grid_rows_become_pareto_figure_and_tables(tmp_path):
+    rows = FS.grid_task("iftomm-a01-pendulum", 0.3, "mujoco", 15,
+                        grid=[{"integrator": "Euler", "timestep": 2e-3}])
+    assert [r.settings for r in rows] == ["recommended", "integrator=Euler timestep=0.002"]
+    assert all(r.ok and r.cpu_per_s > 0 for r in rows)
+    studies: dict = {}
+    report_free.collect("freegrid", _Done(rows), "iftomm-a01-pendulum", studies, _Steps())
+    doc = Document(tmp_path)
+    report_free.section(doc, studies["free"], quick=False)
+    assert (tmp_path / "img" / "free-wp-iftomm-a01-pendulum.png").stat().st_size > 1000
+    assert len(pd.read_csv(tmp_path / "free_grid.csv")) == 2
+    ch = pd.read_csv(tmp_path / "free_cheapest.csv")
+    assert set(ch["tolerance"]) == set(FS.TOLERANCES)
