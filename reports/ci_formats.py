@@ -246,13 +246,15 @@ def _clean(text: str) -> str:
 
 
 # ============================================================================ Markdown
-def markdown_summary(title: str, cases: Sequence[CiCase], intro: Sequence[str] = ()) -> str:
-    """A Markdown table of the verdicts, failures first, with the failure messages."""
+def markdown_summary(title: str, cases: Sequence[CiCase], intro: Sequence[str] = (),
+                     error_label: str = "error / peak") -> str:
+    """A Markdown table of the verdicts, failures first, with the failure messages
+    (``error_label``: the error column's heading, e.g. ``error / range`` for free motion)."""
     fails = [c for c in cases if c.status != "pass"]
     head = f"## {title}: {'PASS' if not fails else 'FAIL'} " \
            f"({len(cases) - len(fails)} of {len(cases)} passed)"
     has_base = any(math.isfinite(c.baseline) for c in cases)
-    cols = ["case", "engine", "verdict", "worst quantity", "error / peak", "at"]
+    cols = ["case", "engine", "verdict", "worst quantity", error_label, "at"]
     cols += ["baseline", "growth"] if has_base else []
     cols += ["tolerance"]
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
@@ -296,13 +298,15 @@ def write_text(path: str, text: str, what: str) -> None:
 
 def write_outputs(suite: str, cases: Sequence[CiCase], junit: str | None = None,
                   summary: str | None = None, intro: Sequence[str] = (),
-                  properties: dict | None = None, command: str = "compare") -> None:
+                  properties: dict | None = None, command: str = "compare",
+                  error_label: str = "error / peak") -> None:
     """Write the JUnit XML to ``junit`` and the Markdown summary to ``summary`` (paths,
-    ``-``: standard output; None: not asked for)."""
+    ``-``: standard output; None: not asked for); ``error_label`` heads the summary's
+    error column."""
     if junit:
         write_text(junit, junit_xml(suite, cases, properties, command), "JUnit file")
     if summary:
-        write_text(summary, markdown_summary(suite, cases, intro), "summary")
+        write_text(summary, markdown_summary(suite, cases, intro, error_label), "summary")
 
 
 def write_compare_outputs(mech, results, given: str, junit: str | None = None,

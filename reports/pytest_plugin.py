@@ -239,6 +239,31 @@ class Xval:
         raise AssertionError(disagreement(f"{run_.case}{src} / {engine}", run_, comps, tol,
                                           settings_line(engine, run_.settings)))
 
+    def assert_free_agrees(self, model, engine: str = "mujoco", *,
+                           duration: float | None = None, samples: int = 200,
+                           settings=None):
+        """Free motion: ``model`` (a case or file with ``[motion]``, or a driven one,
+        released at rest under gravity) released in ``engine`` and judged against the
+        exact trajectory (:func:`reports.free_compare.compare_free`); returns the
+        :class:`FreeVerdict`.  The failure names each failing quantity, its trusted
+        horizon, the nearest reference event and the engine's step."""
+        __tracebackhide__ = True
+        from analytic.cases import free_case_names
+        from reports.free_cases import free_case
+        from reports.free_studies import free_verdict
+        name = os.fspath(model) if isinstance(model, (str, os.PathLike)) else None
+        mech = model if name is None else free_case(
+            name if name in free_case_names() else os.fspath(self.resolve(name)))
+        _, v = free_verdict(mech, engine, duration, samples, settings)
+        if v.passed:
+            return v
+        lines = [f"{v.case} / {engine}: free motion over {v.duration:g} s disagrees "
+                 f"(trusted horizon {v.horizon:.4g} s)"]
+        lines += [f"  {c}" for c in v.judged if not c.passed]
+        lines += [f"  {x}" for x in (v.near_event, v.step_note) if x]
+        lines.append(f"  settings: {engine} {v.settings}")
+        raise AssertionError("\n".join(lines))
+
     # -- baselines ------------------------------------------------------------------
     def path(self, baseline) -> Path:
         p = Path(baseline)

@@ -307,6 +307,9 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
             f = ex.submit(_task_entry, t[1], *t[2:])
             pending[f] = ("run", t[0], t[1])
             per_case[t[0]] += 1
+        if cfg.studies and not cfg.cases:  # free motion: its own cases (report_free)
+            from reports import report_free
+            pending.update(report_free.submit(ex, cfg.quick, ph))
         if cfg.studies:
             grid_futs, studies["grid_sizes"] = _submit_grids(cfg, ex, cases, ph)
             pending.update(grid_futs)
@@ -343,6 +346,10 @@ def _collect(f, kind, label, src, cfg, ex, ph, results, figures, studies, grid_r
     """One finished task: store it and submit what it unblocks (a case's figures once
     its runs are in; a grid's Pareto plot once its rows are in)."""
     from reports import studies as S
+    if kind in ("free", "freegrid"):
+        from reports import report_free
+        report_free.collect(kind, f, label, studies, ph)
+        return
     if kind == "run":
         res = _result_or_error(f)
         if "case" not in res:  # the task itself died

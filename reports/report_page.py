@@ -126,6 +126,9 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
               "sample of every run). The last column says why a printed number differs from "
               "the exact one.", intro=True)
         doc.table(seeds, "seed_comparison", digits=7, wide=("why the notes differ",))
+    if studies.get("free"):
+        from reports.report_free import section as free_section
+        free_section(doc, studies["free"], cfg.quick)
     if studies.get("grids"):
         _speed_section(doc, studies["grids"], cfg)
     if "hard" in studies:

@@ -5,7 +5,9 @@ its springs, dampers and motors; integrates the exact equation of motion
 (:mod:`analytic.free_motion`) and prints, at evenly spaced times, every joint's
 coordinate (deg or m) and the energies, then the events met.  ``--csv`` writes every
 joint's coordinate, rate and acceleration, the energies and the motors' power (SI);
-``--json`` prints one JSON object (SI).
+``--json`` prints one JSON object (SI).  ``--engine NAME|all`` also releases the
+linkage in the engines and judges each run against the exact trajectory
+(:mod:`reports.simulate_engines_cli`; status 1 on a failed verdict).
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ def register(sub) -> None:
     s.add_argument("--csv", type=opt.output_file,
                    help="write the samples to this CSV file ('-': standard output)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
+    from .simulate_engines_cli import add_options  # --engine, --set, ..., --junit, --summary
+    add_options(s)
     s.set_defaults(func=cmd_simulate)
 
 
@@ -67,9 +71,22 @@ def cmd_simulate(args) -> int:
     if args.json and args.csv == "-":
         raise OutputError("--json and --csv - both write to standard output; give --csv a "
                           "file name")
+    from .simulate_engines_cli import cmd_engines, engine_options_given
+    if not getattr(args, "engine", None) and (given := engine_options_given(args)):
+        raise opt.UsageError(f"{', '.join(given)} need(s) --engine NAME|all (the engines' "
+                             "free runs); without it xval simulate prints the exact "
+                             "trajectory only")
+    if getattr(args, "engine", None) and args.csv == "-":
+        raise OutputError("--engine prints its verdicts to standard output; give --csv a "
+                          "file name")
     mech = load_case(args.case)
     traj = simulate(mech, args.duration)
     n = args.samples or mech.motion.samples
+    if getattr(args, "engine", None):
+        if args.csv:
+            smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
+            write_csv(_frame(mech, smp), args.csv, args.stdout)
+        return cmd_engines(args, mech, traj, n)
     smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
     frame = _frame(mech, smp)
     if args.json:

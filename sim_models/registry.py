@@ -114,9 +114,12 @@ def split_overrides(pairs, engines) -> dict[str, dict[str, str]]:
     return _split(pairs, engines)[0]
 
 
-def _split(pairs, engines) -> tuple[dict[str, dict[str, str]], dict[tuple[str, str], str]]:
-    """:func:`split_overrides` and, per ``(engine, key)``, the ``--set`` item it came from."""
+def _split(pairs, engines, classes=None) -> tuple[dict[str, dict[str, str]],
+                                                   dict[tuple[str, str], str]]:
+    """:func:`split_overrides` and, per ``(engine, key)``, the ``--set`` item it came from
+    (``classes``: engine -> settings class, default the registered ones)."""
     from .engine_base import SettingsError
+    classes = classes or {e: get_engine(e).settings_class for e in engines}
     out: dict[str, dict[str, str]] = {e: {} for e in engines}
     origin: dict[tuple[str, str], str] = {}
     for item in pairs or ():
@@ -132,7 +135,7 @@ def _split(pairs, engines) -> tuple[dict[str, dict[str, str]], dict[tuple[str, s
                                     f"(engines: {', '.join(out)})")
         hits = []
         for e in ([target] if target else list(out)):
-            fields = get_engine(e).settings_class.field_types()
+            fields = classes[e].field_types()
             if key not in fields:
                 continue
             hits.append(e)
@@ -147,13 +150,14 @@ def _split(pairs, engines) -> tuple[dict[str, dict[str, str]], dict[tuple[str, s
             out[e][key] = value
             origin[(e, key)] = item
         if not hits:
-            known = sorted({k for e in out for k in get_engine(e).settings_class.field_types()})
+            known = sorted({k for e in out for k in classes[e].field_types()})
             raise SettingsError(f"--set {item!r}: no engine here has a setting {key!r}; "
                                 f"settings: {', '.join(known)}")
     return out, origin
 
 
 def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, object]]
+                          | None = None, classes: Mapping[str, type[EngineSettings]]
                           | None = None) -> dict[str, EngineSettings]:
     """Each engine's settings from the command line: its recommended defaults, the
     option flags ``options`` (``{"--timestep": ("timestep", 1e-4)}``; a ``None`` value
@@ -161,18 +165,21 @@ def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, ob
     items ``pairs``.  One door for every source: each value passes the settings
     class's ranges (:mod:`sim_models.ranges`), and the error names what the user typed
     (``--set mujoco.iterations=-5: ...``, ``argument --timestep: ...``).  A flag and a
-    ``--set`` item for the same setting are refused (no silent precedence)."""
+    ``--set`` item for the same setting are refused (no silent precedence).
+    ``classes``: engine -> settings class where it is not the registered one (the
+    free-motion settings, :func:`sim_models.free_engine.free_session_class`)."""
     from .engine_base import SettingsError
-    per, origin = _split(pairs, engines)
+    classes = dict(classes or {e: get_engine(e).settings_class for e in engines})
+    per, origin = _split(pairs, engines, classes)
     for flag, (key, value) in (options or {}).items():
-        if value is not None and not any(key in get_engine(e).settings_class.field_types()
+        if value is not None and not any(key in classes[e].field_types()
                                          for e in engines):
             raise SettingsError(f"argument {flag}: no engine run here has a setting {key!r} "
                                 f"(engines: {', '.join(engines)})")
     out = {}
     for e in engines:
-        eng = get_engine(e)
-        fields = eng.settings_class.field_types()
+        cls = classes[e]
+        fields = cls.field_types()
         over: dict[str, object] = {}
         said: dict[str, str] = {}
         for flag, (key, value) in (options or {}).items():
@@ -186,7 +193,7 @@ def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, ob
         over.update(per.get(e, {}))
         said.update({k: f"--set {origin[(e, k)]}" for k in per.get(e, {})})
         try:
-            out[e] = eng.settings(over)
+            out[e] = cls.from_overrides(over, e)
         except SettingsError as err:
             if err.key in said:
                 raise SettingsError(f"{said[err.key]}: {err.problem}", err.key, err.value,

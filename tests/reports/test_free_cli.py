@@ -1,0 +1,67 @@
+"""``xval simulate --engine``: status 0 on a passing verdict, 1 on a failing one, 2 with one
+line on bad input; --json, --junit and --summary carry the verdict.
+
+The failing run is MuJoCo's semi-implicit Euler at 0.02 s on IFToMM A01 (the pendulum
+from the horizontal, 2 s): a first-order method at 0.089 rad per step is off by more
+than 1 % of the swing (the test expects the failure, not a number)."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from tests.reports.cli_run import run
+
+A01 = ("simulate", "iftomm-a01-pendulum", "--duration", "1", "--samples", "51")
+
+
+@pytest.fixture(autouse=True)
+def _headless(monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", "disable")
+
+
+def test_passing_verdict_status_0_and_json():
+    code, out = run(*A01, "--engine", "mujoco", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    (v,) = doc["verdicts"]
+    assert v["engine"] == "mujoco" and v["verdict"] == "pass"
+    assert v["trusted_horizon_s"] is None  # never exceeded: JSON has no infinity
+    assert v["iftomm"]["level"] == "1e-3"
+    assert {c["quantity"] for c in v["comparisons"]} >= {"O.x", "link.theta", "energy"}
+
+
+def test_failing_verdict_status_1_with_junit_and_summary(tmp_path):
+    junit, summary = tmp_path / "j.xml", tmp_path / "s.md"
+    code, out = run("simulate", "iftomm-a01-pendulum", "--duration", "2", "--samples", "101",
+                    "--engine", "mujoco", "--integrator", "Euler", "--timestep", "0.02",
+                    "--junit", str(junit), "--summary", str(summary))
+    assert code == 1
+    assert "FAIL" in out and "trusted horizon:" in out and "--timestep 0.005" in out
+    root = ET.parse(junit).getroot()
+    assert root.get("failures") == "1"
+    tc = root.find(".//testcase")
+    assert tc.get("classname") == "xval.simulate.mujoco"
+    assert tc.find("failure") is not None
+    assert "FAIL" in summary.read_text() and "error / scale" in summary.read_text()
+    from tests.reports.test_baseline import _validate_junit  # the Jenkins xunit schema
+    _validate_junit(junit, tests=1, failures=1)
+
+
+@pytest.mark.parametrize(("args", "words"), [
+    (("--set", "integrator=RK4"), "--engine"),
+    (("--engine", "mujoco", "--set", "nope=1"), "'nope'"),
+    (("--engine", "mujoco", "--set", "mujoco.timestep=-1"), "timestep"),
+    (("--engine", "mujoco", "--timestep", "5"), "--timestep"),
+    (("--engine", "mujoco", "--integrator", "RK4", "--set", "mujoco.integrator=Euler"),
+     "give one"),
+    (("--engine", "nosuch"), "--engine"),
+])
+def test_bad_input_one_line_status_2(capsys, args, words):
+    code, out = run(*A01, *args)
+    err = capsys.readouterr().err
+    assert code == 2, out
+    assert err.startswith("xval: error:") and err.count("\n") == 1
+    assert words in err

@@ -1,0 +1,103 @@
+"""The report's "Free motion" section: a real (short) MuJoCo free run of A01 judged and
+written as a verdict table, three figures and the IFToMM rows; the work-precision
+helpers on a hand-made grid whose Pareto front and cheapest settings are known."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+from reports import free_studies as FS
+from reports import report_free
+from reports.page import Document
+
+
+@pytest.fixture(autouse=True)
+def _headless(monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", "disable")
+
+
+def test_section_has_table_figures_and_iftomm_rows(tmp_path):
+    res = FS.case_task("iftomm-a01-pendulum", 0.5, 20, engines=["mujoco"])
+    assert not res["errors"], res["errors"]
+    doc = Document(tmp_path)
+    report_free.section(doc, {"cases": {"iftomm-a01-pendulum": res}, "grid": [],
+                              "errors": []}, quick=True)
+    md = doc.markdown("t")
+    assert "# Free motion" in md and "trusted horizon" in md
+    for key in ("trajectory", "error", "drift"):
+        assert (tmp_path / "img" / f"free-iftomm-a01-pendulum-{key}.png").stat().st_size > 1000
+    vt = pd.read_csv(tmp_path / "free_verdicts.csv")
+    assert list(vt["engine"]) == ["mujoco"] and vt["verdict"][0] == "pass"
+    ift = pd.read_csv(tmp_path / "free_iftomm.csv", dtype={"class": str})
+    assert ift["problem"][0] == "iftomm-a01-pendulum" and ift["class"][0] == "1e-3"
+    assert ift["code"][0].startswith("mujoco ")
+
+
+def _row(engine, settings, cpu, err, ok=True):
+    return FS.FreeRow("c", engine, 1.0, settings, "i", 1e-3, ok, ok, "", "q", err, err,
+                      math.inf, "", 0.0, 0.0, cpu, 10, cpu, "", math.nan)
+
+
+def test_pareto_and_cheapest_on_a_known_grid():
+    g = FS.frame([_row("e", "a", 1.0, 1e-2), _row("e", "b", 2.0, 1e-4),
+                  _row("e", "c", 3.0, 1e-3),   # dominated by b
+                  _row("e", "d", 0.5, 1e-1), _row("e", "x", 0.1, math.inf, ok=False)])
+    assert list(FS.pareto(g)["settings"]) == ["d", "a", "b"]
+    ch = FS.cheapest(g, (1e-2, 1e-3, 1e-5)).set_index("tolerance")["settings"]
+    assert ch[1e-2] == "a" and ch[1e-3] == "b" and ch[1e-5] == "none"
+
+
+class _Ex:
+    def __init__(self):
+        self.calls = []
+
+    def submit_at(self, p, fn, *args):
+        self.calls.append((p, fn.__name__, args))
+        return object()
+
+
+class _Ph:
+    def add(self, name, n):
+        pass
+
+
+def test_quick_report_runs_two_short_cases_and_no_grid():
+    ex = _Ex()
+    pending = report_free.submit(ex, True, _Ph())
+    assert [c[1] for c in ex.calls] == ["case_task", "case_task"]
+    assert {c[2][0] for c in ex.calls} == {"iftomm-a01-pendulum", "seed-four-bar"}
+    assert max(c[2][1] for c in ex.calls) <= 2.0 and len(pending) == 2
+    full = _Ex()
+    report_free.submit(full, False, _Ph())
+    assert sum(c[1] == "grid_task" for c in full.calls) == 2 * 3
+
+
+class _Done:
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+class _Steps(_Ph):
+    def step(self, name, n=1):
+        pass
+
+
+def test_full_report_grid_rows_become_pareto_figure_and_tables(tmp_path):
+    rows = FS.grid_task("iftomm-a01-pendulum", 0.3, "mujoco", 15,
+                        grid=[{"integrator": "Euler", "timestep": 2e-3}])
+    assert [r.settings for r in rows] == ["recommended", "integrator=Euler timestep=0.002"]
+    assert all(r.ok and r.cpu_per_s > 0 for r in rows)
+    studies: dict = {}
+    report_free.collect("freegrid", _Done(rows), "iftomm-a01-pendulum", studies, _Steps())
+    doc = Document(tmp_path)
+    report_free.section(doc, studies["free"], quick=False)
+    assert (tmp_path / "img" / "free-wp-iftomm-a01-pendulum.png").stat().st_size > 1000
+    assert len(pd.read_csv(tmp_path / "free_grid.csv")) == 2
+    ch = pd.read_csv(tmp_path / "free_cheapest.csv")
+    assert set(ch["tolerance"]) == set(FS.TOLERANCES)
