@@ -37,6 +37,10 @@ def cmd_compare(args) -> int:
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
+    if args.engine == "all":  # an engine whose optional library is missing: one line each
+        from sim_models.registry import skipped_engines
+        for why in skipped_engines().values():
+            print(f"xval: note: {why}; skipped", file=sys.stderr)
     settings = settings_for(engines, list(args.set or ()),
                             {"--timestep": ("timestep", args.timestep),
                              "--integrator": ("integrator", args.integrator)})

@@ -164,7 +164,9 @@ class PinocchioSession(Session):
         self.pin = require_pinocchio()
         self._build()
         self.acc = float(tree.mech.driver.acceleration)
-        self.max_lambda_z = 0.0
+        self.max_lambda_z = 0.0    # largest |z multiplier| read (the redundant row)
+        self.rnea_residual = 0.0   # largest |RNEA joint force - applied|, N m or N
+        self._h = 0.0              # the step the corrector's gains are set for (s)
 
     # ------------------------------------------------------------------ model
     def _frames(self):
@@ -264,8 +266,12 @@ class PinocchioSession(Session):
         return pin.SE3(np.eye(3), _v3(np.asarray(point, float) - self.offset[b]))
 
     def set_baumgarte(self, h: float) -> None:
-        """Critically damped Baumgarte gains for step ``h`` (s)."""
+        """Critically damped Baumgarte gains for step ``h`` (s): ``omega = baumgarte / h``,
+        ``Kp = omega^2``, ``Kd = 2 omega``."""
         w = float(self.settings.baumgarte) / h if h > 0 else 0.0
+        self._gains(w)
+
+    def _gains(self, w: float) -> None:
         for cm in self.cmodels:
             cm.setBaumgarteCorrectorParameters(
                 self.pin.BaumgarteCorrectorParameters(w * w, 2.0 * w))
@@ -373,7 +379,6 @@ class PinocchioSession(Session):
     def forward_at(self, q, qd, acceleration: float, rows, rec: Recorder) -> None:
         Q, V = np.zeros(self.model.nq), np.zeros(self.nv)
         Q[self.vidx], V[self.vidx] = q, qd
-        self.set_baumgarte(0.0)  # the exact state: no drift to correct
         self.convert(np.zeros(1), [(Q, V, float(acceleration))], [list(np.atleast_1d(rows))],
                      rec)
 
@@ -388,20 +393,30 @@ class PinocchioSession(Session):
         q, qd, qdd = np.zeros((K, nt)), np.zeros((K, nt)), np.zeros((K, nt))
         force = np.zeros((K, J, 2))
         normal, moment, effort = np.zeros((K, P)), np.zeros((K, P)), np.zeros(K)
-        for k, (Q, V, acc) in enumerate(raws):
-            try:
-                a, lam, td = self.dynamics(Q, V, acc)
-            except (RuntimeError, ValueError):
-                a, lam, td = np.full(self.nv, np.nan), np.full(self.ncon, np.nan), np.nan
-            q[k], qd[k], qdd[k] = Q[self.vidx], V[self.vidx], a[self.vidx]
-            effort[k] = st.driver_sigma * td
-            if np.all(np.isfinite(a)):
-                self._forces(Q, V, a, lam, td, force[k], normal[k], moment[k])
-            else:
-                force[k], normal[k], moment[k] = np.nan, np.nan, np.nan
+        self._gains(0.0)   # the dynamics at the state: no corrector (module docstring)
+        try:
+            for k, (Q, V, acc) in enumerate(raws):
+                self._convert_one(k, Q, V, acc, q, qd, qdd, force, normal, moment, effort)
+        finally:
+            if self._h:
+                self.set_baumgarte(self._h)
         _, gap, rate = rec.put_motions(rows, times, q, qd, qdd)
         rec.put_forces_many(rows, force, effort, normal, moment)
         return gap, rate
+
+    def _convert_one(self, k, Q, V, acc, q, qd, qdd, force, normal, moment, effort):
+        """Record ``k`` (state ``Q, V``, driver acceleration ``acc``) into row ``k`` of
+        the arrays of :meth:`convert`."""
+        try:
+            a, lam, td = self.dynamics(Q, V, acc)
+        except (RuntimeError, ValueError):
+            a, lam, td = np.full(self.nv, np.nan), np.full(self.ncon, np.nan), np.nan
+        q[k], qd[k], qdd[k] = Q[self.vidx], V[self.vidx], a[self.vidx]
+        effort[k] = self.tree.driver_sigma * td
+        if np.all(np.isfinite(a)):
+            self._forces(Q, V, a, lam, td, force[k], normal[k], moment[k])
+        else:
+            force[k], normal[k], moment[k] = np.nan, np.nan, np.nan
 
     def _forces(self, Q, V, a, lam, td, force, normal, moment) -> None:
         """One record's joint forces (analytic conventions) into ``force (J, 2)``,
@@ -426,8 +441,9 @@ class PinocchioSession(Session):
                 f = R.T @ (s * L[c])
                 fext[jnt] = fext[jnt] + pin.Force(f, np.cross(plc.translation, f))
         tau = pin.rnea(m, d, Q, V, a, fext)
-        self.rnea_residual = float(np.abs(tau - np.eye(self.nv)[self.drive_v] * td).max())
-        for i, tj in enumerate(st.joints):
+        tau[self.drive_v] -= td   # what is left: the RNEA against constraintDynamics
+        self.rnea_residual = max(self.rnea_residual, float(np.abs(tau).max()))
+        for tj in st.joints:
             j = self.jid[tj.child]
             R, O = d.oMi[j].rotation, d.oMi[j].translation
             F, Mz = R @ d.f[j].linear, (R @ d.f[j].angular)[2]
@@ -451,7 +467,8 @@ class PinocchioSession(Session):
             force[k] = normal[p] * n
 
     def extra(self) -> dict:
-        return {"max_lambda_z": self.max_lambda_z, "loops_3d_rows": self.ncon}
+        return {"max_lambda_z": self.max_lambda_z, "constraint_rows": self.ncon,
+                "rnea_residual": self.rnea_residual}
 
 
 __all__ = ["PinocchioSession", "PinocchioSettings", "require_pinocchio"]
