@@ -31,11 +31,11 @@ from .conftest import assert_run_within
 #: to 1e-12 (``prox_accuracy``): round-off of a 3-6 joint model, measured 1e-15..6e-12 of
 #: peak over the built-in cases; 1e-9 leaves 100x for other CPUs/BLAS.
 PINOCCHIO_EXACT = 1e-9
-#: A prescribed run at the recommended settings (RK4, 360 steps a revolution): RK4's
-#: global error is of order (omega h)^4 = (2 pi / 360)^4 = 9e-8 of the motion, times the
-#: case's constants; measured 2.4e-7 (seed four-bar) and 3.1e-7 (seed slider-crank) of
-#: peak.  1e-5 leaves 30x, and a first-order scheme at this step (semi-implicit Euler:
-#: 1e-2 of peak) fails it.
+#: A prescribed run at the recommended settings (RK4, 180 steps a revolution): RK4's
+#: global error is of order (omega h)^4 = (2 pi / 180)^4 = 1.5e-6 of the motion, times
+#: the case's constants; measured 2.3e-7 (seed four-bar) and 2.1e-7 (seed slider-crank)
+#: of peak.  1e-5 leaves 40x, and a first-order scheme (semi-implicit Euler: 2e-3 of
+#: peak at 1440 steps a revolution) fails it.
 PINOCCHIO_RUN = 1e-5
 #: The z multiplier of a planar loop's 3D point constraint: its Jacobian row is exactly
 #: zero, so the proximal iterations never move it from its start (0).
