@@ -17,8 +17,8 @@ from analytic.sweep import input_values
 from sim_models import compile_linkage
 from sim_models.engines import instantaneous, run
 from sim_models.registry import (
-    EngineUnavailableError,
     _REGISTRY,
+    EngineUnavailableError,
     available_engines,
     get_engine,
     register_engine,
