@@ -200,6 +200,8 @@ class PinocchioSession(Session):
         self.max_lambda_z = 0.0    # largest |z multiplier| read (the redundant row)
         self.rnea_residual = 0.0   # largest |RNEA joint force - applied|, N m or N
         self._h = 0.0              # the step the corrector's gains are set for (s)
+        #: a free run's hook adding its force elements to the readout's ``fext``
+        self.element_fext = None
 
     # ------------------------------------------------------------------ model
     def _frames(self):
@@ -462,6 +464,8 @@ class PinocchioSession(Session):
         for _ in range(m.njoints):
             fext.append(pin.Force.Zero())
         self._load_fext(fext)
+        if self.element_fext is not None:   # a free run's springs, dampers, motors
+            self.element_fext(fext)
         L = lam.reshape(-1, 3)
         self.max_lambda_z = max(self.max_lambda_z, float(np.abs(L[:, 2]).max(initial=0.0)))
         for c, (ch, cm) in enumerate(zip(st.chords, self.cmodels, strict=True)):
