@@ -185,6 +185,12 @@ def _v3(p) -> np.ndarray:
     return np.array([float(p[0]), float(p[1]), 0.0])
 
 
+def _couple(r, f, torque: float = 0.0) -> np.ndarray:
+    """``r x f + (0, 0, torque)`` of in-plane vectors (z = 0): only z is nonzero
+    (faster than ``np.cross``, which spends its time on axis handling here)."""
+    return np.array([0.0, 0.0, r[0] * f[1] - r[1] * f[0] + torque])
+
+
 class PinocchioSession(Session):
     """A Pinocchio model of one linkage, driven through its prescribed motion."""
 
@@ -325,7 +331,7 @@ class PinocchioSession(Session):
             pt = st.com[b] if ld.point is None else st.mech.bodies[b].points[ld.point]
             r = _v3(np.asarray(pt, float) - self.offset[b])
             f = R.T @ _v3(ld.force)
-            fext[j] = fext[j] + pin.Force(f, np.cross(r, f) + np.array([0.0, 0.0, ld.torque]))
+            fext[j] = fext[j] + pin.Force(f, _couple(r, f, ld.torque))
 
     def _tau_loads(self, q, v) -> np.ndarray:
         """The loads as generalised forces ``J^T f`` (``constraintDynamics`` takes none)."""
@@ -476,7 +482,7 @@ class PinocchioSession(Session):
                     continue
                 R = d.oMi[jnt].rotation
                 f = R.T @ (s * L[c])
-                fext[jnt] = fext[jnt] + pin.Force(f, np.cross(plc.translation, f))
+                fext[jnt] = fext[jnt] + pin.Force(f, _couple(plc.translation, f))
         tau = pin.rnea(m, d, Q, V, a, fext)
         tau[self.drive_v] -= td   # what is left: the RNEA against constraintDynamics
         self.rnea_residual = max(self.rnea_residual, float(np.abs(tau).max()))

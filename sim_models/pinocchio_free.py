@@ -32,7 +32,7 @@ import numpy as np
 
 from .engine_base import EngineSettings, check_raw_state
 from .free_base import ElementLoads, FreeRead, FreeSession, FreeStart
-from .pinocchio_engine import PinocchioSession, PinocchioSettings, _v3
+from .pinocchio_engine import PinocchioSession, PinocchioSettings, _couple, _v3
 from .tree import SimTree
 
 
@@ -100,7 +100,7 @@ class PinocchioFreeSession(FreeSession):
                 R = m.data.oMi[j].rotation
                 f = R.T @ _v3(F[b])
                 r = _v3(np.asarray(st.com[b], float) - m.offset[b])
-                fext[j] = fext[j] + pin.Force(f, np.cross(r, f) + np.array([0.0, 0.0, M[b]]))
+                fext[j] = fext[j] + pin.Force(f, _couple(r, f, M[b]))
         return add
 
     def _tau(self, Q, V, t: float) -> np.ndarray:
