@@ -69,7 +69,7 @@ def missing_library(name: str) -> str | None:
     e = _REGISTRY[name]
     if e.requires and importlib.util.find_spec(e.requires) is None:
         how = f": {e.install}" if e.install else ""
-        return f"engine {name!r} needs the Python module {e.requires!r}, not installed{how}"
+        return f"engine {name!r} needs the {e.requires!r} package, not installed{how}"
     return None
 
 
