@@ -113,9 +113,12 @@ def test_redundant_z_rows_carry_nothing(pin):
             assert np.abs(got - want).max() < PINOCCHIO_EXACT * peak, (mu, ch.name)
 
 
-def test_missing_optional_library_is_skipped_and_explained():
-    """An engine whose optional library is missing: left out of ``--engine all`` with one
-    line, and asked for by name it says how to install it (an ImportError as well)."""
+def test_missing_optional_library_is_skipped_and_explained(capsys):
+    """An engine whose optional library is missing: left out of ``--engine all`` and the
+    report with one line, and asked for by name (``xval compare CASE --engine NAME``) it
+    says how to install it, status 2 (an ImportError as well, for library callers)."""
+    from reports.cli import main
+    from reports.cli_engines import note_skipped_engines
     register_engine("nolib", "sim_models.pinocchio_engine", "PinocchioSession", "test",
                     "no_such_library_xval", "pip install 'linkage-xval[nolib]'")
     try:
@@ -126,5 +129,11 @@ def test_missing_optional_library_is_skipped_and_explained():
             get_engine("nolib")
         with pytest.raises(ImportError):
             get_engine("nolib")
+        note_skipped_engines()
+        err = capsys.readouterr().err.splitlines()
+        assert [ln for ln in err if "nolib" in ln] == [f"xval: note: {why}; skipped"]
+        assert main(["compare", "seed-four-bar", "--engine", "nolib"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"xval: error: {why}"]
     finally:
         _REGISTRY.pop("nolib", None)
