@@ -53,6 +53,9 @@ class FreeStart:
     v_origin: np.ndarray
     x: np.ndarray
     xd: np.ndarray
+    #: whole turns (rad, multiples of 2 pi) from the engines' body angles to the
+    #: reference's (the tree starts within half a turn of its reference pose)
+    turns: np.ndarray | None = None
 
 
 def free_start(tree: SimTree, s0) -> FreeStart:
@@ -77,10 +80,52 @@ def free_start(tree: SimTree, s0) -> FreeStart:
         raise EngineRefusal(f"mechanism {mech.name!r}: the engines' tree cannot take the "
                             "reference's initial pose (body angles differ by "
                             f"{np.max(np.abs(wrap(pth[0] - th))):.3g} rad)")
-    return FreeStart(q, qd, pth[0], pom[0], org[0], vo[0], jx, jxd)
+    turns = 2 * np.pi * np.round((th - pth[0]) / (2 * np.pi))
+    return FreeStart(q, qd, pth[0], pom[0], org[0], vo[0], jx, jxd, turns)
 
 
 # ============================================================================ readout
+def bodies_at(tree: SimTree, q, qd):
+    """``theta, omega`` (1, B), body-frame ``origin, v_origin`` (1, B, 2) of one state in
+    tree coordinates: :meth:`SimTree.propagate` without accelerations, in scalar
+    arithmetic (a harness that applies forces every step calls it per step; ~15x
+    faster than the vectorised one for one row)."""
+    B = len(tree.body_names)
+    th, om = [0.0] * B, [0.0] * B
+    org, vo = [(0.0, 0.0)] * B, [(0.0, 0.0)] * B
+    g = tree.ground
+    th[g] = float(tree.theta_ref[g])
+    org[g] = (float(tree.origin_ref[g][0]), float(tree.origin_ref[g][1]))
+    cos, sin = math.cos, math.sin
+    for i, tj in enumerate(tree.joints):
+        p, c = tj.parent, tj.child
+        cp, sp = cos(th[p]), sin(th[p])
+        wp = om[p]
+        if tj.kind == "hinge":
+            th[c] = th[p] + tj.rel_angle + float(q[i])
+            om[c] = wp + float(qd[i])
+            ax, ay = tj.anchor_parent
+            rx, ry = cp * ax - sp * ay, sp * ax + cp * ay
+            cc, sc = cos(th[c]), sin(th[c])
+            bx, by = tj.anchor_child
+            kx, ky = -(cc * bx - sc * by), -(sc * bx + cc * by)
+            org[c] = (org[p][0] + rx + kx, org[p][1] + ry + ky)
+            vo[c] = (vo[p][0] - wp * ry - om[c] * ky, vo[p][1] + wp * rx + om[c] * kx)
+        else:
+            th[c] = th[p] + tj.rel_angle
+            om[c] = wp
+            cc, sc = cos(th[c]), sin(th[c])
+            ux = cc * tj.axis_child[0] - sc * tj.axis_child[1]
+            uy = sc * tj.axis_child[0] + cc * tj.axis_child[1]
+            a, b = tj.rel_pos
+            rx = cp * a - sp * b + float(q[i]) * ux
+            ry = sp * a + cp * b + float(q[i]) * uy
+            org[c] = (org[p][0] + rx, org[p][1] + ry)
+            vo[c] = (vo[p][0] - wp * ry + float(qd[i]) * ux,
+                     vo[p][1] + wp * rx + float(qd[i]) * uy)
+    return (np.array([th]), np.array([om]), np.array([org]), np.array([vo]))
+
+
 def _rot_rows(theta, r):
     """World vectors (N, 2) of body-frame vectors ``r`` (2,) or (N, 2) at angles (N,)."""
     c, s = np.cos(theta), np.sin(theta)
@@ -188,6 +233,19 @@ class ElementLoads:
         self.x0 = x_offset
         fm = self.fm
         self.any = bool(fm and (fm.springs or fm.dampers or fm.motors))
+        self._x_last: dict[int, float] = {}
+
+    @property
+    def x0(self):
+        return self._x0
+
+    @x0.setter
+    def x0(self, value) -> None:
+        """The joint coordinates at the start (J,): revolute angles are followed
+        continuously from them, step by step (a torsional spring on a joint that turns
+        sees whole turns)."""
+        self._x0 = value
+        self._x_last = {}
 
     def motor_effort(self, t: float) -> float:
         """The sum of the motors' efforts at ``t`` (N m or N); NaN without a motor."""
@@ -196,54 +254,85 @@ class ElementLoads:
             return math.nan
         return float(sum(mo.at(t) for mo in fm.motors))
 
+    def _joint_state(self, k: int, th, om, pt) -> tuple[float, float]:
+        """Joint ``k``'s coordinate (continuous) and rate at one state."""
+        jt = self.tree.mech.joints[k]
+        if isinstance(jt, Revolute):
+            a, b = self.idx[jt.body_a], self.idx[jt.body_b]
+            d = th[b] - th[a]
+            last = self._x_last.get(k, None if self._x0 is None else float(self._x0[k]))
+            if last is not None:
+                d += 2 * math.pi * round((last - d) / (2 * math.pi))
+            self._x_last[k] = d
+            return d, om[b] - om[a]
+        g, sl = self.idx[jt.guide], self.idx[jt.slider]
+        c, s_ = math.cos(th[g] + jt.direction), math.sin(th[g] + jt.direction)
+        (px, py), (pvx, pvy) = pt(sl, jt.point)
+        (ox, oy), (ovx, ovy) = pt(g, jt.origin)
+        dx, dy = px - ox, py - oy
+        return c * dx + s_ * dy, c * (pvx - ovx) + s_ * (pvy - ovy) + om[g] * (c * dy - s_ * dx)
+
     def wrenches(self, theta, omega, origin, v, t: float):
         """``(F (B, 2), M (B,))``: the elements' force on each body and its moment about
         the body's centre of mass (engine mass properties: ``tree.com``), N and N m, at
-        one state (arrays with one row) and time ``t``."""
+        one state (arrays with one row) and time ``t`` (scalar arithmetic: called every
+        step by a harness that applies them)."""
         st, mech, fm = self.tree, self.tree.mech, self.fm
         B = len(st.body_names)
         F, M = np.zeros((B, 2)), np.zeros(B)
         if not self.any:
             return F, M
+        th, om = theta[0].tolist(), omega[0].tolist()
+        org, vo = origin[0].tolist(), v[0].tolist()
+        cos, sin = math.cos, math.sin
 
-        def at(b, P, f):  # force f at world point P on body b
-            G = origin[0, b] + _rot_rows(theta[0:1, b], st.com[b])[0]
-            F[b] += f
-            M[b] += (P[0] - G[0]) * f[1] - (P[1] - G[1]) * f[0]
+        def pt(b, name):  # world position and velocity of a named point of body b
+            px, py = mech.bodies[b].points[name]
+            c, s_ = cos(th[b]), sin(th[b])
+            rx, ry = c * px - s_ * py, s_ * px + c * py
+            return ((org[b][0] + rx, org[b][1] + ry),
+                    (vo[b][0] - om[b] * ry, vo[b][1] + om[b] * rx))
 
-        def pt(b, name):
-            return _point(st, theta, omega, origin, v, b, mech.bodies[b].points[name])
+        def at(b, P, fx, fy):  # force (fx, fy) at world point P on body b
+            cx, cy = st.com[b]
+            c, s_ = cos(th[b]), sin(th[b])
+            gx, gy = org[b][0] + c * cx - s_ * cy, org[b][1] + s_ * cx + c * cy
+            F[b, 0] += fx
+            F[b, 1] += fy
+            M[b] += (P[0] - gx) * fy - (P[1] - gy) * fx
 
-        x, xd = joint_coordinates(st, theta, omega, origin, v, self.x0)
-        effort = np.zeros(len(mech.joints))
+        effort: dict[int, float] = {}
         for el in fm.springs + fm.dampers:
             if isinstance(el, PointSpring | PointDamper):
                 a, b = self.idx[el.body_a], self.idx[el.body_b]
                 (ra, va), (rb, vb) = pt(a, el.point_a), pt(b, el.point_b)
-                d = (rb - ra)[0]
-                L = math.hypot(*d)
-                u = d / L
+                dx, dy = rb[0] - ra[0], rb[1] - ra[1]
+                L = math.hypot(dx, dy)
+                ux, uy = dx / L, dy / L
                 tension = (el.stiffness * (L - el.free_length) if isinstance(el, PointSpring)
-                           else el.coefficient * float(u @ (vb - va)[0]))
-                at(a, ra[0], tension * u)
-                at(b, rb[0], -tension * u)
+                           else el.coefficient * (ux * (vb[0] - va[0]) + uy * (vb[1] - va[1])))
+                at(a, ra, tension * ux, tension * uy)
+                at(b, rb, -tension * ux, -tension * uy)
             else:
                 k = self.jidx[el.joint]
-                effort[k] += (-el.stiffness * (x[0, k] - el.free_value)
-                              if isinstance(el, JointSpring) else -el.coefficient * xd[0, k])
+                x, xd = self._joint_state(k, th, om, pt)
+                effort[k] = effort.get(k, 0.0) + (
+                    -el.stiffness * (x - el.free_value) if isinstance(el, JointSpring)
+                    else -el.coefficient * xd)
         for mo in fm.motors:
-            effort[self.jidx[mo.joint]] += mo.at(t)
-        for k in np.flatnonzero(effort):
-            jt, e = mech.joints[k], effort[k]
+            k = self.jidx[mo.joint]
+            effort[k] = effort.get(k, 0.0) + mo.at(t)
+        for k, e in effort.items():
+            jt = mech.joints[k]
             if isinstance(jt, Revolute):
                 M[self.idx[jt.body_b]] += e
                 M[self.idx[jt.body_a]] -= e
                 continue
-            g, s = self.idx[jt.guide], self.idx[jt.slider]
-            u = _rot_rows(theta[0:1, g], (math.cos(jt.direction), math.sin(jt.direction)))[0]
-            P, _ = pt(s, jt.point)
-            at(s, P[0], e * u)
-            at(g, P[0], -e * u)
+            g, sl = self.idx[jt.guide], self.idx[jt.slider]
+            ux, uy = cos(th[g] + jt.direction), sin(th[g] + jt.direction)
+            P, _ = pt(sl, jt.point)
+            at(sl, P, e * ux, e * uy)
+            at(g, P, -e * ux, -e * uy)
         F[st.ground], M[st.ground] = 0.0, 0.0
         return F, M
 
@@ -277,6 +366,9 @@ class FreeSession(ABC):
     integrator_name: ClassVar[str] = ""
     #: which elements the engine builds itself and which the harness applies (README)
     native: ClassVar[str] = ""
+    #: "engine" when :attr:`FreeRead.motor_effort` is the engine's own reading (an
+    #: actuator's force), "harness" when it is the value the harness applied
+    motor_effort_source: ClassVar[str] = "harness"
 
     def __init__(self, tree: SimTree, settings: EngineSettings | None = None):
         self.tree = tree
@@ -358,7 +450,8 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
         if reason is not None:
             t_fail = float(t)
             break
-        th[k], om[k], al[k], org[k], vo[k] = r.theta, r.omega, r.alpha, r.origin, r.v_origin
+        th[k], om[k], al[k], org[k], vo[k] = (r.theta + start.turns, r.omega, r.alpha,
+                                              r.origin, r.v_origin)
         jf[k], eff[k] = r.joint_force, r.motor_effort
     x, xd, gap, T, V = free_readout(st, th, om, org, vo, start.x)
     has_motor = bool(mech.motion and mech.motion.motors)
@@ -372,6 +465,7 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
         timestep=max((h for h, _ in plan), default=float(session.settings.timestep)),
         integrator=session.integrator(), notes=tuple(session.notes),
         extra={"native": session.native, "energy_scale": scale, "E0": e0,
+               "motor_effort_source": session.motor_effort_source,
                "start_q": start.q, "start_qd": start.qd})
 
 
@@ -447,6 +541,6 @@ def _in_subtree(tree: SimTree, b: int, root: int) -> bool:
     return False
 
 
-__all__ = ["ElementLoads", "FreeRead", "FreeSession", "FreeStart", "energies",
+__all__ = ["ElementLoads", "FreeRead", "bodies_at", "FreeSession", "FreeStart", "energies",
            "energy_scale", "free_readout", "free_start", "joint_coordinates", "drive_free",
            "step_plan", "subtree_correction", "time_free_steps"]

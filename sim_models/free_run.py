@@ -24,7 +24,14 @@ SI, world axes):
   states with the same masses, springs and gravity as the reference (one function
   for every engine), so energy drift is the engine's, not a convention's;
 * ``motor_effort_engine`` (N,) or None: the engine's own effort on the motor joint
-  (N m or N), unjudged where the engine applies the harness's value.
+  (N m or N), unjudged where the engine applies the harness's value;
+* ``extra`` (filled by :func:`sim_models.free_base.drive_free`): ``native`` (which force
+  elements are the engine's own, which the harness applies), ``energy_scale`` and
+  ``E0`` (J: the reference's scale and initial energy, the drift's yardstick),
+  ``motor_effort_source`` (``"engine"``: an actuator's own reading; ``"harness"``: the
+  value applied), ``start_q``/``start_qd`` (the released state in tree coordinates).
+
+Runs come from :func:`sim_models.free_engine.run_free`.
 """
 
 from __future__ import annotations

@@ -57,16 +57,31 @@ class MujocoFreeSettings(EngineSettings):
     """MuJoCo's recommended free-motion settings (the fields of
     :class:`sim_models.mjcf.MujocoSettings` that a released model uses).
 
-    Evidence (``benchmarks/free_engine_grid.py``, this machine, 2 shared cores): see the
-    README, "Free motion in the engines".  ``timestep`` 1e-3 s with RK4: A01 over 20 s
-    and the seed four-bar released under gravity keep their error well inside 1e-4 of
-    the range; the loop is held by the same near-hard Baumgarte-stabilised ``connect``
-    as the prescribed runs (``solref`` a 10 ms critically damped time constant,
-    ``invweight_scale`` 1e-3); a stiffer ``solref`` (below ~2 timesteps) makes the
-    loop's correction itself the stiff part of the system.
+    Evidence (``benchmarks/free_engine_grid.py grid``; worst joint-coordinate error
+    over the run relative to its range, energy drift relative to the energy scale,
+    stepping CPU s per simulated s on this shared 2-core machine, noisy to ~2x):
+
+    ======================  ===========================  ============================
+    integrator, timestep    A01, 5 s                     seed four-bar released, 2 s
+    ======================  ===========================  ============================
+    RK4 2e-3                2.3e-11, 0.03                7.5e-5, drift 2.5e-7, 0.04
+    RK4 1e-3                1.9e-12, 0.05-0.10           1.1e-5, drift 3.3e-8, 0.07-0.10
+    RK4 5e-4                3.7e-13, 0.14                9.6e-7, drift 2.5e-9, 0.14
+    RK4 2.5e-4              2.9e-13, 0.23                1.6e-6, drift 2.2e-9, 0.33
+    implicitfast/Euler 1e-3 6.8e-4, drift 1.3e-3         0.68, drift 3.2e-3, gap 1.3e-3
+    implicitfast/Euler 2.5e-4 1.8e-4                     0.17, drift 8.0e-4
+    ======================  ===========================  ============================
+
+    ``implicitfast`` and ``Euler`` give the same numbers (no velocity-dependent force
+    in these models: both are semi-implicit Euler) and are first order.  At RK4 1e-3 s
+    the loop's ``solref`` time constant: 3 ms 9.1e-5, 10 ms 1.1e-5, 30 ms 8.5e-6,
+    100 ms 2.1e-5; ``invweight_scale`` 1 (stock MuJoCo) 1.6e-3, 1e-3 1.1e-5, 1e-5
+    1.2e-5.  RK4 at 5e-4 s: below that the error stops falling (the soft constraint's
+    own error), so a smaller step only costs.  A01 has no loop: 1e-12 at any RK4 step.
+    ``impratio`` and ``cone`` act on friction only (contacts are off): not settings here.
     """
 
-    timestep: float = 1e-3
+    timestep: float = 5e-4
     integrator: str = "RK4"
     solref: tuple[float, float] = direct_solref(1e-2)
     solimp: tuple[float, float, float, float, float] = HARD_SOLIMP
@@ -96,6 +111,7 @@ class MujocoFreeSession(MujocoSession, FreeSession):
 
     name = "mujoco"
     settings_class = MujocoFreeSettings
+    motor_effort_source = "engine"
     native = ("gravity, point springs/dampers (spatial tendons), joint springs/dampers "
               "(fixed tendons), motors (motor actuator on a fixed tendon): MuJoCo's own; "
               "constant loads: harness (xfrc_applied each step)")

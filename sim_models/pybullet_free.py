@@ -18,14 +18,17 @@ second order; the prescribed runs step once more instead, which a free run canno
 undo).  Tree-joint forces by Newton-Euler from these accelerations and the loops'
 constraint forces (:func:`sim_models.newton_euler.reconstruct`), with the
 harness-applied element forces taken out of each subtree
-(:func:`sim_models.free_base.subtree_correction`).
+(:func:`sim_models.free_base.subtree_correction`).  At t = 0, before any step, PyBullet
+has no acceleration and no constraint force (it reads 0): alpha and the joint forces of
+that sample are NaN (not measured).
 
-Start: ``resetJointState`` to the released state.  PyBullet's first step after a reset
-ignores the loop constraints (measured in the prescribed runs; they pre-roll from an
-earlier analytic state, which a free run does not have).  Here the first step after
-the reset is a **1e-9 s step** (``first_step``), which absorbs that quirk while moving
-the state by ~1e-9 of a step's change; its effect is measured in the README (Free
-motion in the engines) and the step counts in ``steps``.
+Start: ``resetJointState`` to the released state, motors off.  The prescribed runs
+pre-roll because PyBullet's first step after a reset ignores the loop under the
+velocity motor; released, with the motors off, no such effect was measured: the seed
+four-bar released at 15 rad/s (0.2 s, 1 ms samples) has the same x error at 1 ms
+(2.89e-6 of range), the same alpha error at 1, 2, 3 ms (1.38e-4, 1.32e-4, 1.25e-4 of
+range) and the same loop gap (1.2e-7 m) with a full first step and with a 1e-9 s first
+step (``first_step``, default 0: none).
 """
 
 from __future__ import annotations
@@ -39,7 +42,14 @@ import numpy as np
 
 from . import ranges
 from .engine_base import EngineSettings
-from .free_base import ElementLoads, FreeRead, FreeSession, FreeStart, subtree_correction
+from .free_base import (
+    ElementLoads,
+    FreeRead,
+    FreeSession,
+    FreeStart,
+    bodies_at,
+    subtree_correction,
+)
 from .newton_euler import reconstruct
 from .pybullet_engine import PybulletSettings, PybulletSim
 from .tree import SimTree
@@ -59,11 +69,26 @@ class PybulletFreeSettings(EngineSettings):
     max_joint_velocity
         PyBullet's speed clamp of every joint, rad/s or m/s.
     first_step
-        Length of the first step after the reset, s (0: a full step; see the module
-        docstring).
+        Length of an extra first step after the reset, s (0: none; measured no effect,
+        see the module docstring).
 
-    Evidence: README, "Free motion in the engines" (the grid of
-    ``benchmarks/free_engine_grid.py``).
+    Evidence (``benchmarks/free_engine_grid.py grid``; worst joint-coordinate error
+    relative to its range, energy drift relative to the energy scale, stepping CPU s
+    per simulated s on this shared 2-core machine):
+
+    ========  ===========================  ==================================
+    timestep  A01, 5 s                     seed four-bar released, 2 s
+    ========  ===========================  ==================================
+    4e-4      2.8e-4, drift 1.4e-6, 0.14   0.69, drift 1.4e-3, 0.18
+    1e-4      7.1e-5, drift 9.0e-8, 0.32   0.25, drift 3.6e-4, 0.45
+    2.5e-5    1.8e-5, drift 5.6e-9, 1.2    0.066, drift 8.9e-5, 1.6
+    ========  ===========================  ==================================
+
+    The error is first order in the step (semi-implicit Euler) and nothing else moves
+    it: ``erp`` 0.2 / 0.8 / 1, 100 solver iterations and ``first_step`` change the
+    seed's error by < 1% (the loop gap stays < 4e-6 of the size).  1e-4 s is the
+    cost/accuracy compromise; an accuracy of 1e-3 of range over 2 s would need ~1e-7 s
+    (about 500 CPU s per simulated s).
     """
 
     timestep: float = 1e-4
@@ -71,7 +96,7 @@ class PybulletFreeSettings(EngineSettings):
     residual_threshold: float = 1e-30
     erp: float = 1.0
     max_joint_velocity: float = 1e4
-    first_step: float = 1e-9
+    first_step: float = 0.0
 
     engine_name: ClassVar[str] = "pybullet"
     RANGES: ClassVar[Mapping[str, object]] = {
@@ -118,16 +143,10 @@ class PybulletFreeSession(FreeSession):
             self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
             self.h = h
 
-    def _bodies(self, q, qd):
-        st = self.tree
-        nt = len(st.joints)
-        th, om, _, org, vo, _ = st.propagate(q[None], qd[None], np.zeros((1, nt)))
-        return th, om, org, vo
-
     def _apply_elements(self, t: float) -> None:
         sim, p = self.sim, self.sim.p
         q, v, _, _ = sim.states()
-        th, om, org, vo = self._bodies(q, v)
+        th, om, org, vo = bodies_at(self.tree, q, v)
         F, M = self.elements.wrenches(th, om, org, vo, t)
         st = self.tree
         for b in range(len(st.body_names)):
@@ -203,7 +222,11 @@ class PybulletFreeSession(FreeSession):
         for k, jt in enumerate(st.mech.joints):
             if jt.name in F:
                 force[k] = F[jt.name][0]
-        if self.elements.any:
+        if len(vh) < 2:
+            # before the first step PyBullet has no constraint force (it reads 0) and no
+            # acceleration: not measured
+            force[:] = np.nan
+        elif self.elements.any:
             Fe, _ = self.elements.wrenches(th, om, org, vo, t)
             force = subtree_correction(st, force, Fe)
         eff = self.elements.motor_effort(t)
