@@ -39,6 +39,8 @@ def cmd_compare(args) -> int:
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
+    if args.engine == "all":
+        note_skipped_engines()
     settings = settings_for(engines, list(args.set or ()),
                             {"--timestep": ("timestep", args.timestep),
                              "--integrator": ("integrator", args.integrator)})
@@ -141,10 +143,19 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                   f"dt {r.timestep:.3g} s")
 
 
+def note_skipped_engines() -> None:
+    """One stderr line per registered engine whose optional library is missing (what
+    ``--engine all`` and the report leave out, and how to install it)."""
+    from sim_models.registry import skipped_engines
+    for why in skipped_engines().values():
+        print(f"xval: note: {why}; skipped", file=sys.stderr)
+
+
 def cmd_report(args) -> int:
     from analytic.errors import OutputError
 
     from .report_cmd import run
+    note_skipped_engines()  # the report runs every installed engine
     try:
         return run(args)
     except OSError as e:  # the output folder was checked at --out; a race or a full disk

@@ -180,6 +180,12 @@ def _scene_task(quick: bool) -> dict:
 
 
 # ----------------------------------------------------------------------------- metadata
+#: Engines whose library's distribution has another name (PyPI ``pin`` installs the
+#: ``pinocchio`` module; its cmeel layout hides the module from
+#: ``importlib.metadata.packages_distributions``).
+DISTRIBUTIONS = {"pinocchio": "pin"}
+
+
 def metadata(cfg: ReportConfig, engines) -> dict:
     from importlib.metadata import PackageNotFoundError, version
     cpu = platform.processor() or platform.machine()
@@ -193,7 +199,7 @@ def metadata(cfg: ReportConfig, engines) -> dict:
     vers = {}
     for pkg in ("numpy", "pandas", "matplotlib", *engines, "linkage-xval"):
         try:
-            vers[pkg] = version(pkg)
+            vers[pkg] = version(DISTRIBUTIONS.get(pkg, pkg))
         except PackageNotFoundError:
             vers[pkg] = "not installed"
     try:

@@ -179,7 +179,21 @@ def grid_plan(case: str, quick: bool) -> list[dict]:
                              label=f"rho{rho:g}/{spr}",
                              settings=dict(steps_per_rev=spr, spectral_radius=rho,
                                            timestep=T / spr)))
+    plan += _pinocchio_plan(T, quick)
     return plan
+
+
+def _pinocchio_plan(T: float, quick: bool) -> list[dict]:
+    """Pinocchio's family (RK4 steps per revolution x Baumgarte, its own evidence for
+    the recommended 180 / 0.05), when its optional library is installed."""
+    from sim_models.registry import available_engines
+    if "pinocchio" not in available_engines():
+        return []
+    spr_all = (90, 180, 360) if quick else (45, 90, 180, 360, 720)
+    return [dict(engine="pinocchio", family=f"baumgarte={b:g}", integrator="rk4", spr=spr,
+                 label=f"rk4/b{b:g}/{spr}",
+                 settings=dict(steps_per_rev=spr, baumgarte=b, timestep=min(T / spr, 0.1)))
+            for b in (0.0, 0.05) for spr in spr_all]
 
 
 # ============================================================================ errors

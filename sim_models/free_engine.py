@@ -20,7 +20,7 @@ from .engine_base import compile_linkage
 from .engine_settings import EngineRefusal, EngineSettings
 from .free_base import FreeSession, drive_free
 from .free_run import FreeEngineRun, FreeRequest
-from .registry import UnknownEngineError
+from .registry import UnknownEngineError, skipped_engines
 from .tree import SimTree
 
 #: engine name -> (module, free session class)
@@ -28,12 +28,14 @@ FREE_SESSIONS: dict[str, tuple[str, str]] = {
     "mujoco": ("sim_models.mujoco_free", "MujocoFreeSession"),
     "pybullet": ("sim_models.pybullet_free", "PybulletFreeSession"),
     "exudyn": ("sim_models.exudyn_free", "ExudynFreeSession"),
+    "pinocchio": ("sim_models.pinocchio_free", "PinocchioFreeSession"),
 }
 
 
 def free_engine_names() -> tuple[str, ...]:
-    """The engines with a free-motion run."""
-    return tuple(FREE_SESSIONS)
+    """The engines with a free-motion run (an optional engine whose library is not
+    installed is left out: :func:`sim_models.registry.skipped_engines`)."""
+    return tuple(n for n in FREE_SESSIONS if n not in skipped_engines())
 
 
 def free_session_class(engine: str) -> type[FreeSession]:

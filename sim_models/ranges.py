@@ -162,6 +162,25 @@ MODES = Choice(("run", "instantaneous"))
 STEPS_PER_REV = Range(1, 1_000_000, whole=True,
                       why="1e6 steps a revolution run about a minute per revolution")
 
+#: Pinocchio's Baumgarte corrector per step, ``omega h`` (``Kp = omega^2``, ``Kd = 2 omega``):
+#: 0 switches it off; above 1 the correction acts faster than one step, which an
+#: explicit step cannot follow (it overshoots).
+BAUMGARTE_PER_STEP = Range(0, 1, why="omega h of a critically damped correction; above 1 "
+                           "it is faster than a step")
+#: Pinocchio's proximal regularisation: 0 leaves the planar loop's zero z row of its 3D
+#: point constraints unregularised; above 1 the multipliers move by less than the
+#: residual each iteration (it stalls).
+PROX_MU = Range(0, 1, lo_open=True, why="the proximal weight; 0 leaves the redundant z "
+                "row singular")
+#: Accuracy of Pinocchio's proximal iterations: below 1e-15 no double-precision solve
+#: can meet it, above 1e-3 the multipliers are off by more than the verdict tolerance.
+PROX_ACCURACY = Range(1e-15, 1e-3, why="double round-off below, the verdict tolerance "
+                      "above")
+#: Proximal iterations per dynamics evaluation (each one a back substitution).
+PROX_MAX_ITER = Range(1, 1000, whole=True, why="each iteration is a back substitution "
+                      "per dynamics evaluation")
+
 __all__ = ["CHORDS", "MAX_REVOLUTIONS", "MAX_SAMPLES", "MAX_SPEED_ERROR", "MAX_TIMESTEP",
            "MAX_VIOLATION", "MIN_TIMESTEP", "MODES", "REVOLUTIONS", "SAMPLES", "STATES",
-           "FLAG", "STEPS_PER_REV", "TIMESTEP", "Choice", "Flag", "Range", "first_problem"]
+           "FLAG", "STEPS_PER_REV", "BAUMGARTE_PER_STEP", "PROX_MU", "PROX_ACCURACY",
+           "PROX_MAX_ITER", "TIMESTEP", "Choice", "Flag", "Range", "first_problem"]

@@ -24,7 +24,7 @@ from sim_models.registry import UnknownEngineError, engine_names, get_engine
 from .conftest import ENGINE_RELATIVE, assert_run_within
 
 ROOT = Path(__file__).resolve().parents[2]
-ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn"}
+ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn", "pinocchio"}
 BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs"
 
 
