@@ -31,6 +31,11 @@ class EngineEntry:
     module: str
     session: str
     description: str = ""
+    #: the engine library's top-level module when it is an optional extra ("" when it is
+    #: a dependency): found without importing it (:func:`missing_library`)
+    requires: str = ""
+    #: how to install that library (the message of an explicit ``--engine NAME``)
+    install: str = ""
 
 
 #: The built-in engines, in the order ``--engine all`` runs them.
@@ -41,6 +46,9 @@ BUILTIN: tuple[EngineEntry, ...] = (
                 "PyBullet via URDF: point-to-point loop constraints, velocity motor"),
     EngineEntry("exudyn", "sim_models.exudyn_engine", "ExudynSession",
                 "Exudyn: index-3 DAE, reactions from the Lagrange multipliers"),
+    EngineEntry("mujoco_warp", "sim_models.mujoco_warp_engine", "MujocoWarpSession",
+                "MuJoCo Warp: the MuJoCo model in float32 Warp kernels (CPU or GPU)",
+                "mujoco_warp", "pip install 'linkage-xval[warp]'"),
 )
 
 _REGISTRY: dict[str, EngineEntry] = {e.name: e for e in BUILTIN}
@@ -48,6 +56,26 @@ _REGISTRY: dict[str, EngineEntry] = {e.name: e for e in BUILTIN}
 
 class UnknownEngineError(SimModelError):
     """An engine name that is not registered (the message lists the known ones)."""
+
+
+class EngineUnavailableError(SimModelError, ImportError):
+    """A registered engine whose optional library is not installed (the message says how
+    to install it).  Also an ``ImportError``, as a missing library always was."""
+
+
+def missing_library(name: str) -> str | None:
+    """Why engine ``name`` cannot run here (its optional library is not installed: one
+    line with the install command), or None when it can.  Nothing is imported."""
+    e = _REGISTRY[name]
+    if e.requires and importlib.util.find_spec(e.requires) is None:
+        how = f": {e.install}" if e.install else ""
+        return f"engine {name!r} needs the {e.requires!r} package, not installed{how}"
+    return None
+
+
+def skipped_engines() -> dict[str, str]:
+    """Registered engines ``--engine all`` skips, each with its one-line reason."""
+    return {n: why for n in _REGISTRY if (why := missing_library(n)) is not None}
 
 
 @dataclass(frozen=True)
@@ -70,9 +98,11 @@ class Engine:
         return self.settings_class.from_overrides(overrides, self.name)
 
 
-def register_engine(name: str, module: str, session: str, description: str = "") -> None:
-    """Register (or replace) an engine: ``module`` must define the class ``session``."""
-    _REGISTRY[name] = EngineEntry(name, module, session, description)
+def register_engine(name: str, module: str, session: str, description: str = "",
+                    requires: str = "", install: str = "") -> None:
+    """Register (or replace) an engine: ``module`` must define the class ``session``;
+    ``requires`` names an optional library's module (``install``: how to get it)."""
+    _REGISTRY[name] = EngineEntry(name, module, session, description, requires, install)
 
 
 def engine_names() -> tuple[str, ...]:
@@ -81,19 +111,25 @@ def engine_names() -> tuple[str, ...]:
 
 
 def available_engines() -> tuple[str, ...]:
-    """Registered engines whose module is present (found without importing it or its
-    engine library), in registry order: what ``--engine all`` runs."""
-    return tuple(n for n, e in _REGISTRY.items() if importlib.util.find_spec(e.module))
+    """Registered engines whose module is present and whose optional library is
+    installed (found without importing either), in registry order: what ``--engine all``
+    runs (:func:`skipped_engines` says why the others are left out)."""
+    return tuple(n for n, e in _REGISTRY.items()
+                 if importlib.util.find_spec(e.module) and missing_library(n) is None)
 
 
 def get_engine(name: str) -> Engine:
-    """The engine called ``name`` (imports its module; a missing engine library raises
-    :class:`~sim_models.tree.SimModelError` from the module's own import check)."""
+    """The engine called ``name`` (imports its module; a missing optional library raises
+    :class:`EngineUnavailableError` saying how to install it, any other missing engine
+    library :class:`~sim_models.tree.SimModelError` from the module's own import check)."""
     try:
         entry = _REGISTRY[str(name).lower()]
     except KeyError:
         raise UnknownEngineError(f"unknown engine {name!r}; engines: "
                                  f"{', '.join(engine_names())}") from None
+    why = missing_library(entry.name)
+    if why is not None:
+        raise EngineUnavailableError(why)
     mod = importlib.import_module(entry.module)
     cls = getattr(mod, entry.session)
     return Engine(entry, cls)
@@ -195,7 +231,7 @@ def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, ob
     return out
 
 
-__all__ = ["BUILTIN", "Engine", "EngineEntry", "UnknownEngineError", "available_engines",
-           "engine_names",
+__all__ = ["BUILTIN", "Engine", "EngineEntry", "EngineUnavailableError", "UnknownEngineError",
+           "available_engines", "engine_names", "missing_library", "skipped_engines",
            "get_engine", "make_settings", "register_engine", "settings_from_options",
            "split_overrides"]
