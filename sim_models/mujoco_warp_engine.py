@@ -102,6 +102,8 @@ class MujocoWarpSettings(EngineSettings):
 
     Parameters
     ----------
+    steps_per_rev
+        The step is the smaller of ``timestep`` and one revolution / ``steps_per_rev``.
     timestep, integrator, solref, solimp, iterations, armature, invweight_scale
         As :class:`sim_models.mjcf.MujocoSettings` (the same model is built).
     tolerance
@@ -113,11 +115,17 @@ class MujocoWarpSettings(EngineSettings):
         Update ``cvel``/``cdof_dot`` at the present state before each step and sample
         (:meth:`MujocoWarpSession._fresh_velocities`: MuJoCo Warp 4.0.0 builds the loop
         rows' ``Jdot v`` from the previous call's velocities).  ``False``: stock.
+    readout
+        ``"warp"``: the joint forces from Warp's own ``rne_postconstraint`` (float32
+        ``cfrc_int``), as a GPU user reads them; ``"host"``: Warp's accelerations and
+        constraint forces read out in float64 by the host MuJoCo
+        (:meth:`MujocoWarpSession._raw_host`).
     device
         ``"auto"`` (first CUDA device if any, else the CPU), ``"cpu"`` or ``"cuda"``.
     """
 
-    timestep: float = 2.5e-4
+    timestep: float = 1e-2
+    steps_per_rev: int = 576
     integrator: str = "RK4"
     solver: str = "Newton"
     solref: tuple[float, float] = direct_solref(1e-2)
@@ -127,21 +135,28 @@ class MujocoWarpSettings(EngineSettings):
     armature: float = 1e8
     invweight_scale: float = 1e-2
     fresh_jdotv: bool = True
+    readout: str = "host"
     device: str = "auto"
 
     engine_name: ClassVar[str] = "mujoco_warp"
     RANGES: ClassVar[Mapping[str, object]] = {
         **{k: MujocoSettings.RANGES[k] for k in ("timestep", "solref", "solimp", "iterations",
                                                  "tolerance", "armature", "invweight_scale")},
+        "steps_per_rev": ranges.STEPS_PER_REV,
         "integrator": ranges.Choice(_INTEGRATORS, fold=True),
         "solver": ranges.Choice(("Newton", "CG"), fold=True),
         "fresh_jdotv": ranges.FLAG,
+        "readout": ranges.Choice(("warp", "host")),
         "device": ranges.Choice(("auto", "cpu", "cuda")),
     }
 
     def extra_problem(self) -> tuple[str, str] | None:
         """solref: as :meth:`MujocoSettings.extra_problem`."""
         return self.mujoco_settings().extra_problem()
+
+    def max_step(self, plan) -> float:
+        """The smaller of ``timestep`` and one revolution / ``steps_per_rev`` (s)."""
+        return min(float(self.timestep), plan.rev_time / int(self.steps_per_rev))
 
     def mujoco_settings(self) -> MujocoSettings:
         """The :class:`MujocoSettings` of the same model (DIAGEXACT off, minimal scene)."""
@@ -153,7 +168,8 @@ class MujocoWarpSettings(EngineSettings):
 
     def describe(self) -> str:
         return (f"MuJoCo Warp (float32, device {self.device}) {self.integrator} "
-                f"dt<={self.timestep:g} s, {self.solver}, solref={self.solref}, "
+                f"dt<={self.timestep:g} s, steps/rev<={self.steps_per_rev}, {self.solver}, "
+                f"solref={self.solref}, "
                 f"solimp={self.solimp}, iterations={self.iterations}, "
                 f"tolerance={self.tolerance:g}, armature={self.armature:g}, "
                 f"invweight_scale={self.invweight_scale:g}")
@@ -360,6 +376,33 @@ class MujocoWarpSession(MujocoSession):
 
     # -- readout ------------------------------------------------------------------
     def _raw(self, a_prescribed: float) -> tuple:
+        """The raw record (:meth:`_raw_warp` or :meth:`_raw_host`, ``settings.readout``)."""
+        if self.settings.readout == "host":
+            return self._raw_host(a_prescribed)
+        return self._raw_warp(a_prescribed)
+
+    def _raw_host(self, a_prescribed: float) -> tuple:
+        """Warp's solution (``qpos, qvel, qacc`` and the constraint forces ``efc.force``)
+        read out in float64 by the host MuJoCo: its constraint rows rebuilt at Warp's
+        state (``mj_fwdPosition``, ``mj_fwdVelocity``, the same rows in the same order),
+        Warp's forces and accelerations put in, ``mj_rnePostConstraint``."""
+        mj, m, h, d = self.mj, self.model, self.data, self.wd
+        h.qpos[:] = d.qpos.numpy()[0]
+        h.qvel[:] = d.qvel.numpy()[0]
+        mj.mj_fwdPosition(m, h)
+        mj.mj_fwdVelocity(m, h)
+        n = int(d.nefc.numpy()[0])
+        if n != h.nefc:
+            return self._raw_warp(a_prescribed)  # rows differ: Warp's own readout
+        h.efc_force[:] = d.efc.force.numpy()[0, :n]
+        h.qacc[:] = d.qacc.numpy()[0]
+        mj.mj_rnePostConstraint(m, h)
+        effort = float(h.cdof[self._drive_dof] @ h.cfrc_int[self._drive_body])
+        return (h.qpos.copy(), h.qvel.copy(), h.qacc.copy(), h.cfrc_int.copy(),
+                h.subtree_com.copy(), h.efc_type[:n].copy(), h.efc_id[:n].copy(),
+                h.efc_force[:n].copy(), a_prescribed, effort)
+
+    def _raw_warp(self, a_prescribed: float) -> tuple:
         """:meth:`MujocoSession._raw`'s arrays, from Warp's world 0 (float32 made
         float64), plus the drive's effort along its dof, ``cdof . cfrc_int`` of the
         driven body (N m or N)."""

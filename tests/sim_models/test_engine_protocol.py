@@ -21,12 +21,12 @@ from sim_models.engine_base import EngineRefusal, SettingsError, plan_samples
 from sim_models.engines import rerun, run
 from sim_models.registry import UnknownEngineError, engine_names, get_engine, missing_library
 
+from .conftest import ENGINE_RELATIVE, assert_run_within
+
 #: every registered engine; one whose optional library is missing is skipped, saying so
 ENGINES = [pytest.param(n, marks=pytest.mark.skipif(missing_library(n) is not None,
                                                     reason=str(missing_library(n))))
            for n in engine_names()]
-
-from .conftest import ENGINE_RELATIVE, assert_run_within
 
 ROOT = Path(__file__).resolve().parents[2]
 ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn"}

@@ -63,7 +63,9 @@ def test_run_agrees_with_mujoco_on_the_same_model():
     mech = load_case("seed-four-bar")
     s = MujocoWarpSettings()
     w = run(mech, "mujoco_warp", s, revolutions=2, samples=36)
-    m = run(mech, "mujoco", s.mujoco_settings(), revolutions=2, samples=36)
+    same_step = s.mujoco_settings().with_overrides({"timestep": w.timestep})
+    m = run(mech, "mujoco", same_step, revolutions=2, samples=36)
+    assert m.timestep == pytest.approx(w.timestep)
     assert w.ok and m.ok
     for a, b in ((w.alpha, m.alpha), (w.drive_effort, m.drive_effort),
                  (w.joint_force, m.joint_force)):
@@ -80,3 +82,25 @@ def test_stale_jdotv_workaround_is_what_closes_the_fast_loop():
             samples=36)
     assert not r.ok and "loop violation" in r.reason
 
+
+
+def test_report_states_the_precision_beside_the_verdict():
+    """The verdict rows carry the engine's precision; a float32 verdict failed at a
+    tolerance below its floor says it is a precision limit (tolerance 1e-6, under the
+    measured floor 3.6e-5 of the seed slider-crank)."""
+    from reports.compare import compare_run
+    from reports.console import verdict_table as console_table
+    from reports.report_tables import FLOAT32_NOTE, summary_table, verdict_table
+    mech = load_case("seed-slider-crank")
+    results = []
+    for engine in ("mujoco_warp", "mujoco"):
+        r = run(mech, engine, revolutions=2, samples=36)
+        results.append({"case": mech.name, "engine": engine, "run": r,
+                        "comparisons": compare_run(r, mech, 1e-6)})
+    summary = summary_table(verdict_table(results))
+    rows = {d["engine"]: d for d in summary.to_dict("records")}
+    assert rows["mujoco_warp"]["precision"] == "float32"
+    assert rows["mujoco"]["precision"] == "float64"
+    assert rows["mujoco_warp"]["verdict"] == "FAIL"
+    assert rows["mujoco_warp"]["note"] == FLOAT32_NOTE
+    assert any("mujoco_warp (float32)" in line for line in console_table(summary, 200))
