@@ -100,6 +100,28 @@ _SOLVERS = {"newton": "mjSOL_NEWTON", "cg": "mjSOL_CG"}
 class MujocoWarpSettings(EngineSettings):
     """Settings of the MuJoCo model run by MuJoCo Warp (float32; evidence below).
 
+    Evidence (2 revolutions, 36 samples of the 2nd, worst error / peak over
+    accelerations, pin forces and drive effort; 2-core CPU, Warp's CPU device):
+
+    * **steps_per_rev 576** (``timestep`` only a 10 ms cap): float32 ``qpos`` rounds
+      every step, so the floor grows with the step count, not with the step: seed
+      four-bar RK4, one revolution, 431 / 863 / 1691 / 4211 steps: 5.9e-5 / 6.1e-5 /
+      2.8e-4 / 7.0e-4.  Over 144 / 288 / 576 steps a revolution (RK4, float32 readout):
+      hibbeler-16-121 1.7e-2 / 1.1e-3 / 3.3e-4, six-bar 1.1e-3 / 4.9e-4 / 6.6e-4,
+      seed-four-bar 3.8e-4 / 2.8e-4 / 2.6e-4, inverted-slider-crank 4.8e-4 / 4.4e-4 /
+      5.3e-4, seed-slider-crank 8.4e-5 / 8.9e-5 / 2.8e-4.  At 576 every built-in case but
+      hibbeler-two-inclines (1.1e-3) is within 1e-3 (README, "MuJoCo Warp").
+    * **RK4** (with ``fresh_jdotv``): Euler at dt 2.5e-4 left 1.7e-3 on the seed
+      four-bar (MuJoCo's Euler 1.4e-3 there); stock RK4 lost the 200 rad/s slider-crank's
+      loop.
+    * **invweight_scale 1e-2**: the 200 rad/s slider-crank 4.3e-4 at 1.0, 3.6e-5 at 1e-2
+      and 3.8e-5 at 1e-3 (dt 2.5e-4); the seed four-bar the same at all three.
+    * **tolerance 1e-10**, **iterations 100**, **Newton**: 1e-8, 1e-10 and 20 iterations
+      gave the same errors; CG before the fixes read forces 37x peak off.  Samples are
+      solved with tolerance 0 (:meth:`MujocoWarpSession._sample`).
+    * **readout host**: quick-return's slot moment 1.3e-2 of peak (float32 ``cfrc_int``)
+      against 2.5e-4.
+
     Parameters
     ----------
     steps_per_rev
