@@ -88,8 +88,29 @@ def require_warp():
         warp.config.kernel_cache_dir = str(cache)
     warp.config.quiet = True
     warp.config.log_level = warp.LOG_WARNING  # no "Module ... load" line per kernel
-    warp.init()
+    INIT_MESSAGES.extend(_quiet_init(warp))
     return warp, mujoco_warp
+
+
+#: What Warp's native initialisation wrote to stderr (e.g. "Could not find or load the
+#: NVIDIA CUDA driver" on a machine without a GPU): kept for each session's notes.
+INIT_MESSAGES: list[str] = []
+
+
+def _quiet_init(warp) -> list[str]:
+    """``warp.init()`` with file descriptor 2 captured (its native code prints there)."""
+    import tempfile
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        saved = os.dup(2)
+        try:
+            os.dup2(tmp.fileno(), 2)
+            warp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        tmp.seek(0)
+        text = tmp.read().decode(errors="replace")
+    return [ln.strip() for ln in text.splitlines() if ln.strip()]
 
 
 _INTEGRATORS = ("RK4", "Euler", "implicitfast", "implicit")
@@ -249,6 +270,7 @@ class MujocoWarpSession(MujocoSession):
             self.wm.opt.warn_overflow = 0
             self.wd = mjw.put_data(m, self.data)
         self.cpu = self.device.is_cpu
+        self.notes.extend(f"Warp: {m}" for m in INIT_MESSAGES)
         self.notes.append(f"MuJoCo Warp {_version(mjw)} on Warp device "
                           f"{self.device.alias} ({self.device.name}), float32; kernel cache "
                           f"{wp.config.kernel_cache_dir}")
