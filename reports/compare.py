@@ -340,10 +340,11 @@ def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
         d = c.as_dict()
         d.update(case=run_.case, engine=run_.engine, settings=run_.settings_text,
                  run_ok=run_.ok, run_reason=run_.reason or "",
-                 engine_reading=is_engine_reading(c.quantity))
+                 engine_reading=is_engine_reading(c.quantity),
+                 precision=run_.extra.get("precision", "float64"))
         rows.append(d)
     cols = ["case", "engine", "quantity", "max_abs", "peak", "normalised", "at", "tolerance",
-            "passed", "engine_reading", "run_ok", "run_reason", "settings"]
+            "passed", "engine_reading", "run_ok", "run_reason", "settings", "precision"]
     return pd.DataFrame(rows, columns=cols)
 
 

@@ -76,12 +76,14 @@ def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
         return []
     rows = []
     for d in summary.to_dict("records"):
-        rows.append([str(d.get("case", "")), str(d.get("engine", "")),
+        prec = d.get("precision")
+        engine = str(d.get("engine", "")) + (f" ({prec})" if prec == "float32" else "")
+        rows.append([str(d.get("case", "")), engine,
                      str(d.get("verdict", "")), str(d.get("worst quantity", "") or ""),
                      sig2(d.get("worst error / peak")), sig2(d.get("tolerance")),
                      _text(d.get("at (input)")), _text(d.get("note"))])
     head = ["case", "engine", "verdict", "worst quantity", "error/peak", "tol", "at", "note"]
-    fixed = [None, 8, 7, 16, 10, 5, 12, None]
+    fixed = [None, 21, 7, 16, 10, 5, 12, None]  # engine: "mujoco_warp (float32)" fits
     for i, f in enumerate(fixed):
         if f is not None:
             fixed[i] = max(len(head[i]), min(f, max(len(r[i]) for r in rows)))

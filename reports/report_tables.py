@@ -109,8 +109,23 @@ def summary_table(verdicts: pd.DataFrame, units: dict[str, str] | None = None
                      "at (deg or m)": at,
                      "at (input)": format_input(at, unit).strip(),
                      "tolerance": float(worst["tolerance"]) if worst is not None else np.nan,
+                     "precision": _precision(g),
                      "note": "" if g["run_ok"].all() else str(g["run_reason"].iloc[0])})
+        if not ok and g["run_ok"].all() and rows[-1]["precision"] == "float32":
+            rows[-1]["note"] = FLOAT32_NOTE
     return pd.DataFrame(rows)
+
+
+#: A float32 engine's failed verdict (its run completed): said as what it is.
+FLOAT32_NOTE = ("float32 engine: its error floor (README, MuJoCo Warp) lies above this "
+                "tolerance here: a precision limit of the engine, not a harness failure")
+
+
+def _precision(g: pd.DataFrame) -> str:
+    """The engine's arithmetic (``float32`` / ``float64``) of a case x engine group."""
+    if "precision" not in g or not g["precision"].notna().any():
+        return "float64"
+    return str(g["precision"].dropna().iloc[0])
 
 
 def quantity_unit(quantity: str, revolute: bool) -> str:

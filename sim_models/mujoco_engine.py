@@ -57,7 +57,7 @@ class MujocoSession(Session):
         self.notes.append(f"MuJoCo warning: {msg.strip()}")
 
     def _build(self) -> None:
-        mujoco, st, s = self.mj, self.tree, self.settings
+        mujoco, st, s = self.mj, self.tree, self.mujoco_settings()
         spec = build_mjcf(st.mech, s, tree=st)
         apply_scene(spec, st, s.scene)
         # a model MuJoCo's compiler rejects: EngineRefusal, one line (mjcf.compile_refusal)
@@ -84,6 +84,11 @@ class MujocoSession(Session):
         self.moving_loads = self._loads_move()
         self.max_contacts = 0  # most contacts seen at a sample (scene-economy study)
 
+    def mujoco_settings(self) -> MujocoSettings:
+        """The :class:`MujocoSettings` the host model is built with (a session of the same
+        model in another runtime, e.g. MuJoCo Warp, maps its own settings to these)."""
+        return self.settings
+
     def close(self) -> None:
         if getattr(self, "_old_warning", False) is not False:
             self.mj.set_mju_user_warning(self._old_warning)
@@ -101,8 +106,10 @@ class MujocoSession(Session):
     def set_drive(self, a_prescribed: float) -> None:
         self.data.qfrc_applied[self.drive_dof] = self.A * self.tree.driver_sigma * a_prescribed
 
-    def apply_loads(self) -> None:
-        d = self.data
+    def apply_loads(self, d=None) -> None:
+        """``xfrc_applied`` of the loads from the pose in ``d`` (default ``self.data``;
+        any object with MjData's ``xipos, xpos, xmat, xfrc_applied`` arrays)."""
+        d = self.data if d is None else d
         if not self.loads:
             return
         d.xfrc_applied[:] = 0.0
@@ -220,10 +227,18 @@ class MujocoSession(Session):
                 out[k, c] = efc_force[k][eq_rows[efc_id[k][eq_rows] == e][:2]]
         return out
 
+    def drive_effort(self, qdd, acc, raws) -> np.ndarray:
+        """(K,) the drive's effort on the mechanism along the driven tree dof (N m or N):
+        ``A (a_prescribed - qacc)`` of the armature drive (exact in float64: qacc is
+        resolved to 1e-16 of A's share)."""
+        st = self.tree
+        return self.A * (st.driver_sigma * acc - qdd[:, st.driver_tree])
+
     def convert(self, times, raws, rows, rec: Recorder):
         """The analytic conventions of K raw records (:meth:`_raw`), vectorised."""
         st, mech = self.tree, self.tree.mech
-        qpos, qvel, qacc, cfrc, com, efc_type, efc_id, efc_force, acc = zip(*raws, strict=True)
+        qpos, qvel, qacc, cfrc, com, efc_type, efc_id, efc_force, acc = \
+            zip(*(r[:9] for r in raws), strict=True)
         q, qd, qdd = (np.array(x)[:, a] for x, a in ((qpos, self.qadr), (qvel, self.dadr),
                                                       (qacc, self.dadr)))
         cfrc = np.array(cfrc)[:, self.child_bid]
@@ -232,7 +247,7 @@ class MujocoSession(Session):
         acc = np.array(acc)
         prop, gap, rate = rec.put_motions(rows, times, q, qd, qdd)
         th, org = prop[0], prop[3]
-        tau = self.A * (st.driver_sigma * acc - qdd[:, st.driver_tree])
+        tau = self.drive_effort(qdd, acc, raws)
         K, J, P = len(raws), len(mech.joints), len(st.prismatic)
         force = np.zeros((K, J, 2))
         normal, moment = np.zeros((K, P)), np.zeros((K, P))

@@ -49,6 +49,9 @@ BUILTIN: tuple[EngineEntry, ...] = (
     EngineEntry("pinocchio", "sim_models.pinocchio_engine", "PinocchioSession",
                 "Pinocchio: constraintDynamics, loops closed by rigid point constraints",
                 "pinocchio", "pip install 'linkage-xval[pinocchio]'"),
+    EngineEntry("mujoco_warp", "sim_models.mujoco_warp_engine", "MujocoWarpSession",
+                "MuJoCo Warp: the MuJoCo model in float32 Warp kernels (CPU or GPU)",
+                "mujoco_warp", "pip install 'linkage-xval[warp]'"),
 )
 
 _REGISTRY: dict[str, EngineEntry] = {e.name: e for e in BUILTIN}

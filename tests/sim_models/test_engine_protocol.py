@@ -19,9 +19,14 @@ from analytic.toml_io import load_mechanism
 from sim_models import compile_linkage
 from sim_models.engine_base import EngineRefusal, SettingsError, plan_samples
 from sim_models.engines import rerun, run
-from sim_models.registry import UnknownEngineError, engine_names, get_engine
+from sim_models.registry import UnknownEngineError, engine_names, get_engine, missing_library
 
 from .conftest import ENGINE_RELATIVE, assert_run_within
+
+#: every registered engine; one whose optional library is missing is skipped, saying so
+ENGINES = [pytest.param(n, marks=pytest.mark.skipif(missing_library(n) is not None,
+                                                    reason=str(missing_library(n))))
+           for n in engine_names()]
 
 ROOT = Path(__file__).resolve().parents[2]
 ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn", "pinocchio"}
@@ -105,7 +110,7 @@ def _available(name):
         pytest.skip(f"{name}: {e}")
 
 
-@pytest.mark.parametrize("name", engine_names())
+@pytest.mark.parametrize("name", ENGINES)
 def test_settings_from_key_value_strings(name):
     eng = _available(name)
     s0 = eng.settings()
@@ -123,7 +128,7 @@ def test_settings_from_key_value_strings(name):
         eng.settings({"timestep": "fast"})
 
 
-@pytest.mark.parametrize("name", engine_names())
+@pytest.mark.parametrize("name", ENGINES)
 def test_run_is_reproducible_from_its_record(name, tmp_path):
     """An EngineRun carries its mechanism and settings object: re-running it gives the
     same samples, also for a case loaded from a file under another name."""
@@ -164,7 +169,7 @@ def test_plan_by_time_for_a_reversing_input():
     assert abs(p.values[-1] - d.value) == pytest.approx(4 * math.pi - 2 * out, rel=1e-9)
 
 
-@pytest.mark.parametrize("name", engine_names())
+@pytest.mark.parametrize("name", ENGINES)
 def test_reversing_input_runs_to_a_verdict(name):
     if not (BUGS / "reversing-input.toml").is_file():
         pytest.skip("no bug files")
