@@ -29,7 +29,8 @@ ENGINES = [pytest.param(n, marks=pytest.mark.skipif(missing_library(n) is not No
            for n in engine_names()]
 
 ROOT = Path(__file__).resolve().parents[2]
-ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn", "pinocchio"}
+ENGINE_LIBRARIES = {"mujoco", "pybullet", "pybullet_data", "exudyn", "pinocchio", "mujoco_warp",
+                    "warp"}
 BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs"
 
 
