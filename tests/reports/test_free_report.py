@@ -101,3 +101,15 @@ def test_full_report_grid_rows_become_pareto_figure_and_tables(tmp_path):
     assert len(pd.read_csv(tmp_path / "free_grid.csv")) == 2
     ch = pd.read_csv(tmp_path / "free_cheapest.csv")
     assert set(ch["tolerance"]) == set(FS.TOLERANCES)
+
+
+def test_a_mechanism_without_a_loop_has_no_loop_drift_not_a_zero():
+    """A pendulum has no cut joint: its loop drift is "no loop", never a measured 0."""
+    import math
+    from types import SimpleNamespace
+
+    from analytic import load_case
+    from reports.free_studies import _loop_drift
+    v = SimpleNamespace(loop=SimpleNamespace(normalised=0.0))
+    assert math.isnan(_loop_drift(SimpleNamespace(mechanism=load_case("iftomm-a01-pendulum")), v))
+    assert _loop_drift(SimpleNamespace(mechanism=load_case("seed-four-bar")), v) == 0.0
