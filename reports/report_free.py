@@ -70,7 +70,8 @@ def verdict_frame(free: dict) -> pd.DataFrame:
             "verdict": "pass" if r.passed else "FAIL", "worst quantity": r.worst,
             "worst error / scale": r.worst_error,
             "trusted horizon": _horizon(r.horizon, r.duration), "lost by": r.lost_by,
-            "energy drift": r.energy_drift, "loop drift": "no loop" if math.isnan(r.loop_drift) else r.loop_drift,
+            "energy drift": r.energy_drift,
+            "loop drift": "no loop" if math.isnan(r.loop_drift) else r.loop_drift,
             "CPU s per simulated s": r.cpu_per_s, "IFToMM class": r.iftomm_level,
             "run": "ok" if r.ok else f"stopped: {r.reason}",
             "not read (not judged)": r.not_read, "settings": r.settings}
