@@ -39,11 +39,11 @@ def cmd_compare(args) -> int:
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
-    if args.engine == "all":
-        note_skipped_engines()
     settings = settings_for(engines, list(args.set or ()),
                             {"--timestep": ("timestep", args.timestep),
                              "--integrator": ("integrator", args.integrator)})
+    if args.engine == "all":  # after every input is checked: bad input stays one line
+        note_skipped_engines()
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     request = RunRequest(args.revolutions, args.samples, mode=args.mode)
     out = []
@@ -155,9 +155,10 @@ def cmd_report(args) -> int:
     from analytic.errors import OutputError
 
     from .report_cmd import run
-    note_skipped_engines()  # the report runs every installed engine
     try:
-        return run(args)
+        status = run(args)
+        note_skipped_engines()  # the report ran every installed engine (after the
+        return status           # inputs were checked: bad input stays one line)
     except OSError as e:  # the output folder was checked at --out; a race or a full disk
         if e.filename is None:
             raise
