@@ -256,6 +256,8 @@ class FreeVerdict:
     #: quantities the engine does not read at all (no value at any sample of a run that
     #: did not stop): reported, not judged
     not_read: tuple[str, ...] = ()
+    #: whether the mechanism has a loop (a pendulum has none: no loop drift to report)
+    has_loop: bool = True
 
     @property
     def judged(self) -> tuple[FreeComparison, ...]:
@@ -294,7 +296,8 @@ class FreeVerdict:
             "lost_by": self.lost_by.quantity if self.lost_by else None,
             "worst": self.worst.quantity,
             "worst_normalised": self.worst.normalised,
-            "energy_drift": self.energy.normalised, "loop_drift": self.loop.normalised,
+            "energy_drift": self.energy.normalised,
+            "loop_drift": self.loop.normalised if self.has_loop else None,
             "cpu_per_simulated_second": self.cpu_per_simulated_second,
             "timestep": self.timestep, "integrator": self.integrator,
             "settings": self.settings, "near_event": self.near_event,
@@ -420,7 +423,7 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
                     energy, loop, iftomm_accuracy(run, ref, mech), bool(run.ok), run.reason,
                     run.t_fail, float(run.cpu_per_simulated_second), float(run.timestep),
                     str(run.integrator), run.settings.describe(), None, None,
-                    tuple(not_read))
+                    tuple(not_read), len(mech.joints) > len(mech.bodies) - 1)
     if v.passed:
         return v
     from dataclasses import replace

@@ -118,9 +118,7 @@ def _a03_error(run) -> float:
 def _loop_drift(run, v: FreeVerdict) -> float:
     """The loop gap's maximum over the size, NaN for a mechanism without a loop (a
     pendulum: no gap to measure, not a gap of 0)."""
-    mech = run.mechanism
-    loops = len(mech.joints) - (len(mech.bodies) - 1)
-    return v.loop.normalised if loops > 0 else math.nan
+    return v.loop.normalised if v.has_loop else math.nan
 
 
 def free_row(run, v: FreeVerdict) -> FreeRow:

@@ -110,8 +110,23 @@ def test_a_mechanism_without_a_loop_has_no_loop_drift_not_a_zero():
     import math
     from types import SimpleNamespace
 
+    import numpy as np
+
     from analytic import load_case
+    from analytic.free_motion import simulate
+    from reports.free_compare import compare_free, reference_samples
     from reports.free_studies import _loop_drift
-    v = SimpleNamespace(loop=SimpleNamespace(normalised=0.0))
-    assert math.isnan(_loop_drift(SimpleNamespace(mechanism=load_case("iftomm-a01-pendulum")), v))
-    assert _loop_drift(SimpleNamespace(mechanism=load_case("seed-four-bar")), v) == 0.0
+    from sim_models.free_run import FreeEngineRun
+
+    traj = simulate(load_case("iftomm-a01-pendulum"), duration=0.5)
+    t = np.linspace(0.0, 0.5, 11)
+    ref = reference_samples(traj, t)
+    run = FreeEngineRun(
+        "iftomm-a01-pendulum", "exact", traj.mech, SimpleNamespace(describe=lambda: ""),
+        SimpleNamespace(duration=0.5), True, None, None, t, tuple(ref.joints),
+        tuple(b.name for b in traj.mech.bodies), ref.x, ref.xd, ref.theta, ref.omega,
+        ref.alpha, np.full((11, 1, 2), np.nan), np.zeros(11), ref.kinetic, ref.potential,
+        None, 0.0, 0, 1e-3, "exact")
+    v = compare_free(run, traj, ref)
+    assert not v.has_loop and v.as_json()["loop_drift"] is None
+    assert math.isnan(_loop_drift(run, v))
