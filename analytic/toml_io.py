@@ -286,7 +286,12 @@ def _motion(doc: dict, source: str, joints: list, L: float, lu: str) -> FreeMoti
     else:
         value = _num(_req(md, "value", mw), "value", mw, MAX_LENGTH, lu, L)
         rate = _num(md.get("rate", 0.0), "rate", mw, MAX_RATE, f"{lu}/s", L)
-    duration = _num(_req(md, "duration", mw), "duration", mw, MAX_DURATION, "s", lo=0.0)
+    d = _req(md, "duration", mw)
+    if isinstance(d, int | float) and not isinstance(d, bool) and math.isfinite(d) and d <= 0:
+        # said as the range it is (0 itself is refused), not as "0 to MAX_DURATION"
+        raise DescriptionError(f"duration = {d:g} s is out of range: the accepted range is "
+                               f"0 < duration <= {MAX_DURATION:g} s", mw)
+    duration = _num(d, "duration", mw, MAX_DURATION, "s", lo=0.0)
     samples = md.get("samples", 201)
     if isinstance(samples, bool) or not isinstance(samples, int):
         raise DescriptionError(f"samples must be an integer, got {samples!r}", mw)

@@ -180,7 +180,11 @@ BAD = [
             r"joint 'slide' = 0.5 m; the feasible range\(s\) of joint 'slide': \[0.1 m, 0.3 m\]"),
     # -- duration and samples beyond their stated limits
     ("duration-negative", edit("duration = 1.0", "duration = -1.0"),
-     SHORT, r"\[motion\]: duration = -1 s is out of range: the accepted range is 0 to 10000 s"),
+     SHORT, r"\[motion\]: duration = -1 s is out of range: the accepted range is "
+     r"0 < duration <= 10000 s"),
+    ("duration-zero", edit("duration = 1.0", "duration = 0.0"),
+     SHORT, r"\[motion\]: duration = 0 s is out of range: the accepted range is "
+     r"0 < duration <= 10000 s"),
     ("duration-nan", edit("duration = 1.0", "duration = nan"),
      (), r"\[motion\]: duration must be a finite number, got nan"),
     ("duration-missing", edit("duration = 1.0\n", ""),
