@@ -66,7 +66,7 @@ BAD = [
     ("duration-huge", edit("duration = 1.0", "duration = 1e5"),
      r"\[motion\]: duration = 100000 s is out of range"),
     ("duration-zero", edit("duration = 1.0", "duration = 0.0"),
-     r"\[motion\]: duration = 0.0 s is out of range"),
+     r"\[motion\]: duration = 0 s is out of range: the accepted range is 0 < duration"),
     ("samples-huge", edit("duration = 1.0", "duration = 1.0\nsamples = 2000000"),
      r"\[motion\]: samples = 2000000 is out of range"),
     ("spring-unknown-body", edit('["coupler", "ground"]', '["nope", "ground"]'),
