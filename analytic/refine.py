@@ -172,23 +172,15 @@ def sign_changes(linkage, x: np.ndarray, y: np.ndarray, periodic: bool, rate: Ra
                            {0: (y, scale, rate)}, zero)[0] if len(x) > 1 else []
 
 
-def turning_points(linkage, kin, periodic: bool) -> dict:
-    """The limit positions of every rotation group and every slider over a sweep, all
-    located in one iteration: ``{("group", g): [input SI, ...], ("slider", joint):
-    [...]}``.  A group's are where its angular velocity changes sign, a slider's where
-    its sliding velocity does (:func:`sign_brackets` of the regular samples,
-    samples below 1e-9 of the input's rate scale being round-off).  Computed once per
-    sweep (kept on ``kin``): the events and the summary read the same inputs."""
-    memo = getattr(kin, "_turning_points", None)
-    if memo is not None and memo[0] == periodic:
-        return memo[1]
-    from .tolerances import SINGULAR_CONDITION
+def rate_series(linkage, kin, regular) -> dict:
+    """The series whose sign changes are the limit positions of :func:`turning_points`:
+    key (``("group", g)`` or ``("slider", joint)``) -> (sampled rate on the ``regular``
+    samples times the input's sign; its scale; the rate as a function of a
+    :class:`analytic.Kinematics` for the root finder).  One piece for the in-memory
+    sweep and the streamed one (:mod:`analytic.sweep_facts`, block by block)."""
     topo = linkage.topo
-    x = np.asarray(kin.value, float)
-    regular = np.asarray(kin.condition < SINGULAR_CONDITION)
-    xr = x[regular]
     sign = np.sign(kin.velocity)[regular]
-    w_in = float(np.max(np.abs(kin.velocity))) if len(x) else 0.0
+    w_in = float(np.max(np.abs(kin.velocity))) if len(regular) else 0.0
     size = size_of(topo)
     rev = linkage.driver_is_revolute
     series = {}  # key -> (sampled series, scale, rate)
@@ -204,6 +196,24 @@ def turning_points(linkage, kin, periodic: bool) -> dict:
         series[("slider", jn)] = (kin.slider(jn)[1][regular] * sign,
                                   w_in * (size if rev else 1.0),
                                   lambda k, jn=jn: k.slider(jn)[1:])
+    return series
+
+
+def turning_points(linkage, kin, periodic: bool) -> dict:
+    """The limit positions of every rotation group and every slider over a sweep, all
+    located in one iteration: ``{("group", g): [input SI, ...], ("slider", joint):
+    [...]}``.  A group's are where its angular velocity changes sign, a slider's where
+    its sliding velocity does (:func:`sign_brackets` of the regular samples,
+    samples below 1e-9 of the input's rate scale being round-off).  Computed once per
+    sweep (kept on ``kin``): the events and the summary read the same inputs."""
+    memo = getattr(kin, "_turning_points", None)
+    if memo is not None and memo[0] == periodic:
+        return memo[1]
+    from .tolerances import SINGULAR_CONDITION
+    x = np.asarray(kin.value, float)
+    regular = np.asarray(kin.condition < SINGULAR_CONDITION)
+    xr = x[regular]
+    series = rate_series(linkage, kin, regular)
     out = _roots_together(linkage, xr, periodic, series) if len(xr) > 1 else \
         {k: [] for k in series}
     try:

@@ -30,6 +30,7 @@ from .refine import (
     least_transmission,
     locate_brackets,
     locate_least_transmission,
+    rate_series,
     sign_changes,
     turning_points,
 )
@@ -224,35 +225,6 @@ def _moving(linkage):
     return out
 
 
-def _rate_series(linkage, kin, regular):
-    """The turning points' series of :func:`analytic.refine.turning_points`: key ->
-    (sampled rate on the regular samples, times the input's sign; its scale; its rate)."""
-    topo = linkage.topo
-    sign = np.sign(kin.velocity)[regular]
-    w_in = float(np.max(np.abs(kin.velocity))) if kin.n else 0.0
-    size = linkage_size(linkage)
-    rev = linkage.driver_is_revolute
-    out = {}
-    for g in range(topo.n_groups):
-        b = int(np.flatnonzero(topo.group_of == g)[0])
-        out[("group", g)] = (kin.omega[:, b][regular] * sign,
-                             w_in * (1.0 if rev else 1 / size),
-                             lambda k, b=b: (k.omega[:, b], k.alpha[:, b]))
-    for j in topo.prismatic:
-        if j == topo.driver_joint:
-            continue
-        jn = topo.joint_names[j]
-        out[("slider", jn)] = (kin.slider(jn)[1][regular] * sign,
-                               w_in * (size if rev else 1.0),
-                               lambda k, jn=jn: k.slider(jn)[1:])
-    return out
-
-
-def linkage_size(linkage) -> float:
-    from .positions import size_of
-    return size_of(linkage.topo)
-
-
 def _det_rate(k):
     return k.determinant, np.full(k.n, np.nan)
 
@@ -414,7 +386,7 @@ class StreamFacts:
             self._xr[:2] = (self._xr[:2] + [float(v) for v in xr[:2]])[:2]
             self._xr_last, self._nreg = float(xr[-1]), self._nreg + len(xr)
         aux = np.degrees(kin.theta[regular]) if len(xr) else None
-        for key, (y, scale, rate) in _rate_series(self.linkage, kin, regular).items():
+        for key, (y, scale, rate) in rate_series(self.linkage, kin, regular).items():
             if only is not None and key not in only:
                 continue
             if key not in self._rates:
