@@ -320,23 +320,7 @@ class ExudynSession(Session):
         self.ground_obj = mbs.AddObject(ii.ObjectGround())
         ground_node = mbs.AddNode(ii.NodePointGround())
         kin = st.kin_ref
-        self.node, self.obj, self.com = {}, {}, {}
-        for b, body in enumerate(mech.bodies):
-            if b == self.g:
-                continue
-            if st.has_mass:  # exact: a massless link stays massless (module docstring)
-                m, inertia = float(body.mass), float(body.inertia)
-            else:
-                m, inertia = float(st.mass[b]), float(st.inertia[b])
-            c = np.asarray(st.com[b], float)
-            th = float(kin.theta[0, b])
-            rG = kin.origin[0, b] + _rot(th, c)
-            n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[rG[0], rG[1], th],
-                                               initialCoordinates=[0.0, 0.0, 0.0],
-                                               initialVelocities=[0.0, 0.0, 0.0]))
-            self.obj[b] = mbs.AddObject(ii.ObjectRigidBody2D(mass=m, inertia=inertia,
-                                                             nodeNumber=n))
-            self.node[b], self.com[b] = n, c
+        self._add_bodies(mbs, kin)
         self.joint_obj = [self._add_joint(jt) for jt in mech.joints]
         self._add_drive(ground_node)
         self._add_loads()
@@ -348,6 +332,33 @@ class ExudynSession(Session):
         self.joint_ae = [np.array(sd.GetObjectLTGAE(o)) for o in self.joint_obj]
         self.drive_ae = int(sd.GetObjectLTGAE(self.drive_obj)[0])
         self.n_ode2 = sd.ODE2Size()
+
+    def _body_mass(self, b: int, body) -> tuple[float, float]:
+        """Mass (kg) and inertia about the centre of mass (kg m^2) built for body ``b``."""
+        st = self.tree
+        if st.has_mass:  # exact: a massless link stays massless (module docstring)
+            return float(body.mass), float(body.inertia)
+        return float(st.mass[b]), float(st.inertia[b])
+
+    def _add_bodies(self, mbs, kin) -> None:
+        """One ``NodeRigidBody2D`` and ``ObjectRigidBody2D`` per moving body, in the
+        reference pose ``kin`` (its first sample): fills ``node``, ``obj``, ``com``."""
+        from exudyn import itemInterface as ii
+        st = self.tree
+        self.node, self.obj, self.com = {}, {}, {}
+        for b, body in enumerate(st.mech.bodies):
+            if b == self.g:
+                continue
+            m, inertia = self._body_mass(b, body)
+            c = np.asarray(st.com[b], float)
+            th = float(kin.theta[0, b])
+            rG = kin.origin[0, b] + _rot(th, c)
+            n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[rG[0], rG[1], th],
+                                               initialCoordinates=[0.0, 0.0, 0.0],
+                                               initialVelocities=[0.0, 0.0, 0.0]))
+            self.obj[b] = mbs.AddObject(ii.ObjectRigidBody2D(mass=m, inertia=inertia,
+                                                             nodeNumber=n))
+            self.node[b], self.com[b] = n, c
 
     def _marker(self, b: int, p):
         """A rigid marker at body-frame point ``p`` (m) of body ``b``."""

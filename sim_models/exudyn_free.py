@@ -107,6 +107,11 @@ class ExudynFreeSession(ExudynSession, FreeSession):
                                     f"build springs, dampers or motors on prismatic joint "
                                     f"{j!r}")
 
+    def _body_mass(self, b: int, body) -> tuple[float, float]:
+        """The description's own mass and inertia (a free run needs them: the exact
+        reference refuses a moving body without mass)."""
+        return float(body.mass), float(body.inertia)
+
     def _build(self):
         exu, st = self.exu, self.tree
         from exudyn import itemInterface as ii
@@ -117,20 +122,7 @@ class ExudynFreeSession(ExudynSession, FreeSession):
         self.ground_obj = mbs.AddObject(ii.ObjectGround())
         self.ground_node = mbs.AddNode(ii.NodePointGround())
         kin = st.kin_ref
-        self.node, self.obj, self.com = {}, {}, {}
-        for b, body in enumerate(mech.bodies):
-            if b == self.g:
-                continue
-            m, inertia = float(body.mass), float(body.inertia)
-            c = np.asarray(st.com[b], float)
-            th = float(kin.theta[0, b])
-            rG = kin.origin[0, b] + _rot(th, c)
-            n = mbs.AddNode(ii.NodeRigidBody2D(referenceCoordinates=[rG[0], rG[1], th],
-                                               initialCoordinates=[0.0, 0.0, 0.0],
-                                               initialVelocities=[0.0, 0.0, 0.0]))
-            self.obj[b] = mbs.AddObject(ii.ObjectRigidBody2D(mass=m, inertia=inertia,
-                                                             nodeNumber=n))
-            self.node[b], self.com[b] = n, c
+        self._add_bodies(mbs, kin)
         self.joint_obj = [self._add_joint(jt) for jt in mech.joints]
         self._add_loads()
         self._coordinate_springs = self._add_elements()
