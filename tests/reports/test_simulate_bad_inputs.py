@@ -17,38 +17,15 @@ import pytest
 from analytic.cases import case_path
 
 from .cli_run import run
+from .free_inputs import MOTION, seed_under_gravity
 
-#: A released seed four-bar under gravity with a spring, a damper and a motor table:
-#: valid as it is (``test_the_base_descriptions_run``).
-MOTION = """
-[motion]
-joint = "O2"
-value = 60.0
-rate = 0.0
-duration = 1.0
-
-[[springs]]
-bodies = ["coupler", "ground"]
-points = ["B", "O2"]
-stiffness = 30.0
-free_length = 250.0
-
-[[dampers]]
-joint = "O4"
-coefficient = 0.01
-
-[[motors]]
-joint = "O2"
-table = [[0.0, 0.0], [1.0, 0.3]]
-"""
 #: The seed slider-crank released from 30 deg (its crank massless, as in the notes).
 SLIDER_MOTION = '\n[motion]\njoint = "A"\nvalue = 30.0\nrate = 0.0\nduration = 1.0\n'
 SHORT = ("--duration", "0.05")
 
 
 def four_bar() -> str:
-    return case_path("seed-four-bar").read_text().replace(
-        "gravity = [0.0, 0.0]", "gravity = [0.0, -9.81]") + MOTION
+    return seed_under_gravity() + MOTION
 
 
 def slider_crank() -> str:

@@ -7,35 +7,9 @@ import re
 
 import pytest
 
-from analytic.cases import case_path
 from tests.reports.cli_run import run
-
-MOTION = """
-[motion]
-joint = "O2"
-value = 60.0
-rate = 0.0
-duration = 1.0
-
-[[springs]]
-bodies = ["coupler", "ground"]
-points = ["B", "O2"]
-stiffness = 30.0
-free_length = 250.0
-
-[[dampers]]
-joint = "O4"
-coefficient = 0.01
-
-[[motors]]
-joint = "O2"
-table = [[0.0, 0.0], [1.0, 0.3]]
-"""
-
-
-def _seed() -> str:
-    return case_path("seed-four-bar").read_text().replace("gravity = [0.0, 0.0]",
-                                                           "gravity = [0.0, -9.81]")
+from tests.reports.free_inputs import MOTION
+from tests.reports.free_inputs import seed_under_gravity as _seed
 
 
 def edit(old: str, new: str):
