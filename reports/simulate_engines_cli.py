@@ -123,9 +123,10 @@ def print_verdict(v, notes=()) -> None:
     by = f" ({lost.quantity} exceeds its tolerance first)" if lost else ""
     _say(f"trusted horizon: {horizon_text(v.horizon, v.duration)}{by}; worst: {w.quantity}, "
          f"{w.normalised:.3g} of its {w.normalisation} (tolerance {w.tolerance:g})")
+    loop = (f"max {v.loop.normalised:.3g} of the mechanism size {v.loop.scale:.4g} m"
+            if v.has_loop else "none, the mechanism has no loop")
     _say(f"energy drift: max {v.energy.normalised:.3g} of the {v.energy.normalisation} "
-         f"{v.energy.scale:.4g} J, at t = {v.energy.at:.4g} s; loop-closure drift: max "
-         f"{v.loop.normalised:.3g} of the mechanism size {v.loop.scale:.4g} m")
+         f"{v.energy.scale:.4g} J, at t = {v.energy.at:.4g} s; loop-closure drift: {loop}")
     if v.iftomm:
         a = v.iftomm
         _say(f"IFToMM accuracy: {a.body}.{a.point} position error max {a.max_error:.3g} m at "
@@ -134,14 +135,17 @@ def print_verdict(v, notes=()) -> None:
         _say(f"near an event: {v.near_event}")
     if v.step_note:
         _say(f"step: {v.step_note}")
-    rows = [[c.quantity, f"{c.max_abs:.3g}" if math.isfinite(c.max_abs) else "not measured",
-             c.unit, f"{c.scale:.3g}", f"{c.normalised:.3g}" if c.measured else "not measured",
-             f"{c.at:.4g}", horizon_text(c.horizon, v.duration) if c.measured else
-             f"stopped {c.measured_until:.4g} s", f"{c.tolerance:g}",
-             "pass" if c.passed else "FAIL"] for c in v.judged]
+    # 80 columns: the unit beside its value, the run's length said once above
+    rows = [[c.quantity, f"{c.max_abs:.3g} {c.unit}" if math.isfinite(c.max_abs) else
+             "not measured", f"{c.scale:.3g}",
+             f"{c.normalised:.3g}" if c.measured else "not measured", f"{c.at:.4g}",
+             ("whole run" if math.isinf(c.horizon) else f"{c.horizon:.4g} s") if c.measured
+             else f"stopped {c.measured_until:.4g} s", f"{c.tolerance:g}",
+             "pass" if c.passed else "FAIL"]
+            for c in v.judged if v.has_loop or c is not v.loop]
     with pd.option_context("display.width", 200, "display.max_columns", 20):
-        print(pd.DataFrame(rows, columns=["quantity", "max_abs", "unit", "scale", "normalised",
-                                          "at s", "horizon", "tolerance", "verdict"])
+        print(pd.DataFrame(rows, columns=["quantity", "max_abs", "scale", "normalised",
+                                          "at s", "horizon", "tol", "verdict"])
               .to_string(index=False))
     if v.not_read:
         _say(f"not read by {v.engine} (reported, not judged): {', '.join(v.not_read)}")
