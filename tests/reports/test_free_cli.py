@@ -65,3 +65,14 @@ def test_bad_input_one_line_status_2(capsys, args, words):
     assert code == 2, out
     assert err.startswith("xval: error:") and err.count("\n") == 1
     assert words in err
+
+
+def test_text_verdict_fits_80_columns_and_a_pendulum_has_no_loop_row(monkeypatch):
+    """The pendulum has no loop: its text verdict says so, with no ``loop.gap`` row of 0
+    (a gap that was never measured); every line fits an 80-column terminal."""
+    monkeypatch.setenv("COLUMNS", "80")
+    code, out = run(*A01, "--engine", "mujoco")
+    assert code == 0
+    assert "loop-closure drift: none, the mechanism has no loop" in out
+    assert "loop.gap" not in out
+    assert max(len(line) for line in out.splitlines()) <= 80
