@@ -46,6 +46,10 @@ from .kernels.cache import (  # noqa: F401 - cache_dir and module_name: the modu
     module_name,
     on_disk,
 )
+from .kin_result import DEFERRED, CompactKinematics, Kinematics
+from .kinetostatics import Forces, solve_forces
+from .linalg import condition
+from .positions import _fmt_value, _infeasible
 from .tolerances import SINGULAR_CONDITION
 
 #: how many suspect (near-singular) configurations one call records; past it the
@@ -300,7 +304,6 @@ class FusedKernel:
         lk = self.lk
         if bad < 0 and (not lk.topo.n_loops or not len(values) or worst <= lk.positions.tol):
             return  # the common case: nothing to raise
-        from .positions import _fmt_value, _infeasible
         if bad >= 0:
             raise _infeasible(lk.topo, float(values[bad]))
         tol = lk.positions.tol
@@ -315,7 +318,6 @@ class FusedKernel:
         is singular (condition number from the stored Jacobians)."""
         if on_singular != "raise" or self.n == 0:
             return
-        from .linalg import condition
         if susp is None:  # more suspects than recorded: screen them all again
             susp = np.arange(len(values))
         if not len(susp):
@@ -371,7 +373,6 @@ class FusedKernel:
         return kin, frc
 
     def _wrap(self, values, vel, acc, out, branch, forces):
-        from .kin_result import Kinematics
         trans = [(name, out["trv"][:, 2 * d], out["trv"][:, 2 * d + 1])
                  for d, name in enumerate(self.trans_names)]
         jp = {j: out["jp"][:, j] for j in range(self.J)}
@@ -396,7 +397,6 @@ class FusedKernel:
         path's singular treatment).  ``forces``: the same pass writes the forces too
         (kept on the result for :meth:`forces`: ``_fused_forces``); ``joints``: and
         every joint's point (``joint_point``), so neither costs another pass."""
-        from .kin_result import CompactKinematics
         values, vel, acc = self._inputs(values, velocity, acceleration)
         if forces:
             self._require_mass()
@@ -420,7 +420,6 @@ class FusedKernel:
     def deferred(self, kin) -> dict:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
         full pass at its inputs."""
-        from .kin_result import DEFERRED
         full, _ = self.solve(kin.value, *_rates(kin), "flag", kin._fused_branch)
         return {k: getattr(full, k) for k in DEFERRED}
 
@@ -441,19 +440,22 @@ class FusedKernel:
 
     def _require_mass(self):
         if not self.with_forces:
-            from .kinetostatics import solve_forces
             solve_forces(self.lk, None)  # raises the typed MissingMassError
             raise AssertionError("unreachable")
 
     def _forces(self, out):
-        from .kinetostatics import Forces
-        mech, topo = self.lk.mech, self.lk.topo
-        jf, nm, sc = out["jf"], out["nm"], out["sc"]
-        joint_force = {jt.name: jf[:, j] for j, jt in enumerate(mech.joints)}
-        normal = {mech.joints[j].name: nm[:, i, 0] for i, j in enumerate(topo.prismatic)}
-        moment = {mech.joints[j].name: nm[:, i, 1] for i, j in enumerate(topo.prismatic)}
-        return Forces(joint_force, normal, moment, sc[:, 0], sc[:, 1], sc[:, 2], sc[:, 3],
-                      sc[:, 4])
+        names = self.__dict__.get("_force_names")
+        if names is None:  # per joint, per slider: fixed by the structure
+            mech, topo = self.lk.mech, self.lk.topo
+            names = self._force_names = ([jt.name for jt in mech.joints],
+                                         [mech.joints[j].name for j in topo.prismatic])
+        jn, pn = names
+        # views, one per joint and slider (a transposed view splits in one C loop)
+        nm = out["nm"].transpose(1, 2, 0)
+        sc = out["sc"].T
+        return Forces(dict(zip(jn, out["jf"].transpose(1, 0, 2), strict=True)),
+                      dict(zip(pn, nm[:, 0], strict=True)),
+                      dict(zip(pn, nm[:, 1], strict=True)), *sc)
 
     def state(self, values=None, velocity=None, acceleration=None, level: int = 3,
               branch: str = "continued", out: dict | None = None) -> State:
