@@ -18,6 +18,9 @@ from analytic.errors import DescriptionError
 from analytic.mechanism import Revolute
 from sim_models.free_cases import G, released
 
+#: Shortest free-motion duration accepted through every door (``xval simulate
+#: --duration``, baseline files), s: one microsecond (the IFToMM A03 run is 0.03 s).
+MIN_DURATION = 1e-6
 #: How long a released built-in case runs, s (issue 21: "released under gravity for 2 s").
 RELEASE_DURATION = 2.0
 #: The IFToMM A02 file's name (written by analytic.free_motion.iftomm.n_four_bar_toml).
