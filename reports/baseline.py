@@ -380,12 +380,12 @@ def _request_checked(request: dict, where: str) -> bool:
                 f"={_json_value(value)}: {problem}" if problem != "missing"
                 else ": missing key"))
         return True
-    for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
-                   ("max_speed_error", float), ("chords", str)):
-        _get(request, k, typ, f"{where}: request")
     if mode != "run":
         raise BaselineError(f"{where}: request mode {mode!r}: only 'run' (prescribed) and "
                             f"'{FREE_MODE}' (free motion) are supported")
+    for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
+                   ("max_speed_error", float), ("chords", str)):
+        _get(request, k, typ, f"{where}: request")
     _request_in_range(request, where)
     return False
 
@@ -887,6 +887,23 @@ def judge(q: QuantityRecord, error: float, at: float, factor: float,
                          factor)
 
 
+def judge_free(q, c, factor: float, fail_loose: bool, slack: float):
+    """The check of one free quantity ``c`` (a :class:`FreeComparison`) against its
+    record ``q``: the prescribed judge on its error (the tolerance only when the record
+    was within it), then its trusted horizon (no earlier than recorded minus
+    ``slack`` s)."""
+    from dataclasses import replace
+
+    error, h = float(c.normalised), float(c.horizon)
+    within = math.isinf(q.horizon)
+    ref = q if within else replace(q, tolerance=math.inf)
+    out = judge(ref, error, float(c.at), factor, fail_loose)
+    out = replace(out, tolerance=q.tolerance, horizon=h, base_horizon=q.horizon)
+    if out.status == "ok" and not within and h < q.horizon - slack:
+        out = replace(out, status="horizon", slack=slack)
+    return out
+
+
 @dataclass
 class RunCheck:
     """One recorded run re-run: its quantities' verdicts and the run-level problems
@@ -977,7 +994,7 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}
-    from .baseline_free import horizon_slack, judge_free
+    from .baseline_free import horizon_slack
     for q in rec.quantities:
         c = now.get(q.quantity)
         if c is None:
@@ -1044,6 +1061,7 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
            "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
+           "judge_free",
            "judged", "load", "merge", "record", "record_command", "record_problems", "request_dict",
            "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
            "source_of", "versions"]

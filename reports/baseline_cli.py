@@ -108,14 +108,24 @@ def _free_options(args, free: bool) -> None:
             raise opt.UsageError(f"{bad[0]} does not apply to --free (a free run is read "
                                  "over --duration at --samples times; its tolerances are "
                                  "the named ones of reports/free_compare.py)")
-        if args.samples is not None and args.samples < 2:
-            raise opt.UsageError(f"argument --samples: {args.samples} is out of range")
+        from analytic.motion_spec import MAX_SAMPLES
+        args.samples = _checked_samples(args.samples, opt.int_range(2, MAX_SAMPLES))
     elif args.duration is not None:
         raise opt.UsageError("--duration needs --free (a prescribed run is read over "
                              "--revolutions)")
-    elif args.samples is not None and args.samples > opt.MAX_SAMPLES:
-        raise opt.UsageError(f"argument --samples: {args.samples} is out of range (2 to "
-                             f"{opt.MAX_SAMPLES} samples per revolution)")
+    else:
+        args.samples = _checked_samples(args.samples, opt.samples)
+
+
+def _checked_samples(text, typ):
+    """``--samples`` through the argparse type of its mode (None: not given)."""
+    import argparse
+    if text is None:
+        return None
+    try:
+        return typ(text)
+    except argparse.ArgumentTypeError as e:
+        raise opt.UsageError(f"argument --samples: {e}") from None
 
 
 # ============================================================================ check
@@ -193,8 +203,7 @@ def register(sub) -> None:
                    help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
     r.add_argument("--revolutions", type=opt.revolutions, default=None,
                    help=f"1 to {opt.MAX_REVOLUTIONS} (default {RunRequest.revolutions})")
-    r.add_argument("--samples", type=opt.int_range(2, max(opt.MAX_SAMPLES, MAX_SAMPLES)),
-                   default=None,
+    r.add_argument("--samples", default=None,  # its range depends on --free: _free_options
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES} (default "
                         f"{RunRequest.samples}); with --free, sample times over the run, "
                         f"2 to {MAX_SAMPLES} (default {DEFAULT_SAMPLES})")

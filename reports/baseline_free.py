@@ -24,11 +24,12 @@ is then what the record holds (PyBullet's first-order step loses the released se
 four-bar after 0.85 s; a baseline guards that it does not lose it sooner).  A run that
 stopped or a quantity that is not finite is never recorded.
 
-The check (:func:`judge_free`): a quantity's error may not grow by more than the drift
-factor over its record (floored at :data:`reports.baseline.DRIFT_FLOOR`, as for the
-prescribed runs); a quantity recorded within its tolerance must stay within it; and its
-trusted horizon may not come earlier than the recorded one by more than
-:data:`HORIZON_SLACK_SAMPLES` sample intervals.
+The check (:func:`reports.baseline.judge_free`): a quantity's error may not grow by
+more than the drift factor over its record (floored at
+:data:`reports.baseline.DRIFT_FLOOR`, as for the prescribed runs); a quantity
+recorded within its tolerance must stay within it; and its trusted horizon may not
+come earlier than the recorded one by more than :data:`HORIZON_SLACK_SAMPLES` sample
+intervals.
 """
 
 from __future__ import annotations
@@ -106,10 +107,10 @@ def run_and_compare_free(mech, engine: str, settings, request: dict):
     """Release ``mech`` in ``engine`` as ``request`` asks and judge it against the exact
     trajectory: ``(FreeEngineRun, [FreeComparison])`` (every judged quantity, the energy
     drift, and the loop drift where the mechanism has a loop)."""
-    from .free_studies import free_verdict
+    from .free_cases import release_and_judge
     over = settings.as_dict() if settings is not None else None
-    run, v = free_verdict(free_mechanism(mech, request), engine,
-                          float(request["duration"]), int(request["samples"]) - 1, over)
+    run, v = release_and_judge(free_mechanism(mech, request), engine,
+                               float(request["duration"]), int(request["samples"]) - 1, over)
     comps = [c for c in v.judged if v.has_loop or c is not v.loop]
     return run, comps
 
@@ -120,24 +121,6 @@ def horizon_slack(request: dict) -> float:
     return HORIZON_SLACK_SAMPLES * float(request["duration"]) / max(n - 1, 1)
 
 
-def judge_free(q, c, factor: float, fail_loose: bool, slack: float):
-    """The check of one free quantity ``c`` (a :class:`FreeComparison`) against its
-    record ``q``: the prescribed judge on its error (the tolerance only when the record
-    was within it), then its trusted horizon (no earlier than recorded minus
-    ``slack`` s)."""
-    from dataclasses import replace
-
-    from .baseline import judge
-    error, h = float(c.normalised), float(c.horizon)
-    within = math.isinf(q.horizon)
-    ref = q if within else replace(q, tolerance=math.inf)
-    out = judge(ref, error, float(c.at), factor, fail_loose)
-    out = replace(out, tolerance=q.tolerance, horizon=h, base_horizon=q.horizon)
-    if out.status == "ok" and not within and h < q.horizon - slack:
-        out = replace(out, status="horizon", slack=slack)
-    return out
-
-
 __all__ = ["DEFAULT_SAMPLES", "FREE_MODE", "HORIZON_SLACK_SAMPLES", "free_mechanism",
            "free_request", "free_request_problem", "free_settings_class", "horizon_slack",
-           "is_free", "judge_free", "run_and_compare_free"]
+           "is_free", "run_and_compare_free"]

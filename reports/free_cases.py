@@ -110,5 +110,25 @@ def command_case(name: str, duration: float | None = None
                          isinstance(mech.joint(m.joint), Revolute), G, float(m.duration))
 
 
+def release_and_judge(mech: Mechanism, engine: str, duration: float | None = None,
+                      samples: int = 200, settings=None):
+    """One engine's free run of ``mech`` (a Mechanism with ``[motion]``, or a driven
+    one, released by :func:`free_case`'s rule) judged against the exact trajectory:
+    ``(FreeEngineRun, FreeVerdict)``.  ``samples``: sample intervals; ``settings``:
+    overrides of the engine's recommended free settings (typed values or
+    ``key=value`` strings)."""
+    from analytic.free_motion import simulate
+    from sim_models.free_engine import free_settings, run_free
+    from sim_models.free_run import FreeRequest
+
+    from .free_compare import compare_free, reference_samples
+    if mech.motion is None:
+        mech = released(mech, RELEASE_DURATION if duration is None else duration)
+    traj = simulate(mech, duration)
+    req = FreeRequest(duration=traj.duration, samples=samples)
+    run = run_free(mech, engine, free_settings(engine, settings), req, traj)
+    return run, compare_free(run, traj, reference_samples(traj, req.times()))
+
+
 def _is_file(name: str) -> bool:
     return str(name).endswith(".toml") or Path(str(name)).is_file()
