@@ -600,20 +600,40 @@ def settings_from_json(rec: RunRecord, where: str, overrides: dict | None = None
     except SettingsError as e:
         raise BaselineError(f"{where}: {rec.label}: the recorded settings cannot be "
                             f"rebuilt: {e}") from None
-    if overrides:
-        s = cls.from_overrides({**s.as_dict(), **overrides}, name)
+    if overrides:  # a key only the other mode's class has is not this run's
+        types = cls.field_types()
+        mine = {k: v for k, v in overrides.items() if k in types}
+        s = cls.from_overrides({**s.as_dict(), **mine}, name)
     return s
 
 
-def overrides_for(pairs, engines) -> dict:
+def overrides_for(pairs, engines, classes=None) -> dict:
     """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (as ``xval compare --set`` takes them)
     as ``{engine: {field: value}}`` for those of ``engines`` that have a field set
-    (:func:`sim_models.registry.split_overrides`; :class:`SettingsError`: status 2)."""
+    (:func:`sim_models.registry.split_overrides`, ``classes`` its settings classes;
+    :class:`SettingsError`: status 2)."""
     if not pairs:
         return {}
     from sim_models.registry import split_overrides
-    return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines))).items()
-            if v}
+    return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines)),
+                                             classes).items() if v}
+
+
+def override_classes(baseline: Baseline) -> dict:
+    """Per engine of ``baseline``, the settings class ``--set`` is checked against: the
+    free-motion one when every run of that engine is a free run, else the prescribed one
+    (a key of the other class only is then applied where the class has it)."""
+    from sim_models.registry import get_engine
+
+    from .baseline_free import free_settings_class
+    out = {}
+    for e in dict.fromkeys(r.engine for r in baseline.runs):
+        free = all(r.free for r in baseline.runs if r.engine == e)
+        try:
+            out[e] = free_settings_class(e) if free else get_engine(e).settings_class
+        except (LinkageError, ImportError):  # an engine gone: the check reports it
+            continue
+    return out
 
 
 # ============================================================================ record
@@ -1060,8 +1080,8 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
 
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
-           "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
-           "judge_free",
-           "judged", "load", "merge", "record", "record_command", "record_problems", "request_dict",
-           "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
-           "source_of", "versions"]
+           "RunCheck", "RunRecord", "builtin_names", "check", "check_run", "dumps",
+           "file_sha256", "judge", "judge_free", "judged", "load", "merge",
+           "override_classes", "record", "record_command", "record_problems",
+           "request_dict", "run_and_compare", "save", "settings_from_json", "settings_json",
+           "settings_line", "source_of", "versions"]

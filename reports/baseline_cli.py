@@ -165,7 +165,9 @@ def cmd_check(args) -> int:
 def _check_overrides(pairs, base: bl.Baseline) -> dict:
     """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
     (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
-    return bl.overrides_for(pairs, (r.engine for r in base.runs))
+    classes = bl.override_classes(base)
+    return bl.overrides_for(pairs, [r.engine for r in base.runs if r.engine in classes],
+                            classes)
 
 
 def _override_props(overrides: dict) -> dict:

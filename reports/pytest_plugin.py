@@ -308,7 +308,8 @@ class Xval:
                 (engine is None or rec.engine == engine)
         checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep,
                           fail_loose=self.fail_loose,
-                          overrides=_overrides(settings, [r.engine for r in base.runs]))
+                          overrides=_overrides(settings, [r.engine for r in base.runs],
+                                               bl.override_classes(base)))
         if not checks:
             raise KeyError(f"{baseline}: no recorded run of case={case!r} engine={engine!r}")
         return base, checks
@@ -402,13 +403,14 @@ class Xval:
                          f"rewrote ({why})")
 
 
-def _overrides(settings, engines) -> dict:
+def _overrides(settings, engines, classes=None) -> dict:
     """``settings`` ({key: value}, applied to every engine that has the key) as
     per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
     if not settings:
         return {}
     from reports.baseline import _fmt_value, overrides_for
-    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines)
+    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines,
+                         classes)
 
 
 def failure_text(base, checks, factor: float, root: Path) -> str:

@@ -151,6 +151,26 @@ def test_command_line_check_passes_then_fails_tightened(tmp_path, recorded, caps
     assert "--free --duration 1 --samples 51" in out   # how to record it again
 
 
+def test_check_set_takes_the_free_settings(tmp_path, recorded, capsys):
+    """``check --set`` of a free-only baseline is checked against the free-motion
+    settings class (PyBullet's ``first_step`` is a free-motion setting only), with the
+    same ranges as ``xval simulate --set``."""
+    doc = _doc(recorded)
+    doc["runs"] = [_run(doc, "mujoco")]
+    p = tmp_path / "a01.json"
+    p.write_text(json.dumps(doc))
+    assert_one_line_error(capsys, ["baseline", "check", str(p), "--set",
+                                   "mujoco.timestep=1"],
+                          r"engine 'mujoco' setting timestep=1: 1 is out of range")
+    assert_one_line_error(capsys, ["baseline", "check", str(p), "--set",
+                                   "mujoco.armature=1"],
+                          r"no engine here has a setting 'armature'")
+    classes = bl.override_classes(bl.load(recorded))
+    assert classes["pybullet"].__name__ == "PybulletFreeSettings"
+    assert bl.overrides_for(["pybullet.first_step=1e-5"], ["pybullet"], classes) == {
+        "pybullet": {"first_step": "1e-5"}}
+
+
 def test_pytest_plugin_cycle(tmp_path, recorded, xval):
     """The plugin's assert_baseline judges free runs with the same check."""
     xval.assert_baseline(recorded)
