@@ -132,11 +132,18 @@ class QuantityRecord:
     tolerance: float      # relative to peak
     max_abs: float        # SI units of the quantity
     peak: float
+    #: a free run's trusted horizon, s (inf: never exceeded; None: a prescribed run,
+    #: whose error is relative to the peak and ``at`` an input value; a free run's is
+    #: relative to the range over the run and ``at`` a time, s)
+    horizon: float | None = None
 
     def as_json(self) -> dict:
-        return {"quantity": self.quantity, "error": _sig(self.error, ERROR_DIGITS),
-                "at": _sig(self.at, 7), "at_unit": self.at_unit, "tolerance": self.tolerance,
-                "max_abs": _sig(self.max_abs, ERROR_DIGITS), "peak": _sig(self.peak, 6)}
+        out = {"quantity": self.quantity, "error": _sig(self.error, ERROR_DIGITS),
+               "at": _sig(self.at, 7), "at_unit": self.at_unit, "tolerance": self.tolerance,
+               "max_abs": _sig(self.max_abs, ERROR_DIGITS), "peak": _sig(self.peak, 6)}
+        if self.horizon is not None:  # null: never exceeded within the run
+            out["horizon_s"] = _sig(self.horizon, 7)
+        return out
 
 
 @dataclass(frozen=True)
@@ -150,14 +157,24 @@ class RunRecord:
     settings: dict        # {"engine", "class", "fields": {name: value}}
     versions: dict
     quantities: tuple[QuantityRecord, ...]
+    #: why a free run being recorded stopped early (not written: refused by
+    #: :func:`record_problems`)
+    stopped: str = field(default="", compare=False)
 
     @property
-    def key(self) -> tuple[str, str, str]:
-        return (self.model.kind, self.model.name, self.engine)
+    def free(self) -> bool:
+        """A free-motion run (:mod:`reports.baseline_free`)."""
+        return self.request.get("mode") == "free"
+
+    @property
+    def key(self) -> tuple[str, ...]:
+        base = (self.model.kind, self.model.name, self.engine)
+        return (*base, "free") if self.free else base
 
     @property
     def label(self) -> str:
-        return f"{self.case} / {self.engine}"
+        return f"{self.case} / {self.engine}" + (
+            f" (free, {self.request['duration']:g} s)" if self.free else "")
 
     def as_json(self) -> dict:
         return {"case": self.case, "engine": self.engine, "model": self.model.as_json(),
@@ -322,16 +339,10 @@ def _parse_run(r, where: str) -> RunRecord:
     src = ModelSource(kinds[0], _get(model, kinds[0], str, f"{where}: model"),
                       _get(model, "sha256", str, f"{where}: model"), content)
     request = _get(r, "request", dict, where)
-    for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
-                   ("max_speed_error", float), ("chords", str), ("mode", str)):
-        _get(request, k, typ, f"{where}: request")
-    if request["mode"] != "run":
-        raise BaselineError(f"{where}: request mode {request['mode']!r}: only 'run' is "
-                            "supported")
-    _request_in_range(request, where)
+    free = _request_checked(request, where)
     settings = _get(r, "settings", dict, where)
     _get(settings, "fields", dict, f"{where}: settings")
-    _settings_in_range(engine, settings, where)
+    _settings_in_range(engine, settings, where, free)
     vers = _get(r, "versions", dict, where)
     qs = []
     for j, q in enumerate(_get(r, "quantities", list, where)):
@@ -347,13 +358,53 @@ def _parse_run(r, where: str) -> RunRecord:
             raise BaselineError(f"{qw}: 'tolerance' must be > 0, got {tol!r}")
         qs.append(QuantityRecord(name, float(err), _num(q.get("at")),
                                  str(q.get("at_unit", "")), tol, _num(q.get("max_abs")),
-                                 _num(q.get("peak"))))
+                                 _num(q.get("peak")), _horizon(q, qw, free)))
     if len({q.quantity for q in qs}) != len(qs):
         raise BaselineError(f"{where}: a quantity is recorded twice")
     if not qs:  # nothing to judge: the run would pass whatever its errors
         raise BaselineError(f"{where}: 'quantities' is empty: a run with no recorded "
                             "quantity judges nothing; record it again")
     return RunRecord(case, engine, src, dict(request), settings, dict(vers), tuple(qs))
+
+
+def _request_checked(request: dict, where: str) -> bool:
+    """Check a recorded request (prescribed ``run`` or ``free``) against the command
+    line's ranges; returns whether it is a free-motion run."""
+    from .baseline_free import FREE_MODE, free_request_problem
+    mode = _get(request, "mode", str, f"{where}: request")
+    if mode == FREE_MODE:
+        bad = free_request_problem(request)
+        if bad:
+            key, value, problem = bad
+            raise BaselineError(f"{where}: request {key}" + (
+                f"={_json_value(value)}: {problem}" if problem != "missing"
+                else ": missing key"))
+        return True
+    if mode != "run":
+        raise BaselineError(f"{where}: request mode {mode!r}: only 'run' (prescribed) and "
+                            f"'{FREE_MODE}' (free motion) are supported")
+    for k, typ in (("revolutions", int), ("samples", int), ("max_violation", float),
+                   ("max_speed_error", float), ("chords", str)):
+        _get(request, k, typ, f"{where}: request")
+    _request_in_range(request, where)
+    return False
+
+
+def _horizon(q: dict, where: str, free: bool) -> float | None:
+    """A free quantity's recorded trusted horizon (s; null: never exceeded -> inf)."""
+    if not free:
+        return None
+    if "horizon_s" not in q:
+        raise BaselineError(f"{where}: missing key 'horizon_s' (a free run's trusted "
+                            "horizon, s; null: never exceeded)")
+    h = q["horizon_s"]
+    if h is None:
+        return math.inf
+    if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) \
+            or h < 0:
+        raise BaselineError(f"{where}: 'horizon_s' must be a time >= 0 s or null (never "
+                            f"exceeded), got {_json_value(h)}")
+    return float(h)
 
 
 def _known_engine(engine: str, where: str) -> None:
@@ -365,18 +416,23 @@ def _known_engine(engine: str, where: str) -> None:
                             f"{', '.join(engine_names())}")
 
 
-def _settings_in_range(engine: str, settings: dict, where: str) -> None:
-    """The recorded settings: the engine's class, every field present (a missing one
-    would silently run at today's default), typed as the class declares, and within its
-    range (the settings class checks it, as for ``--set``: one definition)."""
+def _settings_in_range(engine: str, settings: dict, where: str, free: bool = False) -> None:
+    """The recorded settings: the engine's class (its free-motion class for a free run),
+    every field present (a missing one would silently run at today's default), typed as
+    the class declares, and within its range (the settings class checks it, as for
+    ``--set``: one definition)."""
     from sim_models.engine_settings import SettingsError
-    from sim_models.registry import get_engine
-    from sim_models.tree import SimModelError
     try:
-        eng = get_engine(engine)
-    except (SimModelError, ImportError):  # its library is missing: a failed run, later
+        cls, name = _settings_class(engine, free)
+    except LinkageError as e:
+        if free:  # a registered engine without a free-motion run
+            raise BaselineError(f"{where}: {e}") from None
         return
-    cls, fields = eng.settings_class, settings["fields"]
+    except ImportError:  # its library is missing: a failed run, later
+        return
+    if cls is None:
+        return
+    fields = settings["fields"]
     if settings.get("class", cls.__name__) != cls.__name__:
         raise BaselineError(f"{where}: settings class {settings['class']!r} is not "
                             f"{engine}'s ({cls.__name__})")
@@ -396,10 +452,25 @@ def _settings_in_range(engine: str, settings: dict, where: str) -> None:
             raise BaselineError(f"{where}: settings field {k}={_json_value(fields[k])}: "
                                 f"must be {need}")
     try:
-        cls.from_overrides(fields, eng.name)
+        cls.from_overrides(fields, name)
     except SettingsError as e:
         raise BaselineError(f"{where}: settings field {e.key}={_json_value(e.value)}: "
                             f"{e.problem}") from None
+
+
+def _settings_class(engine: str, free: bool):
+    """``(settings class, engine name)`` of a prescribed or free run of ``engine``
+    (``(None, engine)`` when its library is missing)."""
+    from sim_models.registry import get_engine
+    from sim_models.tree import SimModelError
+    if free:
+        from .baseline_free import free_settings_class
+        return free_settings_class(engine), engine
+    try:
+        eng = get_engine(engine)
+    except (SimModelError, ImportError):
+        return None, engine
+    return eng.settings_class, eng.name
 
 
 def _json_type_problem(v, typ) -> str | None:
@@ -459,7 +530,12 @@ Runner = Callable[..., tuple]
 def run_and_compare(mech, engine: str, settings, request: dict):
     """Run ``engine`` on ``mech`` as ``request`` asks and compare every judged quantity
     with the analytic solution (:func:`reports.verdict_runs.run_verdict`):
-    ``(EngineRun, [Comparison])`` (``[engine]`` rows left out)."""
+    ``(EngineRun, [Comparison])`` (``[engine]`` rows left out).  A free-motion request
+    (:mod:`reports.baseline_free`) releases the linkage instead: ``(FreeEngineRun,
+    [FreeComparison])``."""
+    from .baseline_free import is_free, run_and_compare_free
+    if is_free(request):
+        return run_and_compare_free(mech, engine, settings, request)
     from .verdict_runs import request_of, run_verdict
     v = run_verdict(mech, engine, settings, request_of(request))
     return v.run, v.judged()
@@ -510,27 +586,54 @@ def settings_from_json(rec: RunRecord, where: str, overrides: dict | None = None
     fields; raises :class:`BaselineError` when the engine no longer accepts a recorded
     field (a bad override is the :class:`SettingsError` of ``--set``: status 2)."""
     from sim_models.engine_base import SettingsError
-    from sim_models.registry import get_engine
-    eng = get_engine(rec.engine)
+
+    from .baseline_free import is_free
+    if is_free(rec.request):
+        from .baseline_free import free_settings_class
+        cls, name = free_settings_class(rec.engine), rec.engine
+    else:
+        from sim_models.registry import get_engine
+        eng = get_engine(rec.engine)
+        cls, name = eng.settings_class, eng.name
     try:
-        s = eng.settings_class.from_overrides(rec.settings["fields"], eng.name)
+        s = cls.from_overrides(rec.settings["fields"], name)
     except SettingsError as e:
         raise BaselineError(f"{where}: {rec.label}: the recorded settings cannot be "
                             f"rebuilt: {e}") from None
-    if overrides:
-        s = eng.settings_class.from_overrides({**s.as_dict(), **overrides}, eng.name)
+    if overrides:  # a key only the other mode's class has is not this run's
+        types = cls.field_types()
+        mine = {k: v for k, v in overrides.items() if k in types}
+        s = cls.from_overrides({**s.as_dict(), **mine}, name)
     return s
 
 
-def overrides_for(pairs, engines) -> dict:
+def overrides_for(pairs, engines, classes=None) -> dict:
     """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (as ``xval compare --set`` takes them)
     as ``{engine: {field: value}}`` for those of ``engines`` that have a field set
-    (:func:`sim_models.registry.split_overrides`; :class:`SettingsError`: status 2)."""
+    (:func:`sim_models.registry.split_overrides`, ``classes`` its settings classes;
+    :class:`SettingsError`: status 2)."""
     if not pairs:
         return {}
     from sim_models.registry import split_overrides
-    return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines))).items()
-            if v}
+    return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines)),
+                                             classes).items() if v}
+
+
+def override_classes(baseline: Baseline) -> dict:
+    """Per engine of ``baseline``, the settings class ``--set`` is checked against: the
+    free-motion one when every run of that engine is a free run, else the prescribed one
+    (a key of the other class only is then applied where the class has it)."""
+    from sim_models.registry import get_engine
+
+    from .baseline_free import free_settings_class
+    out = {}
+    for e in dict.fromkeys(r.engine for r in baseline.runs):
+        free = all(r.free for r in baseline.runs if r.engine == e)
+        try:
+            out[e] = free_settings_class(e) if free else get_engine(e).settings_class
+        except (LinkageError, ImportError):  # an engine gone: the check reports it
+            continue
+    return out
 
 
 # ============================================================================ record
@@ -538,15 +641,21 @@ def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
     paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
     from analytic import load_case
-    from analytic.cases import case_names
     from reports import model_identity as mid
-    if model in case_names():
+    if model in builtin_names():
         mech = load_case(model)
         return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech
     p = Path(model).resolve()
     mech = load_case(str(p))
     rel = Path(os.path.relpath(p, base_dir)).as_posix()
     return ModelSource("file", rel, mid.digest(mech), mid.content(mech)), mech
+
+
+def builtin_names() -> list[str]:
+    """The names a baseline records as built-in: the cases, the hard cases and the
+    free-motion cases."""
+    from analytic.cases import case_names, free_case_names, hard_case_names
+    return [*case_names(), *hard_case_names(), *free_case_names()]
 
 
 def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike,
@@ -557,7 +666,10 @@ def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike
     ``settings``: engine name -> settings object (default: the recommended ones);
     ``request``: :func:`request_dict`; ``tolerance``: relative to peak (default
     :data:`analytic.tolerances.ENGINE_RELATIVE`).  Raises :class:`EngineRefusal` /
-    :class:`NothingToCompare` (status 2) as ``xval compare`` does."""
+    :class:`NothingToCompare` (status 2) as ``xval compare`` does.  A free-motion
+    ``request`` (:func:`reports.baseline_free.free_request`) records released runs,
+    each quantity with its own tolerance (:mod:`reports.free_compare`; ``tolerance``
+    must be None) and trusted horizon."""
     from analytic.tolerances import ENGINE_RELATIVE
     from sim_models.registry import get_engine
     tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
@@ -565,12 +677,16 @@ def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike
     runner = runner or run_and_compare
     base_dir = Path(out).resolve().parent
     runs = []
+    from .baseline_free import free_settings_class, is_free
+    free = is_free(req)
     for model in models:
         src, mech = source_of(model, base_dir)
         for engine in engines:
-            s = (settings or {}).get(engine) or get_engine(engine).settings()
+            s = (settings or {}).get(engine) or (
+                free_settings_class(engine)() if free else get_engine(engine).settings())
             r, comps = runner(mech, engine, s, req)
-            runs.append(_record_run(mech, src, engine, s, req, r, comps, tol))
+            runs.append(_record_free(mech, src, engine, s, req, r, comps) if free
+                        else _record_run(mech, src, engine, s, req, r, comps, tol))
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
     return Baseline(tuple(runs), Path(out), now)
 
@@ -581,6 +697,18 @@ def _record_run(mech, src, engine, settings, req, r, comps, tol) -> RunRecord:
                               float(c.max_abs), float(c.peak)) for c in comps)
     return RunRecord(mech.name, engine, src, dict(req), settings_json(engine, settings),
                      versions(engine), qs)
+
+
+def _record_free(mech, src, engine, settings, req, r, comps) -> RunRecord:
+    """A free run's record: each quantity's error over its range, the time of its
+    maximum (s), its tolerance and trusted horizon (a run that stopped: noted as a
+    problem by :func:`record_problems`)."""
+    qs = tuple(QuantityRecord(c.quantity, float(c.normalised), float(c.at), "s",
+                              float(c.tolerance), float(c.max_abs), float(c.scale),
+                              float(c.horizon)) for c in comps)
+    stopped = "" if r.ok else f"the run stopped at t = {r.t_fail:.4g} s: {r.reason}"
+    return RunRecord(r.case, engine, src, dict(req), settings_json(engine, settings),
+                     versions(engine), qs, stopped)
 
 
 def merge(old: Baseline, new: Baseline) -> tuple[Baseline, dict[str, int]]:
@@ -603,9 +731,14 @@ def record_problems(baseline: Baseline) -> list[str]:
     already above their tolerance (a baseline records a passing state)."""
     out = []
     for r in baseline.runs:
+        if r.stopped:  # a free run that stopped judges nothing after it stopped
+            out.append(f"{r.label}: {r.stopped}")
+            continue
         for q in r.quantities:
             if not math.isfinite(q.error):
                 out.append(f"{r.label}: {q.quantity} is not finite (the run failed)")
+            elif q.horizon is not None:  # free: over its tolerance is its horizon
+                continue
             elif q.error > q.tolerance:
                 out.append(f"{r.label}: {q.quantity} error {q.error:.3g} of peak exceeds "
                            f"its tolerance {q.tolerance:g}")
@@ -615,39 +748,54 @@ def record_problems(baseline: Baseline) -> list[str]:
 def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> str:
     """The ``xval baseline record`` command that records ``baseline``'s runs again (file
     paths relative to ``cwd``, default the current folder); settings that differ from
-    an engine's defaults are named as ``--set ENGINE.KEY=VALUE``."""
+    an engine's defaults are named as ``--set ENGINE.KEY=VALUE``.  Free runs are
+    recorded by their own command (``--free --duration S --samples N``, one per
+    duration and sample count), joined by ``&&`` (each merges into the file)."""
+    groups: dict = {}
+    for r in baseline.runs:
+        k = (r.request["duration"], r.request["samples"]) if r.free else None
+        groups.setdefault(k, []).append(r)
+    return " && ".join(_record_words(runs, baseline, cwd, k)
+                       for k, runs in sorted(groups.items(), key=lambda kv: kv[0] is not None))
+
+
+def _record_words(runs, baseline: Baseline, cwd, free) -> str:
+    """One ``xval baseline record`` command for ``runs`` (all prescribed, or all free
+    with ``free`` = (duration, samples))."""
     from analytic.cases import case_names
     models, engines, sets = [], [], []
-    for r in baseline.runs:
+    for r in runs:
         m = r.model.name if r.model.kind == "builtin" else \
             os.path.relpath(r.model.path(baseline.base_dir), cwd or os.getcwd())
         models += [m] if m not in models else []
         engines += [r.engine] if r.engine not in engines else []
         sets += [s for s in _overrides(r) if s not in sets]
-    if set(case_names()) <= set(models):
+    if free is None and set(case_names()) <= set(models):
         models = ["all"] + [m for m in models if m not in case_names()]
-    req = baseline.runs[0].request if baseline.runs else request_dict()
     words = ["xval baseline record", *models, *(f"--engine {e}" for e in engines),
              *(f"--set {s}" for s in sets)]
+    out = os.path.relpath(baseline.path.resolve(), cwd or os.getcwd())
+    if free is not None:
+        return " ".join([*words, f"--free --duration {free[0]:g} --samples {free[1]}",
+                         f"--out {out}"])
+    req = runs[0].request if runs else request_dict()
     default = request_dict()  # the options' defaults: RunRequest's
     words += [f"--revolutions {req['revolutions']}"] \
         if req["revolutions"] != default["revolutions"] else []
     words += [f"--samples {req['samples']}"] if req["samples"] != default["samples"] else []
     from analytic.tolerances import ENGINE_RELATIVE
-    tols = {q.tolerance for r in baseline.runs for q in r.quantities}
+    tols = {q.tolerance for r in runs for q in r.quantities}
     if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:
         words.append(f"--tolerance {t:g}")
-    out = os.path.relpath(baseline.path.resolve(), cwd or os.getcwd())
     return " ".join([*words, f"--out {out}"])
 
 
 def _overrides(rec: RunRecord) -> list[str]:
     """``ENGINE.KEY=VALUE`` for each recorded setting that is not the engine's default."""
-    from sim_models.registry import get_engine
-    from sim_models.tree import SimModelError
     try:
-        default = get_engine(rec.engine).settings().as_dict()
-    except (SimModelError, ImportError):  # an engine gone: the check reports it
+        cls, _ = _settings_class(rec.engine, rec.free)
+        default = cls().as_dict()
+    except (LinkageError, ImportError, TypeError):  # an engine gone: the check says so
         return []
     out = []
     for k, v in sorted(rec.settings["fields"].items()):
@@ -678,6 +826,16 @@ class QuantityCheck:
     at_unit: str
     tolerance: float
     factor: float
+    #: free runs: the trusted horizon now and recorded, s (inf: never exceeded), and how
+    #: much earlier it may come (``reports.baseline_free.horizon_slack``)
+    horizon: float = math.nan
+    base_horizon: float = math.nan
+    slack: float = math.nan
+
+    @property
+    def scale_word(self) -> str:
+        """What the error is relative to: a free run's range, a prescribed run's peak."""
+        return "of range" if self.at_unit == "s" else "of peak"
 
     @property
     def failed(self) -> bool:
@@ -695,19 +853,25 @@ class QuantityCheck:
         """One line naming the quantity, what happened, by how much and where."""
         from analytic.input_display import format_input
         at = f" at {format_input(self.at, self.at_unit)}" if math.isfinite(self.at) else ""
+        of = self.scale_word
         if self.status == "missing":
-            return f"{self.quantity}: recorded (error {self.base:.3g} of peak) but no " \
+            return f"{self.quantity}: recorded (error {self.base:.3g} {of}) but no " \
                    "longer compared"
         if self.status == "new":
-            return f"{self.quantity}: new, not in the baseline (error {self.error:.3g} of peak)"
+            return f"{self.quantity}: new, not in the baseline (error {self.error:.3g} {of})"
         if self.status == "not-finite":
             return f"{self.quantity}: error is not finite{at} (the run diverged or failed)"
-        grew = f"{self.base:.3g} -> {self.error:.3g} of peak{at} ({_times(self.ratio)})"
+        if self.status == "horizon":
+            return f"{self.quantity}: trusted horizon {self.base_horizon:.4g} s -> " \
+                   f"{self.horizon:.4g} s, earlier by more than one sample interval " \
+                   f"({self.slack:.3g} s; error {self.error:.3g} {of}, tolerance " \
+                   f"{self.tolerance:g})"
+        grew = f"{self.base:.3g} -> {self.error:.3g} {of}{at} ({_times(self.ratio)})"
         if self.status in ("improved", "loose"):
             return f"{self.quantity}: improved {grew}, more than the factor " \
                    f"{self.factor:g}: the baseline is loose; re-record"
         if self.status == "over-tolerance":
-            return f"{self.quantity}: error {self.error:.3g} of peak{at} exceeds its " \
+            return f"{self.quantity}: error {self.error:.3g} {of}{at} exceeds its " \
                    f"tolerance {self.tolerance:g} (baseline {self.base:.3g}, {_times(self.ratio)})"
         if self.status == "drift":
             floor = "" if self.base >= DRIFT_FLOOR else \
@@ -741,6 +905,23 @@ def judge(q: QuantityRecord, error: float, at: float, factor: float,
         status = "ok"
     return QuantityCheck(q.quantity, status, error, q.error, at, q.at_unit, q.tolerance,
                          factor)
+
+
+def judge_free(q, c, factor: float, fail_loose: bool, slack: float):
+    """The check of one free quantity ``c`` (a :class:`FreeComparison`) against its
+    record ``q``: the prescribed judge on its error (the tolerance only when the record
+    was within it), then its trusted horizon (no earlier than recorded minus
+    ``slack`` s)."""
+    from dataclasses import replace
+
+    error, h = float(c.normalised), float(c.horizon)
+    within = math.isinf(q.horizon)
+    ref = q if within else replace(q, tolerance=math.inf)
+    out = judge(ref, error, float(c.at), factor, fail_loose)
+    out = replace(out, tolerance=q.tolerance, horizon=h, base_horizon=q.horizon)
+    if out.status == "ok" and not within and h < q.horizon - slack:
+        out = replace(out, status="horizon", slack=slack)
+    return out
 
 
 @dataclass
@@ -784,7 +965,8 @@ class RunCheck:
 
 
 def _severity(q: QuantityCheck) -> tuple:
-    rank = {"not-finite": 4, "over-tolerance": 3, "missing": 2, "drift": 1}.get(q.status, 0)
+    rank = {"not-finite": 4, "over-tolerance": 3, "missing": 2, "horizon": 2,
+            "drift": 1}.get(q.status, 0)
     over = q.error / max(q.factor * max(q.base, DRIFT_FLOOR), 1e-300) \
         if math.isfinite(q.error) and math.isfinite(q.base) else math.inf
     return (rank, over)
@@ -832,16 +1014,20 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}
+    from .baseline_free import horizon_slack
     for q in rec.quantities:
         c = now.get(q.quantity)
         if c is None:
             out.quantities.append(QuantityCheck(q.quantity, "missing", math.nan, q.error,
                                                 math.nan, q.at_unit, q.tolerance, factor))
+        elif rec.free:
+            out.quantities.append(judge_free(q, c, factor, fail_loose,
+                                             horizon_slack(rec.request)))
         else:
             out.quantities.append(judge(q, float(c.normalised), float(c.at), factor,
                                         fail_loose))
     recorded = {q.quantity for q in rec.quantities}
-    unit = "deg" if _revolute(mech) else "m"
+    unit = "s" if rec.free else "deg" if _revolute(mech) else "m"
     for c in comps:
         if c.quantity not in recorded:
             out.quantities.append(QuantityCheck(c.quantity, "new", float(c.normalised),
@@ -853,9 +1039,8 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
 def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
     """The recorded model as it is now (None, with a problem, when it is gone)."""
     from analytic import load_case
-    from analytic.cases import case_names
     src = rec.model
-    if src.kind == "builtin" and src.name not in case_names():
+    if src.kind == "builtin" and src.name not in builtin_names():
         out.problems.append(f"the built-in case {src.name!r} no longer exists")
         return None
     from reports import model_identity as mid
@@ -895,7 +1080,8 @@ def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
 
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityCheck", "QuantityRecord",
-           "RunCheck", "RunRecord", "check", "check_run", "dumps", "file_sha256", "judge",
-           "judged", "load", "merge", "record", "record_command", "record_problems", "request_dict",
-           "run_and_compare", "save", "settings_from_json", "settings_json", "settings_line",
-           "source_of", "versions"]
+           "RunCheck", "RunRecord", "builtin_names", "check", "check_run", "dumps",
+           "file_sha256", "judge", "judge_free", "judged", "load", "merge",
+           "override_classes", "record", "record_command", "record_problems",
+           "request_dict", "run_and_compare", "save", "settings_from_json", "settings_json",
+           "settings_line", "source_of", "versions"]

@@ -24,12 +24,31 @@ def cmd_record(args) -> int:
     from analytic.cases import case_names
     from sim_models.registry import settings_from_options
     check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
-    engines = _engines(args.engine)
+    free = bool(getattr(args, "free", False))
+    _free_options(args, free)
+    engines = _engines(args.engine, free)
     models = []
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
-    settings = settings_from_options(engines, args.set or ())
-    req = bl.request_dict(args.revolutions, args.samples)
+    if free:
+        from sim_models.free_engine import free_session_class
+
+        from .baseline_free import free_mechanism, free_request
+        from .free_cases import RELEASE_DURATION, command_case
+        settings = settings_from_options(
+            engines, args.set or (),
+            classes={e: free_session_class(e).settings_class for e in engines})
+        req = free_request(args.duration or RELEASE_DURATION, args.samples)
+        for m in dict.fromkeys(models):  # one line, status 2, before any run
+            mech, _ = command_case(m, req["duration"])
+            if mech.motion is None:  # a user's file is not guessed at (as xval simulate)
+                from analytic.errors import DescriptionError
+                raise DescriptionError(f"{m}: no [motion] table: free motion needs the "
+                                       "initial joint, value, rate and duration")
+            free_mechanism(mech, req)
+    else:
+        settings = settings_from_options(engines, args.set or ())
+        req = bl.request_dict(args.revolutions, args.samples)
     base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance)
     problems = bl.record_problems(base)
@@ -37,8 +56,12 @@ def cmd_record(args) -> int:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
                 default=None)
         from analytic.input_display import format_input
-        worst = f"worst {w.quantity} {w.error:.3g} of peak at {format_input(w.at, w.at_unit)}" \
+        of = "of range" if free else "of peak"
+        worst = f"worst {w.quantity} {w.error:.3g} {of} at {format_input(w.at, w.at_unit)}" \
             if w else "nothing compared"
+        if free and w:
+            h = min(q.horizon for q in r.quantities)
+            worst += "; trusted horizon " + ("whole run" if math.isinf(h) else f"{h:.4g} s")
         print(f"{r.label}: {len(r.quantities)} quantities, {worst}")
     if problems:
         for p in problems:
@@ -62,11 +85,47 @@ def cmd_record(args) -> int:
     return 0
 
 
-def _engines(choice: list[str] | None) -> list[str]:
+def _engines(choice: list[str] | None, free: bool = False) -> list[str]:
     from sim_models.registry import engine_names, get_engine
+    if free:
+        from sim_models.free_engine import free_engine_names, free_session_class
+        if not choice or "all" in choice:
+            return list(free_engine_names())
+        for e in choice:
+            free_session_class(e)  # an engine without a free run: one line, status 2
+        return list(dict.fromkeys(choice))
     if not choice or "all" in choice:
         return list(engine_names())
     return list(dict.fromkeys(get_engine(e).name for e in choice))
+
+
+def _free_options(args, free: bool) -> None:
+    """The options that belong to one mode only: one line, status 2."""
+    if free:
+        bad = [k for k, v in (("--revolutions", args.revolutions),
+                              ("--tolerance", args.tolerance)) if v is not None]
+        if bad:
+            raise opt.UsageError(f"{bad[0]} does not apply to --free (a free run is read "
+                                 "over --duration at --samples times; its tolerances are "
+                                 "the named ones of reports/free_compare.py)")
+        from analytic.motion_spec import MAX_SAMPLES
+        args.samples = _checked_samples(args.samples, opt.int_range(2, MAX_SAMPLES))
+    elif args.duration is not None:
+        raise opt.UsageError("--duration needs --free (a prescribed run is read over "
+                             "--revolutions)")
+    else:
+        args.samples = _checked_samples(args.samples, opt.samples)
+
+
+def _checked_samples(text, typ):
+    """``--samples`` through the argparse type of its mode (None: not given)."""
+    import argparse
+    if text is None:
+        return None
+    try:
+        return typ(text)
+    except argparse.ArgumentTypeError as e:
+        raise opt.UsageError(f"argument --samples: {e}") from None
 
 
 # ============================================================================ check
@@ -106,7 +165,9 @@ def cmd_check(args) -> int:
 def _check_overrides(pairs, base: bl.Baseline) -> dict:
     """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
     (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
-    return bl.overrides_for(pairs, (r.engine for r in base.runs))
+    classes = bl.override_classes(base)
+    return bl.overrides_for(pairs, [r.engine for r in base.runs if r.engine in classes],
+                            classes)
 
 
 def _override_props(overrides: dict) -> dict:
@@ -119,13 +180,18 @@ _tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
 
 
 def _model(text: str) -> str:
-    return text if text == "all" else opt.case_or_file(text)
+    from analytic.cases import free_case_names
+    return text if text == "all" or text in free_case_names() else opt.case_or_file(text)
 
 
 def register(sub) -> None:
     """``xval baseline record|check``."""
+    from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
     from sim_models.engine_run import RunRequest
     from sim_models.registry import engine_names
+
+    from .baseline_free import DEFAULT_SAMPLES
+    from .free_cases import MIN_DURATION, RELEASE_DURATION
     p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
     r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
@@ -137,10 +203,19 @@ def register(sub) -> None:
                    help="the baseline file to write (JSON)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
-    r.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
-                   help=f"1 to {opt.MAX_REVOLUTIONS}")
-    r.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
-                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
+    r.add_argument("--revolutions", type=opt.revolutions, default=None,
+                   help=f"1 to {opt.MAX_REVOLUTIONS} (default {RunRequest.revolutions})")
+    r.add_argument("--samples", default=None,  # its range depends on --free: _free_options
+                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES} (default "
+                        f"{RunRequest.samples}); with --free, sample times over the run, "
+                        f"2 to {MAX_SAMPLES} (default {DEFAULT_SAMPLES})")
+    r.add_argument("--free", action="store_true",
+                   help="record free-motion runs: each case released from the exact "
+                        "state (a built-in case without [motion] released at rest under "
+                        "gravity, as the report does) and judged over --duration")
+    r.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
+                   help=f"with --free: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
+                        f"(default {RELEASE_DURATION:g})")
     r.add_argument("--tolerance", type=_tolerance, default=None,
                    help="relative to peak, recorded per quantity (default 1e-3)")
     r.add_argument("--replace", action="store_true",

@@ -21,8 +21,10 @@ def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
         w = c.worst()
         if c.passed:
             ratio = f", {w.ratio:.3g}x" if w and math.isfinite(w.ratio) else ""
-            worst = f"worst {w.quantity} {w.error:.3g} of peak (baseline {w.base:.3g}" \
-                    f"{ratio})" if w else "nothing compared"
+            worst = f"worst {w.quantity} {w.error:.3g} {w.scale_word} (baseline " \
+                    f"{w.base:.3g}{ratio})" if w else "nothing compared"
+            if w and c.record.free:
+                worst += "; trusted horizon " + _horizon_text(c)
             out.append(f"pass  {c.record.label}: {worst}")
             continue
         first = c.problems[0] if c.problems else c.failures()[0].message()
@@ -45,6 +47,16 @@ def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
                "runs failed" + (" (drift, tolerance, or a run, quantity or model gone or "
                                 "changed)" if failed else ""))
     return out
+
+
+def _horizon_text(c) -> str:
+    """A free run's trusted horizon now and recorded (the earliest of its quantities)."""
+    now = min((q.horizon for q in c.quantities if math.isfinite(q.error)), default=math.nan)
+    rec = min((q.horizon for q in c.record.quantities), default=math.nan)
+
+    def t(h):
+        return "whole run" if math.isinf(h) else f"{h:.4g} s"
+    return f"{t(now)} (recorded {t(rec)})"
 
 
 def versions_line(checks) -> str:

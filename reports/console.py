@@ -121,5 +121,44 @@ def print_verdict(summary: pd.DataFrame, echo=print) -> None:
     echo(counts_line(summary))
 
 
-__all__ = ["WIDTH", "counts_line", "failure_notes", "margin_rows", "print_verdict", "sig2",
-           "verdict_table"]
+def free_counts_line(free: pd.DataFrame) -> str:
+    """The free-motion verdicts (``free_verdicts.csv``) in one line: ``free motion: N of
+    M pass (engine k/n, ...), F failed, K known engine limits (engine case, ...)``."""
+    if not len(free):
+        return "free motion: no verdicts"
+    v = free["verdict"].astype(str)
+    eng = free["engine"].fillna("").astype(str)
+    per = ", ".join(f"{e} {int(((v == 'pass') & (eng == e)).sum())}/{int((eng == e).sum())}"
+                    for e in dict.fromkeys(eng) if e)
+    known = free[v == "known limit"]
+    line = (f"free motion: {int((v == 'pass').sum())} of {len(free)} pass"
+            + (f" ({per})" if per else "") + f", {int((v == 'FAIL').sum())} failed")
+    if len(known):
+        line += (f", {len(known)} known engine limit{'s' if len(known) > 1 else ''} ("
+                 + ", ".join(f"{r.engine} {r.case}" for r in known.itertuples()) + ")")
+    return line
+
+
+def free_failure_lines(free: pd.DataFrame, width: int = WIDTH) -> list[str]:
+    """Each failed or known-limit free verdict in full: case / engine, verdict, worst
+    quantity and error, trusted horizon, and its note or why the run stopped."""
+    import textwrap
+    out = []
+    for d in free.to_dict("records"):
+        if d.get("verdict") == "pass":
+            continue
+        what = (f"{d['case']} / {_text(d.get('engine')) or '-'}: {d['verdict']}")
+        if _text(d.get("worst quantity")):
+            what += (f", {d['worst quantity']} {sig2(d.get('worst error / scale'))} of "
+                     f"its scale, trusted {_text(d.get('trusted horizon'))}")
+        run = _text(d.get("run"))
+        if run and run != "ok":
+            what += f"; {run}"
+        if _text(d.get("note")):
+            what += f"; {d['note']}"
+        out += textwrap.wrap(what, width, subsequent_indent="    ")
+    return out
+
+
+__all__ = ["WIDTH", "counts_line", "failure_notes", "free_counts_line", "free_failure_lines",
+           "margin_rows", "print_verdict", "sig2", "verdict_table"]

@@ -303,15 +303,5 @@ def free_verdict(mech, engine: str, duration: float | None = None, samples: int 
     one, released by :func:`reports.free_cases.free_case`'s rule) judged against the
     exact trajectory: ``(run, FreeVerdict)``.  ``settings``: overrides of the engine's
     recommended free settings (typed values or ``key=value`` strings)."""
-    from analytic.free_motion import simulate
-    from sim_models.free_cases import released
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
-
-    from .free_cases import RELEASE_DURATION
-    if mech.motion is None:
-        mech = released(mech, RELEASE_DURATION if duration is None else duration)
-    traj = simulate(mech, duration)
-    req = FreeRequest(duration=traj.duration, samples=samples)
-    run = run_free(mech, engine, free_settings(engine, settings), req, traj)
-    return run, compare_free(run, traj, reference_samples(traj, req.times()))
+    from .free_cases import release_and_judge
+    return release_and_judge(mech, engine, duration, samples, settings)

@@ -87,6 +87,24 @@ def _entry(mech, engine: str, settings, request: dict) -> dict:
     return hit
 
 
+def _free_entry(mech, engine: str, settings, request: dict):
+    """A free run and its judged quantities, cached for the session."""
+    from reports.baseline_free import run_and_compare_free
+    key = ("free", _mech_digest(mech), engine, type(settings).__qualname__,
+           repr(settings), tuple(sorted(request.items())))
+    hit = _CACHE.get(key)
+    if hit is not None:
+        _STATS["hits"] += 1
+        return hit
+    t0 = time.perf_counter()
+    _STATS["runs"] += 1
+    try:
+        hit = _CACHE[key] = run_and_compare_free(mech, engine, settings, request)
+    finally:
+        _STATS["seconds"] += time.perf_counter() - t0
+    return hit
+
+
 def _make_run(mech, engine, settings, request) -> dict:
     from analytic.errors import LinkageError
     from reports.verdict_runs import request_of, run_verdict
@@ -113,8 +131,13 @@ def session_run(mech, engine: str, settings=None, revolutions: int | None = None
 
 
 def cached_runner(mech, engine: str, settings, request: dict):
-    """:data:`reports.baseline.Runner` on the session cache (baseline checks)."""
+    """:data:`reports.baseline.Runner` on the session cache (baseline checks); a
+    free-motion request (:mod:`reports.baseline_free`) is released and judged by the
+    same function ``xval baseline`` uses, cached alike."""
     from reports.baseline import judged
+    from reports.baseline_free import is_free
+    if is_free(request):
+        return _free_entry(mech, engine, settings, request)
     e = _entry(mech, engine, settings, request)
     return e["run"], judged(e["comparisons"])
 
@@ -285,7 +308,8 @@ class Xval:
                 (engine is None or rec.engine == engine)
         checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep,
                           fail_loose=self.fail_loose,
-                          overrides=_overrides(settings, [r.engine for r in base.runs]))
+                          overrides=_overrides(settings, [r.engine for r in base.runs],
+                                               bl.override_classes(base)))
         if not checks:
             raise KeyError(f"{baseline}: no recorded run of case={case!r} engine={engine!r}")
         return base, checks
@@ -372,19 +396,21 @@ class Xval:
                 str(rec.model.path(base.base_dir))
             s = bl.settings_from_json(rec, str(base.path),
                                       _overrides(settings, [rec.engine]).get(rec.engine))
-            tol = rec.quantities[0].tolerance if rec.quantities else None
+            # a free run's tolerances are the named ones of each quantity
+            tol = rec.quantities[0].tolerance if rec.quantities and not rec.free else None
             why = c.problems[0] if c.problems else (c.failures() or c.loose())[0].message()
             self._record(base.path, model, rec.engine, s, rec.request, tol,
                          f"rewrote ({why})")
 
 
-def _overrides(settings, engines) -> dict:
+def _overrides(settings, engines, classes=None) -> dict:
     """``settings`` ({key: value}, applied to every engine that has the key) as
     per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
     if not settings:
         return {}
     from reports.baseline import _fmt_value, overrides_for
-    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines)
+    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines,
+                         classes)
 
 
 def failure_text(base, checks, factor: float, root: Path) -> str:
@@ -432,7 +458,9 @@ def run_params(path, root: Path) -> list:
         base = bl.load(p)
     except bl.BaselineError as e:
         return [pytest.param(("error", f"xval: error: {e}"), id="xval_baseline")]
-    return [pytest.param(("run", r.key), id=f"{r.case}/{r.engine}") for r in base.runs]
+    return [pytest.param(("run", r.key), id=f"{r.case}/{r.engine}" + ("/free" if r.free
+                                                                        else ""))
+            for r in base.runs]
 
 
 def baseline_checker(xval: Xval, path: str, param):

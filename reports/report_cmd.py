@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from . import report
-from .console import print_verdict
+from .console import free_counts_line, free_failure_lines, print_verdict
 
 
 def run(args) -> int:
@@ -42,12 +42,33 @@ def run(args) -> int:
     summary = pd.read_csv(path / "verdict_summary.csv", keep_default_na=False,
                           na_values=[""])
     print_verdict(summary)
+    free = _free_verdicts(path)
+    if free is not None:
+        for ln in free_failure_lines(free) + [free_counts_line(free)]:
+            print(ln)
     wall = time.perf_counter() - t0
     phases = pd.read_csv(path / "phases.csv")
     print(f"wall time {wall:.1f} s ("
           + ", ".join(f"{r.phase} {r.seconds:.1f} s" for r in phases.itertuples()) + ")")
     print(f"report: {path / 'index.html'}  ({path / 'report.md'})")
-    return 0 if (summary["verdict"] == "pass").all() else 1  # a failed verdict: status 1
+    return exit_status(summary, free)
 
 
-__all__ = ["run"]
+def _free_verdicts(path: Path) -> pd.DataFrame | None:
+    """The report's free-motion verdicts, None when it ran no free-motion section."""
+    f = path / "free_verdicts.csv"
+    if not f.exists():
+        return None
+    return pd.read_csv(f, keep_default_na=False, na_values=[""])
+
+
+def exit_status(summary: pd.DataFrame, free: pd.DataFrame | None) -> int:
+    """1 when any prescribed verdict or any free-motion verdict failed (a listed known
+    engine limit, reports/free_limits.py, is reported and not counted), else 0."""
+    failed = not (summary["verdict"] == "pass").all()
+    if free is not None and len(free):
+        failed = failed or bool((free["verdict"].astype(str) == "FAIL").any())
+    return 1 if failed else 0
+
+
+__all__ = ["exit_status", "run"]

@@ -17,21 +17,19 @@ import math
 
 import numpy as np
 
-from analytic import load_case
 from analytic.free_motion import simulate
 from analytic.mechanism import Revolute
 from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
 
 from . import cli_options as opt
-
-#: Shortest duration accepted on the command line, s (one microsecond: the IFToMM A03
-#: run is 0.03 s).
-MIN_DURATION = 1e-6
+from .free_cases import MIN_DURATION  # one definition for every door
 
 
 def register(sub) -> None:
     s = sub.add_parser("simulate", help="free motion: integrate a released linkage")
-    s.add_argument("case", help="built-in case name or TOML file with a [motion] table")
+    s.add_argument("case", help="built-in case name or TOML file with a [motion] table (a "
+                        "built-in case without one is released at rest under gravity, as "
+                        "the report's free-motion section releases it)")
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"seconds, {MIN_DURATION:g} to {MAX_DURATION:g} (default: the "
                         "description's)")
@@ -79,19 +77,23 @@ def cmd_simulate(args) -> int:
     if getattr(args, "engine", None) and args.csv == "-":
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
-    mech = load_case(args.case)
+    from .free_cases import command_case
+    mech, release = command_case(args.case, args.duration)
     traj = simulate(mech, args.duration)
     n = args.samples or mech.motion.samples
+    if release is not None and not args.json:
+        print(release.text)
     if getattr(args, "engine", None):
         if args.csv:
             smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
             write_csv(_frame(mech, smp), args.csv, args.stdout)
-        return cmd_engines(args, mech, traj, n)
+        return cmd_engines(args, mech, traj, n, release)
     smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
     frame = _frame(mech, smp)
     if args.json:
         out = {"case": mech.name, "duration_s": traj.duration, "rtol": traj.rtol,
                "method": traj.method, "evaluations": traj.nfev,
+               "released": release.as_json() if release else None,
                "events": [{"t_s": e.t, "kind": e.kind, "joint": e.joint,
                            "detail": e.detail} for e in traj.events],
                "samples": {c: frame[c].tolist() for c in frame.columns}}

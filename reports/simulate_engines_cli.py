@@ -77,8 +77,10 @@ def run_engines(mech, traj, args, samples: int):
     return out
 
 
-def cmd_engines(args, mech, traj, samples: int) -> int:
-    """The engine part of ``xval simulate``: run, judge, print; 0 pass, 1 fail."""
+def cmd_engines(args, mech, traj, samples: int, release=None) -> int:
+    """The engine part of ``xval simulate``: run, judge, print; 0 pass, 1 fail.
+    ``release``: the :class:`reports.free_cases.Release` of a built-in case without
+    ``[motion]`` (in the JSON as ``released``; the text output says it before)."""
     from .cli_paths import check_outputs
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
@@ -87,7 +89,8 @@ def cmd_engines(args, mech, traj, samples: int) -> int:
     if args.json:
         from .compare import json_safe
         print(json.dumps(json_safe({
-            "case": mech.name, "duration_s": traj.duration, "reference": {
+            "case": mech.name, "duration_s": traj.duration,
+            "released": release.as_json() if release else None, "reference": {
                 "method": traj.method, "rtol": traj.rtol,
                 "events": [{"t_s": e.t, "kind": e.kind, "joint": e.joint,
                             "detail": e.detail} for e in traj.events]},

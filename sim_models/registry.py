@@ -143,14 +143,16 @@ def make_settings(name: str, overrides: Mapping[str, object] | None = None) -> E
     return get_engine(name).settings(overrides)
 
 
-def split_overrides(pairs, engines) -> dict[str, dict[str, str]]:
+def split_overrides(pairs, engines, classes=None) -> dict[str, dict[str, str]]:
     """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (``--set``) -> per-engine overrides.
 
     A plain key goes to every engine in ``engines`` that has that setting and must be
     known to at least one; ``ENGINE.KEY`` goes to that engine only, and wins over a plain
     ``KEY`` whatever their order.  The same key given twice with different values is
-    refused.  Raises :class:`~sim_models.engine_base.SettingsError` naming the bad item."""
-    return _split(pairs, engines)[0]
+    refused.  ``classes``: engine -> settings class (default the registered ones; the
+    free-motion runs pass theirs).  Raises :class:`~sim_models.engine_base.SettingsError`
+    naming the bad item."""
+    return _split(pairs, engines, classes)[0]
 
 
 def _split(pairs, engines, classes=None) -> tuple[dict[str, dict[str, str]],

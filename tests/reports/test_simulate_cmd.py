@@ -3,6 +3,7 @@ status 2; a good run prints its table and events, status 0."""
 
 from __future__ import annotations
 
+import math
 import re
 
 import pytest
@@ -82,10 +83,59 @@ def test_springs_without_motion(tmp_path, capsys):
     assert code == 2 and "act in free motion only" in err and err.count("\n") == 1
 
 
-def test_no_motion_table(capsys):
-    code, _ = run("simulate", "seed-four-bar")
+def test_no_motion_table_in_a_file(tmp_path, capsys):
+    """A user's file without [motion] is not guessed at: one line, status 2."""
+    f = tmp_path / "driven.toml"
+    f.write_text(_seed())
+    code, _ = run("simulate", str(f))
     err = capsys.readouterr().err
     assert code == 2 and "no [motion] table" in err and err.count("\n") == 1
+
+
+def test_builtin_case_without_motion_is_released_as_the_report_does():
+    """``xval simulate seed-four-bar`` (no [motion]) integrates the report's released
+    seed four-bar: the driver's joint O2 at its reference 60 deg, at rest, under
+    9.81 m/s^2, and says so; the trajectory starts there with KE 0."""
+    import json
+
+    from reports.free_cases import free_case
+    code, text = run("simulate", "seed-four-bar", "--duration", "0.1", "--json")
+    out = json.loads(text)
+    assert code == 0 and out["case"] == free_case("seed-four-bar").name
+    rel = out["released"]
+    assert rel["joint"] == "O2" and rel["rate"] == 0.0 and rel["duration_s"] == 0.1
+    assert rel["value"] == pytest.approx(math.radians(60.0), rel=1e-15)
+    assert rel["gravity_m_s2"] == [0.0, -9.81]
+    smp = out["samples"]
+    assert smp["O2_rad"][0] == pytest.approx(math.radians(60.0), rel=1e-12)
+    assert smp["kinetic_J"][0] == 0.0
+    code, text = run("simulate", "seed-four-bar", "--duration", "0.1", "--samples", "3")
+    assert code == 0 and text.startswith("seed-four-bar has no [motion] table: released")
+    assert "at its driver's reference value 60 deg, at rest, under 9.81 m/s^2 in -y, " \
+           "0.1 s" in text
+
+
+def test_builtin_case_released_in_an_engine():
+    import json
+    code, text = run("simulate", "seed-four-bar", "--engine", "mujoco", "--duration",
+                     "0.05", "--samples", "11", "--json")
+    out = json.loads(text)
+    assert code == 0 and out["released"]["joint"] == "O2"
+    assert out["verdicts"][0]["engine"] == "mujoco" and out["verdicts"][0]["verdict"] == "pass"
+    code, text = run("simulate", "seed-four-bar", "--engine", "mujoco", "--duration",
+                     "0.05", "--samples", "11")
+    assert code == 0 and text.splitlines()[0].startswith("seed-four-bar has no [motion]")
+    assert "== seed-four-bar-released / mujoco (free motion, 0.05 s): PASS" in text
+
+
+@pytest.mark.parametrize("case", ["hibbeler-16-121", "hibbeler-16-30", "hibbeler-16-31",
+                                  "hibbeler-two-inclines"])
+@pytest.mark.parametrize("engine", [[], ["--engine", "all"]])
+def test_massless_builtin_case_cannot_be_released(capsys, case, engine):
+    code, out = run("simulate", case, *engine)
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"case {case!r} cannot be released under gravity: no moving body has mass" in err
 
 
 def test_massless_linkage_has_no_inertia(tmp_path, capsys):
