@@ -65,7 +65,7 @@ def cmd_compare(args) -> int:
 def _verdict_json(v, mode: str) -> dict:
     """One engine's object in ``xval compare --json`` (a :class:`reports.verdict_runs.
     Verdict`)."""
-    from reports.compare import step_note
+    from reports.compare import FAIL, PASS, step_note, verdict_word
     r = v.run
     return {
         "case": r.case, "engine": r.engine, "mode": mode,
@@ -88,8 +88,7 @@ def _table(comps) -> list[list[str]]:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
             ["not measured"] * 2
         # the engines' own readings are reported, not judged (reports.compare.verdict)
-        judged = "not judged" if is_engine_reading(c.quantity) else \
-            ("pass" if c.passed else "FAIL")
+        judged = "not judged" if is_engine_reading(c.quantity) else c.status
         rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
                      f"{c.tolerance:.3g}", judged])
     return rows
@@ -104,7 +103,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
     import pandas as pd
 
     from analytic.input_display import format_input
-    from reports.compare import step_note
+    from reports.compare import FAIL, PASS, step_note, verdict_word
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
 
     def say(text: str) -> None:
@@ -113,7 +112,9 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
     with pd.option_context("display.width", width, "display.max_columns", 20):
         for v in out:
             r, comps, ok, near = v.run, v.comparisons, v.ok, v.near_event
-            print(f"== {mech.name} / {r.engine} ({mode}) : {'PASS' if ok else 'FAIL'}")
+            word = verdict_word(list(comps), r.ok)
+            print(f"== {mech.name} / {r.engine} ({mode}) : "
+                  f"{word.upper() if word in (PASS, FAIL) else word}")
             say(f"settings: {r.settings_text}")
             if r.by_time:
                 say(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
