@@ -65,13 +65,16 @@ def cmd_compare(args) -> int:
 def _verdict_json(v, mode: str) -> dict:
     """One engine's object in ``xval compare --json`` (a :class:`reports.verdict_runs.
     Verdict`)."""
-    from reports.compare import FAIL, PASS, step_note, verdict_word
+    from reports.compare import PASS, step_note, verdict_word
     r = v.run
+    word = verdict_word(list(v.comparisons), r.ok)  # pass, precision limit (float32), FAIL
     return {
         "case": r.case, "engine": r.engine, "mode": mode,
         "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
         "sampled_by": "time" if r.by_time else "input",
-        "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if v.ok else "fail",
+        "run_ok": r.ok, "reason": r.reason,
+        "verdict": "fail" if not v.ok else (PASS if word == PASS else word),
+        "precision": r.settings.arithmetic.name,
         "near_event": v.near_event, "wall_seconds_per_revolution": r.wall_per_rev,
         "timestep": r.timestep, "notes": list(r.notes),
         "step_note": None if v.ok else step_note(r, v.tree.linkage.driver_is_revolute),

@@ -88,7 +88,8 @@ def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
                      sig2(d.get("worst error / peak")), sig2(d.get("tolerance")),
                      _text(d.get("at (input)")), _text(d.get("note"))])
     head = ["case", "engine", "verdict", "worst quantity", "error/peak", "tol", "at", "note"]
-    fixed = [None, 21, 25, 16, 10, 5, 12, None]  # verdict: "precision limit (float32)"  # engine: "mujoco_warp (float32)" fits
+    # engine: "mujoco_warp (float32)" fits; verdict: "precision limit (float32)" too
+    fixed = [None, 21, 25, 16, 10, 5, 12, None]
     for i, f in enumerate(fixed):
         if f is not None:
             fixed[i] = max(len(head[i]), min(f, max(len(r[i]) for r in rows)))

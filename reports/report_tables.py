@@ -255,6 +255,7 @@ def verdicts_for_reading(verdicts: pd.DataFrame, revolute: dict[str, bool]) -> p
         "run finished": v["run_ok"], "why the run stopped": v["run_reason"]})
 
 
-__all__ = ["LIMIT_PREFIX", "SEED_ROWS", "accepted", "failed_at", "limit_note", "input_unit", "instantaneous_floors", "quantity_unit",
+__all__ = ["LIMIT_PREFIX", "SEED_ROWS", "accepted", "failed_at", "input_unit",
+           "instantaneous_floors", "limit_note", "quantity_unit",
            "seed_comparison", "summary_for_reading", "summary_table", "verdict_table",
            "verdicts_for_reading"]
