@@ -242,22 +242,16 @@ class _WorldView:
         self._d.xfrc_applied.assign(self.xfrc_applied[None])
 
 
-class MujocoWarpSession(MujocoSession):
-    """The MuJoCo model of one linkage stepped by MuJoCo Warp (float32, one world)."""
+class WarpStepping:
+    """The host ``MjModel``/``MjData`` of a MuJoCo session (``self.model``,
+    ``self.data``, ``self.mj``) put on a Warp device and stepped there: the device, the
+    captured step and sample graphs, the stale-``Jdot v`` and stale-force workarounds.
+    Shared by the prescribed (:class:`MujocoWarpSession`) and the released
+    (:class:`sim_models.mujoco_warp_free.MujocoWarpFreeSession`) sessions; the settings
+    carry ``solver``, ``tolerance``, ``fresh_jdotv`` and ``device``."""
 
-    name = "mujoco_warp"
-    settings_class = MujocoWarpSettings
-    engine_readings = False
-
-    def __init__(self, tree: SimTree, settings: MujocoWarpSettings | None = None):
-        self.wp, self.mjw = require_warp()
-        super().__init__(tree, settings)
-
-    def mujoco_settings(self) -> MujocoSettings:
-        return self.settings.mujoco_settings()
-
-    def _build(self) -> None:
-        super()._build()  # the host MjModel, its addresses, the loads
+    def _put_warp(self) -> None:
+        """The host model (built) on the Warp device; graphs captured."""
         wp, mjw, mujoco, s = self.wp, self.mjw, self.mj, self.settings
         m = self.model
         m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
@@ -284,13 +278,7 @@ class MujocoWarpSession(MujocoSession):
                           f"{self.device.alias} ({self.device.name}), float32; kernel cache "
                           f"{wp.config.kernel_cache_dir}")
         self._step_graph = self._fwd_graph = None
-        k = self.tree.driver_tree
-        self._drive_body, self._drive_dof = int(self.child_bid[k]), int(self.dadr[k])
         self._graphs()  # kernels loaded (compiled on first use) and graphs captured here
-
-    def extra(self) -> dict:
-        return {"device": self.device.alias, "precision": self.settings.arithmetic.name,
-                "ngeom": int(self.model.ngeom)}
 
     # -- graphs -------------------------------------------------------------------
     def _graphs(self):
@@ -374,6 +362,43 @@ class MujocoWarpSession(MujocoSession):
                 getattr(d, name).assign(np.asarray(getattr(h, name), np.float32)[None])
             d.time.fill_(float(h.time))
 
+    def _loads(self) -> None:
+        """The harness's loads (``xfrc_applied``) at Warp's present poses."""
+        view = _WorldView(self.wd)
+        self.apply_loads(view)
+        view.commit()
+
+    def _diverged(self) -> str | None:
+        qvel, qacc = self.wd.qvel.numpy(), self.wd.qacc.numpy()
+        if not (abs(float(qvel.sum())) < HUGE and abs(float(qacc.sum())) < HUGE):
+            return "non-finite or huge velocities (simulation diverged)"
+        return None
+
+
+class MujocoWarpSession(WarpStepping, MujocoSession):
+    """The MuJoCo model of one linkage stepped by MuJoCo Warp (float32, one world)."""
+
+    name = "mujoco_warp"
+    settings_class = MujocoWarpSettings
+    engine_readings = False
+
+    def __init__(self, tree: SimTree, settings: MujocoWarpSettings | None = None):
+        self.wp, self.mjw = require_warp()
+        super().__init__(tree, settings)
+
+    def mujoco_settings(self) -> MujocoSettings:
+        return self.settings.mujoco_settings()
+
+    def _build(self) -> None:
+        super()._build()  # the host MjModel, its addresses, the loads
+        k = self.tree.driver_tree
+        self._drive_body, self._drive_dof = int(self.child_bid[k]), int(self.dadr[k])
+        self._put_warp()
+
+    def extra(self) -> dict:
+        return {"device": self.device.alias, "precision": self.settings.arithmetic.name,
+                "ngeom": int(self.model.ngeom)}
+
     def reset(self, t: float, h: float) -> None:
         super().reset(t, h)  # host: analytic state, drive, loads (its forward unused)
         step, fwd = self._graphs()
@@ -392,15 +417,7 @@ class MujocoWarpSession(MujocoSession):
         else:
             for _ in range(n):
                 wp.capture_launch(step)
-        qvel, qacc = self.wd.qvel.numpy(), self.wd.qacc.numpy()
-        if not (abs(float(qvel.sum())) < HUGE and abs(float(qacc.sum())) < HUGE):
-            return "non-finite or huge velocities (simulation diverged)"
-        return None
-
-    def _loads(self) -> None:
-        view = _WorldView(self.wd)
-        self.apply_loads(view)
-        view.commit()
+        return self._diverged()
 
     def record(self, t: float):
         """A ``forward`` + ``rne_postconstraint`` (graph) at the state at ``t``, then
@@ -485,5 +502,5 @@ def _version(mjw) -> str:
         return getattr(mjw, "__version__", "?")
 
 
-__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "require_warp",
-           "warp_cache_dir"]
+__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "WarpStepping",
+           "require_warp", "warp_cache_dir"]
