@@ -137,9 +137,9 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 w = max(lim, key=lambda c: c.normalised)
                 say(f"{w.status}: {len(lim)} quantities over the tolerance but within the "
                     f"engine's {w.precision} error floor ({w.quantity}: "
-                    f"{w.normalised:.3g} of peak, floor {w.floor:.2g} = 4 u32 x steps x "
-                    "loop condition number there; sim_models/precision.py): a precision "
-                    "limit of the engine, not a failure (status 0)")
+                    f"{w.normalised:.3g} of peak, floor {w.floor:.2g} from the steps taken "
+                    "and the loop condition number there, sim_models/precision.py): a "
+                    "precision limit of the engine, not a failure (status 0)")
             if any(not c.measured for c in comps):
                 first = min(c.at for c in comps if not c.measured)
                 say(f"not measured: the engine has no values from the sample at "
