@@ -17,7 +17,8 @@ Azure Pipelines and CircleCI read; valid against the Jenkins xunit plugin's
           <failure message="<worst quantity, its error, where>" type="tolerance|drift|...">
             every quantity, the settings</failure>          (a failed verdict)
           <error message=... type="refused">...</error>      (the run could not be judged)
-          <system-out>worst error now, settings and notes</system-out>
+          <system-out>worst error now, settings and notes (a precision limit: a passing
+                      testcase whose output starts "precision limit (float32): ...")</system-out>
         </testcase> ...
 
 ``<command>`` is ``compare`` or ``baseline``, so the two commands' results uploaded from
@@ -45,8 +46,10 @@ from analytic.errors import OutputError
 class CiCase:
     """One (case, engine) verdict.
 
-    ``status``: "pass", "fail" (a failed verdict) or "error" (the run could not be
-    judged: refused, nothing to compare, model gone).  ``quantity``/``error``/``at``:
+    ``status``: "pass", "limit" (over the tolerance but within the engine's arithmetic
+    floor: a precision limit, not a failure; ``kind`` says "precision limit (float32)"),
+    "fail" (a failed verdict) or "error" (the run could not be judged: refused, nothing
+    to compare, model gone).  ``quantity``/``error``/``at``:
     the quantity named first (the worst failing one, else the largest error), its error
     relative to peak and where (text with unit).  ``kind``: why it failed ("tolerance",
     "drift", "missing", "run failed", "model changed", ...).  ``message``: one line;
@@ -88,12 +91,14 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
     """``xval compare``'s verdicts (:class:`reports.verdict_runs.Verdict`; ``file``: the
     model file, empty for a built-in case)."""
     from .baseline import versions
+    from .compare import limit_word
     unit = "deg" if revolute else "m"
     out = []
     for v in results:
         r, comps, ok = v.run, v.comparisons, v.ok
         judged = v.judged()
-        bad = [c for c in judged if not c.passed]
+        bad = [c for c in judged if not c.accepted]
+        limited = [c for c in judged if c.limited]
         pool = bad or judged
         worst = max(pool, key=lambda c: c.normalised if math.isfinite(c.normalised)
                     else math.inf, default=None)
@@ -103,6 +108,13 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
             msg = f"the run failed: {r.reason}"
         elif worst is not None and not ok:
             kind = "tolerance"
+        elif ok and limited:  # over the tolerance, within the engine's arithmetic floor
+            w = max(limited, key=lambda c: c.normalised)
+            kind = limit_word(w.precision)
+            worst = w
+            msg = (f"{kind}: {w.quantity}: error {w.normalised:.3g} of peak at "
+                   f"{_at(w.at, unit)} exceeds the tolerance {w.tolerance:g} but is within "
+                   f"the engine's {w.precision} floor {w.floor:.2g}")
         if worst is not None and not ok:
             where = f" at {_at(worst.at, unit)}" if math.isfinite(worst.at) else ""
             msg = (msg + "; " if msg else "") + (
@@ -114,7 +126,8 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
         lines = [str(c) for c in comps] + [f"settings: {r.engine} {r.settings_text}"]
         lines += [f"note: {n}" for n in r.notes]
         out.append(CiCase(
-            case=case, engine=r.engine, status="pass" if ok else "fail",
+            case=case, engine=r.engine,
+            status=("limit" if limited else "pass") if ok else "fail",
             quantity=worst.quantity if worst else "",
             error=worst.normalised if worst else math.nan,
             at=_at(worst.at, unit) if worst else "",
@@ -228,8 +241,12 @@ def _testcase(ts, c: CiCase, command: str) -> None:
         el = ET.SubElement(tc, tag, {"message": _clean(c.message or c.kind),
                                      "type": c.kind or tag})
         el.text = _clean(c.details)
-    so = ET.SubElement(tc, "system-out")  # the current error, passing cases too
-    so.text = _clean("\n".join([c.worst_line(), *([f"settings: {c.settings}"]
+    # the current error, passing cases too; a precision limit is a passing testcase
+    # (JUnit has no such outcome, and junit-10.xsd allows no properties in a testcase)
+    # whose output starts with the verdict: "precision limit (float32): ..."
+    so = ET.SubElement(tc, "system-out")
+    so.text = _clean("\n".join([*([c.message] if c.status == "limit" else []),
+                                c.worst_line(), *([f"settings: {c.settings}"]
                                                   if c.settings else []),
                                 *[f"note: {n}" for n in c.notes]]))
 
@@ -250,7 +267,7 @@ def markdown_summary(title: str, cases: Sequence[CiCase], intro: Sequence[str] =
                      error_label: str = "error / peak") -> str:
     """A Markdown table of the verdicts, failures first, with the failure messages
     (``error_label``: the error column's heading, e.g. ``error / range`` for free motion)."""
-    fails = [c for c in cases if c.status != "pass"]
+    fails = [c for c in cases if c.status in ("fail", "error")]
     head = f"## {title}: {'PASS' if not fails else 'FAIL'} " \
            f"({len(cases) - len(fails)} of {len(cases)} passed)"
     has_base = any(math.isfinite(c.baseline) for c in cases)
@@ -258,8 +275,9 @@ def markdown_summary(title: str, cases: Sequence[CiCase], intro: Sequence[str] =
     cols += ["baseline", "growth"] if has_base else []
     cols += ["tolerance"]
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for c in sorted(cases, key=lambda c: (c.status == "pass", c.case, c.engine)):
-        cells = [c.case, c.engine, "pass" if c.status == "pass" else f"**{c.status.upper()}**",
+    for c in sorted(cases, key=lambda c: (c.status in ("pass", "limit"), c.case, c.engine)):
+        verdict = {"pass": "pass", "limit": c.kind}.get(c.status, f"**{c.status.upper()}**")
+        cells = [c.case, c.engine, verdict,
                  f"`{c.quantity}`" if c.quantity else "", _g(c.error), c.at]
         if has_base:
             grow = c.error / c.baseline if math.isfinite(c.error) and c.baseline > 0 \

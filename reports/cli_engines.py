@@ -65,13 +65,16 @@ def cmd_compare(args) -> int:
 def _verdict_json(v, mode: str) -> dict:
     """One engine's object in ``xval compare --json`` (a :class:`reports.verdict_runs.
     Verdict`)."""
-    from reports.compare import step_note
+    from reports.compare import PASS, step_note, verdict_word
     r = v.run
+    word = verdict_word(list(v.comparisons), r.ok)  # pass, precision limit (float32), FAIL
     return {
         "case": r.case, "engine": r.engine, "mode": mode,
         "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
         "sampled_by": "time" if r.by_time else "input",
-        "run_ok": r.ok, "reason": r.reason, "verdict": "pass" if v.ok else "fail",
+        "run_ok": r.ok, "reason": r.reason,
+        "verdict": "fail" if not v.ok else (PASS if word == PASS else word),
+        "precision": r.settings.arithmetic.name,
         "near_event": v.near_event, "wall_seconds_per_revolution": r.wall_per_rev,
         "timestep": r.timestep, "notes": list(r.notes),
         "step_note": None if v.ok else step_note(r, v.tree.linkage.driver_is_revolute),
@@ -88,8 +91,7 @@ def _table(comps) -> list[list[str]]:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
             ["not measured"] * 2
         # the engines' own readings are reported, not judged (reports.compare.verdict)
-        judged = "not judged" if is_engine_reading(c.quantity) else \
-            ("pass" if c.passed else "FAIL")
+        judged = "not judged" if is_engine_reading(c.quantity) else c.status
         rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
                      f"{c.tolerance:.3g}", judged])
     return rows
@@ -104,7 +106,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
     import pandas as pd
 
     from analytic.input_display import format_input
-    from reports.compare import step_note
+    from reports.compare import FAIL, PASS, step_note, verdict_word
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
 
     def say(text: str) -> None:
@@ -113,7 +115,9 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
     with pd.option_context("display.width", width, "display.max_columns", 20):
         for v in out:
             r, comps, ok, near = v.run, v.comparisons, v.ok, v.near_event
-            print(f"== {mech.name} / {r.engine} ({mode}) : {'PASS' if ok else 'FAIL'}")
+            word = verdict_word(list(comps), r.ok)
+            print(f"== {mech.name} / {r.engine} ({mode}) : "
+                  f"{word.upper() if word in (PASS, FAIL) else word}")
             say(f"settings: {r.settings_text}")
             if r.by_time:
                 say(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
@@ -128,6 +132,14 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                                                       "normalised", "at", "tolerance",
                                                       "passed"])
             print(df.to_string(index=False))
+            lim = [c for c in comps if c.limited]
+            if lim:
+                w = max(lim, key=lambda c: c.normalised)
+                say(f"{w.status}: {len(lim)} quantities over the tolerance but within the "
+                    f"engine's {w.precision} error floor ({w.quantity}: "
+                    f"{w.normalised:.3g} of peak, floor {w.floor:.2g} from the steps taken "
+                    "and the loop condition number there, sim_models/precision.py): a "
+                    "precision limit of the engine, not a failure (status 0)")
             if any(not c.measured for c in comps):
                 first = min(c.at for c in comps if not c.measured)
                 say(f"not measured: the engine has no values from the sample at "

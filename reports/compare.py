@@ -42,6 +42,12 @@ class Comparison:
     tolerance : float
         The normalised tolerance applied.
     passed : bool
+        Within the tolerance.
+    floor : float
+        The engine's arithmetic error floor at ``at`` (normalised like ``normalised``;
+        :meth:`sim_models.engine_settings.EngineSettings.error_floor`), 0.0 for float64.
+    precision : str
+        The engine's arithmetic (``"float64"``, ``"float32"``).
     """
 
     quantity: str
@@ -51,9 +57,29 @@ class Comparison:
     at: float
     tolerance: float
     passed: bool
+    floor: float = 0.0
+    precision: str = "float64"
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    @property
+    def limited(self) -> bool:
+        """Over the tolerance but within the engine's arithmetic floor (a measured error):
+        a precision limit of the engine, not a failure."""
+        return (not self.passed) and self.measured and self.normalised <= self.floor
+
+    @property
+    def accepted(self) -> bool:
+        """Passed, or a precision limit: what the verdict's exit status counts."""
+        return self.passed or self.limited
+
+    @property
+    def status(self) -> str:
+        """``"pass"``, ``"precision limit (float32)"`` or ``"FAIL"``."""
+        if self.passed:
+            return PASS
+        return limit_word(self.precision) if self.limited else FAIL
 
     @property
     def measured(self) -> bool:
@@ -68,10 +94,13 @@ class Comparison:
         d = json_safe(asdict(self))
         d["measured"] = self.measured
         d["judged"] = not is_engine_reading(self.quantity)  # an engine's own reading: no
+        d["verdict"] = self.status
         return d
 
     def __str__(self) -> str:
-        verdict = "pass" if self.passed else "FAIL"
+        verdict = self.status
+        if self.limited:
+            verdict += f": within the {self.precision} floor {self.floor:.2g}"
         if not self.measured:
             return (f"{self.quantity}: not measured from {input_number(self.at)} on (no finite "
                     f"engine value there: the run stopped) {verdict}")
@@ -79,6 +108,16 @@ class Comparison:
                 f"{input_number(self.at)} "
                 f"({self.normalised:.3g} of peak {self.peak:.4g}; tolerance "
                 f"{self.tolerance:.1g}) {verdict}")
+
+
+#: The verdict words: within tolerance, and not.
+PASS, FAIL = "pass", "FAIL"
+
+
+def limit_word(precision: str) -> str:
+    """The verdict word of an error over the tolerance but within the engine's arithmetic
+    floor: ``"precision limit (float32)"``."""
+    return f"precision limit ({precision})"
 
 
 def json_safe(obj):
@@ -239,6 +278,27 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
         if run_.drive_effort_engine is not None:
             out.append(compare(engine_reading("drive.effort"), frc.effort[keep],
                                run_.drive_effort_engine[keep], at, tol))
+    return with_floors(out, run_, at, kin.condition[keep])
+
+
+def with_floors(comparisons: list[Comparison], run_, at, condition) -> list[Comparison]:
+    """Each comparison with the engine's arithmetic floor at its worst sample
+    (``run_.settings.error_floor(run_.steps, condition there)``: the settings say what
+    their arithmetic can reach; :mod:`sim_models.precision`) and the arithmetic's name.
+    A run that stopped claims no floor (its failure is not rounding).  ``at`` and
+    ``condition``: the compared samples' inputs and loop condition numbers."""
+    settings = run_.settings
+    arith = getattr(settings, "arithmetic", None)
+    if arith is None:
+        return comparisons
+    at, condition = np.asarray(at, float), np.asarray(condition, float)
+    out = []
+    for c in comparisons:
+        floor = 0.0
+        if run_.ok and c.measured and at.size and math.isfinite(c.at):
+            k = int(np.argmin(np.abs(at - c.at)))
+            floor = float(settings.error_floor(int(run_.steps), float(condition[k])))
+        out.append(dataclasses.replace(c, floor=floor, precision=arith.name))
     return out
 
 
@@ -272,7 +332,7 @@ def near_event(comparisons: list[Comparison], linkage) -> str | None:
     (:func:`analytic.sweep.nearest_event`), when within :data:`NEAR_EVENT_DEG` (or
     :data:`NEAR_EVENT_STROKE` of the stroke); else None."""
     from analytic.sweep import nearest_event
-    bad = [c for c in judged(comparisons) if not c.passed]
+    bad = [c for c in judged(comparisons) if not c.accepted]
     if not bad:
         return None
     worst = max(bad, key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf)
@@ -341,14 +401,27 @@ def comparison_frame(run_, comparisons: list[Comparison]) -> pd.DataFrame:
         d.update(case=run_.case, engine=run_.engine, settings=run_.settings_text,
                  run_ok=run_.ok, run_reason=run_.reason or "",
                  engine_reading=is_engine_reading(c.quantity),
-                 precision=run_.extra.get("precision", "float64"))
+                 verdict=c.status)
         rows.append(d)
     cols = ["case", "engine", "quantity", "max_abs", "peak", "normalised", "at", "tolerance",
-            "passed", "engine_reading", "run_ok", "run_reason", "settings", "precision"]
+            "passed", "engine_reading", "run_ok", "run_reason", "settings", "precision",
+            "floor", "verdict"]
     return pd.DataFrame(rows, columns=cols)
 
 
 def verdict(comparisons: list[Comparison]) -> bool:
-    """Pass when every quantity computed by this project passes (the engines' own
-    readings known to be wrong are reported, not judged)."""
-    return all(c.passed for c in judged(comparisons))
+    """Pass when every quantity computed by this project passes or sits within the
+    engine's arithmetic floor (a precision limit; the engines' own readings known to be
+    wrong are reported, not judged)."""
+    return all(c.accepted for c in judged(comparisons))
+
+
+def verdict_word(comparisons: list[Comparison], run_ok: bool = True) -> str:
+    """The verdict in words: ``"FAIL"`` (a run that stopped, or a judged quantity over
+    its tolerance and its floor), ``"precision limit (float32)"`` (every judged quantity
+    passes or is within the floor, one at least within the floor only) or ``"pass"``."""
+    js = judged(comparisons)
+    if not run_ok or not all(c.accepted for c in js):
+        return FAIL
+    lim = [c for c in js if c.limited]
+    return limit_word(lim[0].precision) if lim else PASS

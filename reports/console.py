@@ -12,6 +12,8 @@ import math
 
 import pandas as pd
 
+from .report_tables import LIMIT_PREFIX, accepted
+
 WIDTH = 100
 
 
@@ -53,7 +55,7 @@ def counts_line(summary: pd.DataFrame) -> str:
     """``N of M pass (engine k/n, ...); smallest margin: case engine quantity e of tol``."""
     if not len(summary):
         return "no runs"
-    passed = summary["verdict"] == "pass"
+    passed = accepted(summary)  # a precision limit is not a failure
     per = ", ".join(f"{e} {int(passed[summary['engine'] == e].sum())}/"
                     f"{int((summary['engine'] == e).sum())}"
                     for e in dict.fromkeys(summary["engine"]))
@@ -67,7 +69,10 @@ def counts_line(summary: pd.DataFrame) -> str:
         margin, label = f"{where} {err}", "worst"
     else:
         margin, label = f"{where} {err}", "smallest margin"
-    return f"{int(passed.sum())} of {len(summary)} pass ({per}); {label}: {margin}"
+    lim = int(summary["verdict"].astype(str).str.startswith(LIMIT_PREFIX).sum())
+    lim_text = f", {lim} of them at a precision limit" if lim else ""
+    return (f"{int(passed.sum())} of {len(summary)} pass{lim_text} ({per}); "
+            f"{label}: {margin}")
 
 
 def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
@@ -83,7 +88,8 @@ def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
                      sig2(d.get("worst error / peak")), sig2(d.get("tolerance")),
                      _text(d.get("at (input)")), _text(d.get("note"))])
     head = ["case", "engine", "verdict", "worst quantity", "error/peak", "tol", "at", "note"]
-    fixed = [None, 21, 7, 16, 10, 5, 12, None]  # engine: "mujoco_warp (float32)" fits
+    # engine: "mujoco_warp (float32)" fits; verdict: "precision limit (float32)" too
+    fixed = [None, 21, 25, 16, 10, 5, 12, None]
     for i, f in enumerate(fixed):
         if f is not None:
             fixed[i] = max(len(head[i]), min(f, max(len(r[i]) for r in rows)))

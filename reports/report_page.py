@@ -14,6 +14,7 @@ import pandas as pd
 from .console import counts_line
 from .page import Document
 from .report_tables import (
+    accepted,
     input_unit,
     instantaneous_floors,
     seed_comparison,
@@ -155,7 +156,7 @@ def _card(doc, summary, cases, engines, meta, cfg):
     items = []
     if len(summary):
         line = counts_line(summary)
-        passed = summary["verdict"] == "pass"
+        passed = accepted(summary)  # a precision limit is not a failure
         items.append(("verdict", f"{int(passed.sum())} of {len(summary)} (case, engine) "
                                  "runs pass"))
         for e in engines:

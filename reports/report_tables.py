@@ -15,6 +15,7 @@ import pandas as pd
 from analytic.input_display import format_input
 
 from . import quantities
+from .compare import FAIL, PASS, limit_word
 from .quantities import base_quantity
 
 # The notes' own figures (REFERENCE.md) for the seed comparison: (label, notes,
@@ -52,7 +53,7 @@ def _failed_run_row(case, engine, reason, at=np.nan, settings=""):
     return {"case": case, "engine": engine, "quantity": "(run)", "max_abs": np.nan,
             "peak": np.nan, "normalised": np.inf, "at": at, "tolerance": np.nan,
             "passed": False, "engine_reading": False, "run_ok": False,
-            "run_reason": reason, "settings": settings}
+            "run_reason": reason, "settings": settings, "verdict": FAIL}
 
 
 def verdict_table(results: list[dict]) -> pd.DataFrame:
@@ -98,11 +99,13 @@ def summary_table(verdicts: pd.DataFrame, units: dict[str, str] | None = None
     for (case, engine), g in verdicts.groupby(["case", "engine"], sort=False):
         judged = g[~g["engine_reading"].astype(bool)]
         worst = judged.loc[judged["normalised"].astype(float).idxmax()] if len(judged) else None
-        ok = bool(judged["passed"].all()) and bool(g["run_ok"].all())
+        words = _row_verdicts(judged)
+        ok = all(w != FAIL for w in words) and bool(g["run_ok"].all())
+        limits = [w for w in words if w.startswith(LIMIT_PREFIX)]
         at = float(worst["at"]) if worst is not None else np.nan
         unit = (units or {}).get(case, "")
         rows.append({"case": case, "engine": engine,
-                     "verdict": "pass" if ok else "FAIL",
+                     "verdict": (limits[0] if limits else PASS) if ok else FAIL,
                      "worst quantity": worst["quantity"] if worst is not None else "",
                      "worst error / peak": float(worst["normalised"]) if worst is not None
                      else np.nan,
@@ -111,14 +114,36 @@ def summary_table(verdicts: pd.DataFrame, units: dict[str, str] | None = None
                      "tolerance": float(worst["tolerance"]) if worst is not None else np.nan,
                      "precision": _precision(g),
                      "note": "" if g["run_ok"].all() else str(g["run_reason"].iloc[0])})
-        if not ok and g["run_ok"].all() and rows[-1]["precision"] == "float32":
-            rows[-1]["note"] = FLOAT32_NOTE
+        if ok and limits:
+            rows[-1]["note"] = limit_note(judged)
     return pd.DataFrame(rows)
 
 
-#: A float32 engine's failed verdict (its run completed): said as what it is.
-FLOAT32_NOTE = ("float32 engine: its error floor (README, MuJoCo Warp) lies above this "
-                "tolerance here: a precision limit of the engine, not a harness failure")
+#: How a precision-limit verdict starts (:func:`reports.compare.limit_word`).
+LIMIT_PREFIX = limit_word("")[:-2]
+
+
+def _row_verdicts(judged: pd.DataFrame) -> list[str]:
+    """Each judged row's verdict word ("pass", "precision limit (...)", "FAIL"); a frame
+    without the ``verdict`` column (an older CSV) from ``passed``."""
+    if "verdict" in judged and judged["verdict"].notna().all():
+        return [str(w) for w in judged["verdict"]]
+    return [PASS if p else FAIL for p in judged["passed"].astype(bool)]
+
+
+def limit_note(judged: pd.DataFrame) -> str:
+    """A precision-limit verdict's note: the worst such quantity, its error and floor."""
+    lim = judged[[str(w).startswith(LIMIT_PREFIX) for w in _row_verdicts(judged)]]
+    w = lim.loc[lim["normalised"].astype(float).idxmax()]
+    return (f"{w['quantity']} {float(w['normalised']):.2g} of peak is over the tolerance "
+            f"but within the engine's {w.get('precision', '')} floor {float(w['floor']):.2g} "
+            "(sim_models.precision): a precision limit of the engine, not a harness failure")
+
+
+def accepted(summary: pd.DataFrame) -> pd.Series:
+    """Per summary row: not a failed verdict (a pass or a precision limit), what the exit
+    status counts."""
+    return summary["verdict"].astype(str) != FAIL
 
 
 def _precision(g: pd.DataFrame) -> str:
@@ -225,11 +250,12 @@ def verdicts_for_reading(verdicts: pd.DataFrame, revolute: dict[str, bool]) -> p
         "error / peak (-)": v["normalised"], "tolerance (-)": v["tolerance"],
         "at input": [format_input(a, u) for a, u in
                      zip(v["at"].astype(float), at_unit, strict=True)],
-        "verdict": ["pass" if p else ("not judged" if r else "FAIL")
-                    for p, r in zip(v["passed"], v["engine_reading"], strict=True)],
+        "verdict": ["not judged" if r else w for w, r in
+                    zip(_row_verdicts(v), v["engine_reading"], strict=True)],
         "run finished": v["run_ok"], "why the run stopped": v["run_reason"]})
 
 
-__all__ = ["SEED_ROWS", "failed_at", "input_unit", "instantaneous_floors", "quantity_unit",
+__all__ = ["LIMIT_PREFIX", "SEED_ROWS", "accepted", "failed_at", "input_unit",
+           "instantaneous_floors", "limit_note", "quantity_unit",
            "seed_comparison", "summary_for_reading", "summary_table", "verdict_table",
            "verdicts_for_reading"]

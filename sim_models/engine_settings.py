@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from . import ranges
+from .precision import FLOAT64, Arithmetic
 from .tree import SimModelError
 
 
@@ -52,6 +53,9 @@ class EngineSettings:
     RANGES: ClassVar[Mapping[str, object]] = {"timestep": ranges.TIMESTEP}
     #: The registry name, for messages (``engine 'mujoco' setting ...``).
     engine_name: ClassVar[str] = ""
+    #: The arithmetic the engine's solver computes in (:mod:`sim_models.precision`):
+    #: float64 claims no error floor; a float32 engine sets :data:`~sim_models.precision.FLOAT32`.
+    arithmetic: ClassVar[Arithmetic] = FLOAT64
 
     def __post_init__(self):
         self.validate()
@@ -126,6 +130,14 @@ class EngineSettings:
         """Largest step (s) for ``plan`` (a :class:`sim_models.sampling.Plan`: e.g.
         ``plan.rev_time / steps_per_rev``); default :attr:`timestep`."""
         return float(self.timestep)
+
+    def error_floor(self, steps: int, condition: float) -> float:
+        """The error (normalised by the quantity's peak) this engine's arithmetic cannot
+        go below in a run of ``steps`` steps (0: one solve) at a sample of loop
+        condition number ``condition`` (:meth:`sim_models.precision.Arithmetic.floor`;
+        0.0 for float64).  The comparison reads an error above the tolerance but within
+        this floor as a precision limit, not a failure."""
+        return self.arithmetic.floor(steps, condition)
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)

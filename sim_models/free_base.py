@@ -464,6 +464,7 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
         motor_effort_engine=eff if has_motor else None, wall=wall, steps=steps,
         timestep=max((h for h, _ in plan), default=float(session.settings.timestep)),
         integrator=session.integrator(), notes=tuple(session.notes),
+        precision=session.settings.arithmetic.name,
         extra={"native": session.native, "energy_scale": scale, "E0": e0,
                "motor_effort_source": session.motor_effort_source,
                "start_q": start.q, "start_qd": start.qd})

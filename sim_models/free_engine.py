@@ -29,6 +29,7 @@ FREE_SESSIONS: dict[str, tuple[str, str]] = {
     "pybullet": ("sim_models.pybullet_free", "PybulletFreeSession"),
     "exudyn": ("sim_models.exudyn_free", "ExudynFreeSession"),
     "pinocchio": ("sim_models.pinocchio_free", "PinocchioFreeSession"),
+    "mujoco_warp": ("sim_models.mujoco_warp_free", "MujocoWarpFreeSession"),
 }
 
 

@@ -56,6 +56,7 @@ from .engine_base import HUGE, Recorder, check_raw_state
 from .engine_settings import EngineRefusal, EngineSettings
 from .mjcf import HARD_SOLIMP, EngineVersionError, MujocoSettings, direct_solref
 from .mujoco_engine import MujocoSession
+from .precision import FLOAT32
 from .tree import SimTree
 
 #: How to get MuJoCo Warp (the optional extra).
@@ -124,14 +125,20 @@ class MujocoWarpSettings(EngineSettings):
     Evidence (2 revolutions, 36 samples of the 2nd, worst error / peak over
     accelerations, pin forces and drive effort; 2-core CPU, Warp's CPU device):
 
-    * **steps_per_rev 576** (``timestep`` only a 10 ms cap): float32 ``qpos`` rounds
+    * **timestep 2.5e-3 s** (a cap: the step is set by ``steps_per_rev``): it shortens
+      only hibbeler-two-inclines' step among the built-in cases (its 2.7 s run took 591
+      steps of 4.7 ms, now 1101 of 2.5 ms): at 4.7 ms it had 1.1e-3 (slideB.a near the
+      limit position), and MuJoCo float64 on the same model and step had 1.2e-3 there,
+      so that miss was the step, not float32; at 2.5 ms 1.6e-4 (MuJoCo float64 1.1e-4).
+    * **steps_per_rev 576**: float32 ``qpos`` rounds
       every step, so the floor grows with the step count, not with the step: seed
       four-bar RK4, one revolution, 431 / 863 / 1691 / 4211 steps: 5.9e-5 / 6.1e-5 /
       2.8e-4 / 7.0e-4.  Over 144 / 288 / 576 steps a revolution (RK4, float32 readout):
       hibbeler-16-121 1.7e-2 / 1.1e-3 / 3.3e-4, six-bar 1.1e-3 / 4.9e-4 / 6.6e-4,
       seed-four-bar 3.8e-4 / 2.8e-4 / 2.6e-4, inverted-slider-crank 4.8e-4 / 4.4e-4 /
-      5.3e-4, seed-slider-crank 8.4e-5 / 8.9e-5 / 2.8e-4.  At 576 every built-in case but
-      hibbeler-two-inclines (1.1e-3) is within 1e-3 (README, "MuJoCo Warp").
+      5.3e-4, seed-slider-crank 8.4e-5 / 8.9e-5 / 2.8e-4.  At 576 (and the 2.5 ms cap)
+      every built-in case is within 1e-3 (README, "MuJoCo Warp"); at 2304 the float32
+      rounding dominates (error / (u32 steps condition) 0.6-3.0: :mod:`sim_models.precision`).
     * **RK4** (with ``fresh_jdotv``): Euler at dt 2.5e-4 left 1.7e-3 on the seed
       four-bar (MuJoCo's Euler 1.4e-3 there); stock RK4 lost the 200 rad/s slider-crank's
       loop.
@@ -167,7 +174,7 @@ class MujocoWarpSettings(EngineSettings):
         ``"auto"`` (first CUDA device if any, else the CPU), ``"cpu"`` or ``"cuda"``.
     """
 
-    timestep: float = 1e-2
+    timestep: float = 2.5e-3
     steps_per_rev: int = 576
     integrator: str = "RK4"
     solver: str = "Newton"
@@ -182,6 +189,8 @@ class MujocoWarpSettings(EngineSettings):
     device: str = "auto"
 
     engine_name: ClassVar[str] = "mujoco_warp"
+    #: float32 kernels: the error floor of :mod:`sim_models.precision`
+    arithmetic: ClassVar = FLOAT32
     RANGES: ClassVar[Mapping[str, object]] = {
         **{k: MujocoSettings.RANGES[k] for k in ("timestep", "solref", "solimp", "iterations",
                                                  "tolerance", "armature", "invweight_scale")},
@@ -233,22 +242,16 @@ class _WorldView:
         self._d.xfrc_applied.assign(self.xfrc_applied[None])
 
 
-class MujocoWarpSession(MujocoSession):
-    """The MuJoCo model of one linkage stepped by MuJoCo Warp (float32, one world)."""
+class WarpStepping:
+    """The host ``MjModel``/``MjData`` of a MuJoCo session (``self.model``,
+    ``self.data``, ``self.mj``) put on a Warp device and stepped there: the device, the
+    captured step and sample graphs, the stale-``Jdot v`` and stale-force workarounds.
+    Shared by the prescribed (:class:`MujocoWarpSession`) and the released
+    (:class:`sim_models.mujoco_warp_free.MujocoWarpFreeSession`) sessions; the settings
+    carry ``solver``, ``tolerance``, ``fresh_jdotv`` and ``device``."""
 
-    name = "mujoco_warp"
-    settings_class = MujocoWarpSettings
-    engine_readings = False
-
-    def __init__(self, tree: SimTree, settings: MujocoWarpSettings | None = None):
-        self.wp, self.mjw = require_warp()
-        super().__init__(tree, settings)
-
-    def mujoco_settings(self) -> MujocoSettings:
-        return self.settings.mujoco_settings()
-
-    def _build(self) -> None:
-        super()._build()  # the host MjModel, its addresses, the loads
+    def _put_warp(self) -> None:
+        """The host model (built) on the Warp device; graphs captured."""
         wp, mjw, mujoco, s = self.wp, self.mjw, self.mj, self.settings
         m = self.model
         m.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
@@ -275,13 +278,7 @@ class MujocoWarpSession(MujocoSession):
                           f"{self.device.alias} ({self.device.name}), float32; kernel cache "
                           f"{wp.config.kernel_cache_dir}")
         self._step_graph = self._fwd_graph = None
-        k = self.tree.driver_tree
-        self._drive_body, self._drive_dof = int(self.child_bid[k]), int(self.dadr[k])
         self._graphs()  # kernels loaded (compiled on first use) and graphs captured here
-
-    def extra(self) -> dict:
-        return {"device": self.device.alias, "precision": "float32",
-                "ngeom": int(self.model.ngeom)}
 
     # -- graphs -------------------------------------------------------------------
     def _graphs(self):
@@ -365,6 +362,43 @@ class MujocoWarpSession(MujocoSession):
                 getattr(d, name).assign(np.asarray(getattr(h, name), np.float32)[None])
             d.time.fill_(float(h.time))
 
+    def _loads(self) -> None:
+        """The harness's loads (``xfrc_applied``) at Warp's present poses."""
+        view = _WorldView(self.wd)
+        self.apply_loads(view)
+        view.commit()
+
+    def _diverged(self) -> str | None:
+        qvel, qacc = self.wd.qvel.numpy(), self.wd.qacc.numpy()
+        if not (abs(float(qvel.sum())) < HUGE and abs(float(qacc.sum())) < HUGE):
+            return "non-finite or huge velocities (simulation diverged)"
+        return None
+
+
+class MujocoWarpSession(WarpStepping, MujocoSession):
+    """The MuJoCo model of one linkage stepped by MuJoCo Warp (float32, one world)."""
+
+    name = "mujoco_warp"
+    settings_class = MujocoWarpSettings
+    engine_readings = False
+
+    def __init__(self, tree: SimTree, settings: MujocoWarpSettings | None = None):
+        self.wp, self.mjw = require_warp()
+        super().__init__(tree, settings)
+
+    def mujoco_settings(self) -> MujocoSettings:
+        return self.settings.mujoco_settings()
+
+    def _build(self) -> None:
+        super()._build()  # the host MjModel, its addresses, the loads
+        k = self.tree.driver_tree
+        self._drive_body, self._drive_dof = int(self.child_bid[k]), int(self.dadr[k])
+        self._put_warp()
+
+    def extra(self) -> dict:
+        return {"device": self.device.alias, "precision": self.settings.arithmetic.name,
+                "ngeom": int(self.model.ngeom)}
+
     def reset(self, t: float, h: float) -> None:
         super().reset(t, h)  # host: analytic state, drive, loads (its forward unused)
         step, fwd = self._graphs()
@@ -383,15 +417,7 @@ class MujocoWarpSession(MujocoSession):
         else:
             for _ in range(n):
                 wp.capture_launch(step)
-        qvel, qacc = self.wd.qvel.numpy(), self.wd.qacc.numpy()
-        if not (abs(float(qvel.sum())) < HUGE and abs(float(qacc.sum())) < HUGE):
-            return "non-finite or huge velocities (simulation diverged)"
-        return None
-
-    def _loads(self) -> None:
-        view = _WorldView(self.wd)
-        self.apply_loads(view)
-        view.commit()
+        return self._diverged()
 
     def record(self, t: float):
         """A ``forward`` + ``rne_postconstraint`` (graph) at the state at ``t``, then
@@ -476,5 +502,5 @@ def _version(mjw) -> str:
         return getattr(mjw, "__version__", "?")
 
 
-__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "require_warp",
-           "warp_cache_dir"]
+__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "WarpStepping",
+           "require_warp", "warp_cache_dir"]

@@ -56,6 +56,9 @@ def test_exit_status_counts_failed_free_verdicts():
     assert exit_status(_summary(), _free("pass", "known limit")) == 0
     assert exit_status(_summary("FAIL"), _free("pass")) == 1
     assert exit_status(_summary(), _free()) == 0
+    # a float32 engine's precision limit (a prescribed verdict) is not a failure either
+    assert exit_status(_summary("precision limit (float32)"), _free("pass")) == 0
+    assert exit_status(_summary("precision limit (float32)"), _free("FAIL")) == 1
 
 
 def test_summary_line_says_how_many_free_verdicts_failed():

@@ -146,10 +146,34 @@ def test_run_is_reproducible_from_its_record(name, tmp_path):
     assert r.ok, r.reason
     assert r.mechanism is mech and r.settings == get_engine(name).settings()
     assert_run_within(r, tree.linkage, ENGINE_RELATIVE, name)
+    # the arithmetic the run records is the one its settings declare (the error floor's)
+    assert r.extra.get("precision", "float64") == r.settings.arithmetic.name
     r2 = rerun(r)
     for k in ("values", "alpha", "drive_effort", "joint_force"):
         np.testing.assert_allclose(getattr(r2, k), getattr(r, k), rtol=1e-9, atol=1e-9,
                                    err_msg=k)
+
+
+def _free_engines():
+    from sim_models.free_engine import FREE_SESSIONS
+    return [pytest.param(n, marks=pytest.mark.skipif(missing_library(n) is not None,
+                                                     reason=str(missing_library(n))))
+            for n in FREE_SESSIONS]
+
+
+@pytest.mark.parametrize("name", _free_engines())
+def test_free_settings_round_trip_and_declare_the_engines_arithmetic(name):
+    """Every free session's settings round-trip through key=value strings and declare
+    the same arithmetic as the engine's prescribed settings (float32 for MuJoCo Warp)."""
+    from sim_models.free_engine import free_session_class, free_settings
+    s0 = free_settings(name)
+    fields = s0.as_dict()
+    again = free_settings(name, {k: (",".join(map(str, v)) if isinstance(v, tuple)
+                                     else str(v)) for k, v in fields.items()})
+    assert again == s0 and free_session_class(name).name == name
+    assert type(s0).arithmetic == get_engine(name).settings_class.arithmetic
+    with pytest.raises(SettingsError, match="no setting 'warp'"):
+        free_settings(name, {"warp": "9"})
 
 
 def test_plan_by_time_for_a_reversing_input():

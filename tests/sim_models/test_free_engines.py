@@ -91,8 +91,8 @@ def test_start_is_the_reference_state(engine, seed):
         r = sess.read(0.0)
     finally:
         sess.close()
-    assert np.max(np.abs(r.theta - s0.theta[0])) < TOL_START
-    assert np.max(np.abs(r.omega - s0.omega[0])) < TOL_START
+    assert np.max(np.abs(r.theta - s0.theta[0])) < tol_start(engine)
+    assert np.max(np.abs(r.omega - s0.omega[0])) < tol_start(engine)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -152,6 +152,25 @@ TOL_A01["pinocchio"], TOL_GAP["pinocchio"], TOL_ENERGY["pinocchio"] = 1e-8, 1e-6
 TOL_ELEMENTS["pinocchio"] = 1e-6
 DIVERGING["pinocchio"] = {"timestep": 0.05, "integrator": "euler"}
 
+#: MuJoCo Warp (issue 24; float32, RK4 at 1e-3 s, CG, stock inverse weights; optional:
+#: in ENGINES only when mujoco_warp is installed).  Its state is float32: a coordinate
+#: is rounded to u32 |q| (2.4e-7 rad at 200 deg) at the start and at every step.
+#: Measured: A01 2.9e-7 of the range; the released four-bar's gap 1.0e-6 of the size
+#: and energy 8.2e-7 of its scale; the force elements 1.1e-4 of the range, reactions
+#: 4.4e-5 and alpha 1.3e-4 of peak; the slider-crank 4.8e-4; the start 8.1e-8 rad
+#: (200 deg pendulum).  Tolerances ~10-30x those, still 10-100x below a wrong model's
+#: O(1e-2..1) error.
+TOL_A01["mujoco_warp"], TOL_GAP["mujoco_warp"], TOL_ENERGY["mujoco_warp"] = 1e-5, 1e-5, 1e-5
+TOL_ELEMENTS["mujoco_warp"] = TOL_FORCE["mujoco_warp"] = 1e-3
+DIVERGING["mujoco_warp"] = {"timestep": 0.05, "integrator": "Euler"}
+#: The released state read back before any step: float32 rounding of the coordinates
+#: (u32 times a few rad, summed over the tree: < 1e-6 rad) for a float32 engine.
+TOL_START_ENGINE = {"mujoco_warp": 1e-6}
+
+
+def tol_start(engine: str) -> float:
+    return TOL_START_ENGINE.get(engine, TOL_START)
+
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_diverging_setting_is_a_result(engine, seed):
@@ -205,6 +224,7 @@ def test_bare_stepping_loop_is_timed(seed):
 #: origin or sign would be O(1).
 TOL_SLIDER = {"mujoco": 1e-3, "pybullet": 5e-2, "exudyn": 1e-2}
 TOL_SLIDER["pinocchio"] = 1e-4  # measured 1.4e-5 (RK4 at 1e-3 s, the crank's fast swing)
+TOL_SLIDER["mujoco_warp"] = 3e-3  # measured 4.8e-4 (float32, CG, stock inverse weights)
 
 
 @pytest.fixture(scope="module")
@@ -219,8 +239,8 @@ def test_prismatic_coordinates_follow_reference(engine, slider_crank):
     run = run_free(mech, engine, request=FreeRequest(0.3, samples=15), reference=ref)
     assert run.ok, run.reason
     s = ref.at(run.times, forces=False)
-    assert np.max(np.abs(run.x[0] - s.x[0])) < TOL_START
-    assert np.max(np.abs(run.xd[0] - s.xd[0])) < TOL_START
+    assert np.max(np.abs(run.x[0] - s.x[0])) < tol_start(engine)
+    assert np.max(np.abs(run.xd[0] - s.xd[0])) < tol_start(engine)
     assert _rel_err(run, ref) < TOL_SLIDER[engine]
     assert np.isfinite(run.joint_force[1:]).all()  # every joint read (t = 0: see PyBullet)
 
@@ -237,6 +257,6 @@ def test_body_angles_carry_the_reference_turns(engine):
     run = run_free(mech, engine, request=FreeRequest(0.2, samples=4), reference=ref)
     s = ref.at(run.times, forces=False)
     assert run.ok, run.reason
-    assert np.max(np.abs(run.theta[0] - s.theta[0])) < TOL_START
-    assert np.max(np.abs(run.x[0] - s.x[0])) < TOL_START
+    assert np.max(np.abs(run.theta[0] - s.theta[0])) < tol_start(engine)
+    assert np.max(np.abs(run.x[0] - s.x[0])) < tol_start(engine)
     assert np.max(np.abs(run.theta - s.theta)) < 1e-2  # no whole turn anywhere
