@@ -70,7 +70,7 @@ def plot(png: str, runs: list[str]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     data = [dict(np.load(f, allow_pickle=False)) for f in runs]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 7.5), sharex=True)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(12.5, 7.5), sharex=True)
     d0 = data[0]
     ax1.plot(d0["t"], d0["b0_ref"][:, 0], "k-", lw=2.5, label="reference (exact, 1e-9 m)")
     rows = []
@@ -79,24 +79,30 @@ def plot(png: str, runs: list[str]) -> None:
         err = np.hypot(*(d["b0"] - d["b0_ref"]).T)
         fin = np.isfinite(err)
         worst = float(np.max(err[fin])) if fin.any() else math.nan
-        label = (f"{e} ({d['integrator']}, h = {float(d['timestep']):g} s)"
+        label = (f"{e} ({str(d['integrator']).split(' (')[0]}, h = {float(d['timestep']):g} s)"
                  + ("" if bool(d["ok"]) else f": stopped at {float(d['t_fail']):.3g} s"))
         ax1.plot(d["t"], d["b0"][:, 0], "--", lw=1.2, label=label)
         ax2.semilogy(d["t"][fin], np.maximum(err[fin], 1e-16), lw=1.2, label=e)
         rows.append((e, worst, _class(worst) if bool(d["ok"]) else "run stopped: "
                      + str(d["reason"]), float(d["wall"]), float(d["duration"])))
+    # the horizontal passes of the reference (B0 crosses y = 0): the change points
+    y = d0["b0_ref"][:, 1]
+    for i in np.flatnonzero(np.sign(y[:-1]) * np.sign(y[1:]) < 0):
+        for ax in (ax1, ax2):
+            ax.axvline(0.5 * (d0["t"][i] + d0["t"][i + 1]), color="0.85", lw=0.8, zorder=0)
     for c in CLASSES:
         ax2.axhline(c, color="grey", ls=":", lw=1)
         ax2.text(d0["t"][0], c * 1.3, f"IFToMM bar {c:g} m", color="grey", fontsize=8)
     ax1.set_ylabel("B0 x (m)")
-    ax1.set_title(f"IFToMM A02, N = {int(d0['n'])}: B0 (tip of crank0) against time; "
-                  "every horizontal pass is a change point of all windows", fontsize=10)
-    ax1.legend(fontsize=8, loc="lower left")
+    ax1.set_title(f"IFToMM A02, N = {int(d0['n'])}: B0 (tip of crank0) against time\n"
+                  "grey lines: the horizontal passes (change points of all windows)",
+                  fontsize=10)
+    ax1.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax2.set_ylabel("|B0 - B0 reference| (m)")
     ax2.set_xlabel("t (s)")
-    ax2.legend(fontsize=8, loc="lower right")
+    ax2.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
-    fig.savefig(png, dpi=110)
+    fig.savefig(png, dpi=110, bbox_inches="tight")
     for e, worst, cls, wall, dur in rows:
         print(f"{e:10s} largest B0 error {worst:.3g} m over the run: {cls}; "
               f"stepping {wall:.1f} s ({wall / dur:.3g} s per simulated s)")
