@@ -142,6 +142,14 @@ def test_a02_anti_parallelogram_keeps_the_solver():
     assert traj.duration == pytest.approx(0.2)
 
 
+def test_the_identities_are_for_parallelogram_chains_only():
+    """The seed four-bar (not a parallelogram) and Andrews' mechanism keep the solver's
+    kinematics: no chain is found."""
+    from analytic.free_motion.dynamics import _chain
+    for name in ("seed-four-bar", "iftomm-a03-andrews"):
+        assert _chain(Linkage(load_case(name))) is None
+
+
 def test_a02_small_n_over_a_turn():
     """N = 2 through the horizontal (rhombus windows at zero base) and the extended
     toggle at phi = -pi: both change points listed, the branch kept."""
