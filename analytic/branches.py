@@ -304,6 +304,11 @@ class BranchSchedule:
             dr[:B] = (dr[:B] + math.pi) % (2 * math.pi) - math.pi
             scale = max(float(np.max(np.abs(slope_l))), 1e-300)
             jump = float(np.max(np.abs(dr / h - slope_l))) / scale
+        # the dyads met here: those found touching, and those whose sign the continuity
+        # switched (a later window of the N four-bar, flat at the same input but found
+        # ~1e-3 away on the held signs, where it folds onto its base)
+        joints = tuple(self.dyad_joints[k] for k in range(len(steps))
+                       if k in dyads or s[k] != signs[k])
         return Crossing(t, joints, tuple(signs), tuple(s), rule, jump)
 
     # --- the walk -----------------------------------------------------------------

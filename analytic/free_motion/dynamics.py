@@ -49,7 +49,11 @@ class Coefficients:
 def coefficients(lk, q) -> Coefficients:
     """The solver's kinematics at ``q`` (scalar or ``(N,)``) with ``q' = 1, q'' = 0``."""
     q = np.atleast_1d(np.asarray(q, float))
-    kin = lk.kinematics(q, 1.0, 0.0, on_singular="flag")
+    chain = _chain(lk)
+    if chain is not None and chain.applies(q):  # parallelogram windows: exact identities
+        kin = chain.kinematics(q)
+    else:
+        kin = lk.kinematics(q, 1.0, 0.0, on_singular="flag")
     rev, ia, ib = _revolute_pairs(lk)
     x, x_q, x_qq = (arr[:, ib] - arr[:, ia] for arr in (kin.theta, kin.omega, kin.alpha))
     for k in np.flatnonzero(~rev):
@@ -58,6 +62,31 @@ def coefficients(lk, q) -> Coefficients:
     k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
     x[:, k] = q
     return Coefficients(kin, x, x_q, x_qq)
+
+
+def _chain(lk):
+    """The linkage's parallelogram chain (:mod:`.parallelograms`) or None, cached on it:
+    the solver's own rates are ill-conditioned at a window's change point."""
+    d = lk.__dict__
+    if "_free_chain" not in d:
+        from .parallelograms import Chain
+        d["_free_chain"] = Chain.of(lk)
+    return d["_free_chain"]
+
+
+def _massive(lk):
+    """The moving bodies with mass or inertia: indices, centres of mass (body frame,
+    complex), masses and inertias, cached on the linkage."""
+    got = lk.__dict__.get("_free_massive")
+    if got is None:
+        from ..positions import cplx
+        rows = [(b, cplx(body.com), body.mass or 0.0, body.inertia or 0.0)
+                for b, body in enumerate(lk.mech.bodies)
+                if b != lk.topo.ground and (body.mass or body.inertia)]
+        bs, com, mass, inertia = zip(*rows, strict=True) if rows else ((), (), (), ())
+        got = lk._free_massive = (np.array(bs, int), np.array(com, complex),
+                                  np.array(mass, float), np.array(inertia, float))
+    return got
 
 
 def _revolute_pairs(lk):
@@ -128,16 +157,17 @@ def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
     g = complex(*mech.gravity)
     M, C, Qg = np.zeros(N), np.zeros(N), np.zeros(N)
     V = np.zeros(N)
-    for b, body in enumerate(mech.bodies):
-        if b == lk.topo.ground or not body.mass and not body.inertia:
-            continue
-        rG, vG, aG = kin.com_c(b)
-        m, inertia = body.mass, body.inertia
-        M += m * np.abs(vG) ** 2 + inertia * kin.omega[:, b] ** 2
-        C += (m * (vG.real * aG.real + vG.imag * aG.imag)
-              + inertia * kin.omega[:, b] * kin.alpha[:, b])
-        Qg += m * (g.real * vG.real + g.imag * vG.imag)
-        V -= m * (g.real * rG.real + g.imag * rG.imag)
+    bs, com, mass, inertia = _massive(lk)
+    if len(bs):  # every body at once: sum over bodies of the same per-body terms
+        r = kin.E[:, bs] * com
+        w, al = kin.omega[:, bs], kin.alpha[:, bs]
+        rG = kin.zO[:, bs] + r
+        vG = kin.zv[:, bs] + 1j * w * r
+        aG = kin.za[:, bs] + (1j * al - w * w) * r
+        M += (mass * (vG.real ** 2 + vG.imag ** 2) + inertia * w ** 2).sum(axis=1)
+        C += (mass * (vG.real * aG.real + vG.imag * aG.imag) + inertia * w * al).sum(axis=1)
+        Qg += (mass * (g.real * vG.real + g.imag * vG.imag)).sum(axis=1)
+        V -= (mass * (g.real * rG.real + g.imag * rG.imag)).sum(axis=1)
     Ql = np.zeros(N)
     for ld in mech.loads:
         b = lk.body_index(ld.body)

@@ -168,7 +168,7 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     x0 = co.x[0]
     y = np.array([fm.value, fm.rate, 0.0, 0.0, 0.0])
     t, segs, switches = 0.0, [], []
-    closed = _closed_form_joints(mech)
+    closed = _LazyClosed(mech)  # a topology per joint: built only if a switch is needed
     if not np.all(np.isfinite(co.x_q)):  # released at a singular position of its joint
         lk, y, co = _start_elsewhere(lk, co, y, scale, closed, size, switches)
         x0 = co.x[0]
@@ -260,12 +260,25 @@ def _closed_form_joints(mech) -> np.ndarray:
     return np.array(out)
 
 
-def _pick(r: np.ndarray, closed: np.ndarray) -> int:
+class _LazyClosed:
+    """:func:`_closed_form_joints`, computed on first use (it builds one topology per
+    joint: 1.7 s for the 121 joints of A02, N = 40, which never switches)."""
+
+    def __init__(self, mech):
+        self.mech, self._v = mech, None
+
+    def __getitem__(self, k):
+        if self._v is None:
+            self._v = _closed_form_joints(self.mech)
+        return self._v[k]
+
+
+def _pick(r: np.ndarray, closed) -> int:
     """The new coordinate: among the joints moving at least half as fast as the fastest
     (relative to it every other coefficient is then at most 2 < SWITCH_RATIO, so it
     does not switch back at once), a closed-form one if any, the fastest of them."""
     ok = r >= 0.5 * np.max(r)
-    pref = ok & closed
+    pref = ok & closed[:]
     pool = pref if pref.any() else ok
     return int(np.argmax(np.where(pool, r, -1.0)))
 

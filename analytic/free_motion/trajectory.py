@@ -152,9 +152,13 @@ class FreeTrajectory:
         out["x"][idx] = x
         out["xd"][idx] = co.x_q * qd[:, None]
         out["xdd"][idx] = co.x_q * qdd[:, None] + co.x_qq * (qd ** 2)[:, None]
-        kin = lk.kinematics(y[:, 0], qd, qdd, on_singular="flag")
-        body["theta"][idx], body["omega"][idx], body["alpha"][idx] = (
-            kin.theta, kin.omega, kin.alpha)
+        # the rates are linear in q' and q'': scaled from the unit-rate coefficients (the
+        # same numbers as the solver at (q', q''), and for a parallelogram chain its exact
+        # identities instead of the solver's near-singular rates at a change point)
+        u = co.kin
+        body["theta"][idx] = u.theta
+        body["omega"][idx] = u.omega * qd[:, None]
+        body["alpha"][idx] = u.omega * qdd[:, None] + u.alpha * (qd ** 2)[:, None]
         en["kinetic"][idx], en["potential"][idx] = tm.kinetic, tm.potential
         en["motor_power"][idx] = tm.motor_power
         for mo in self._motors():
