@@ -9,7 +9,7 @@ breaking pytest's start-up: their tests run as before, and a test that uses an x
 fixture fails with one line naming the package that collides (:func:`collision`).
 
 The fixtures, options, marker and hooks are here; the work is in
-:mod:`reports.pytest_plugin` (imported on first use).  Fixtures: ``xval`` (session)
+:mod:`reports.regression.pytest_plugin` (imported on first use).  Fixtures: ``xval`` (session)
 and ``xval_baseline`` (one test per run recorded in the ini option ``xval_baseline``'s
 file, ids ``case/engine``).  Options: ``--xval-factor F``, ``--xval-update``,
 ``--xval-fail-loose``, ``--xval-skip-engines``; marker ``xval_engine`` (added to every
@@ -61,12 +61,12 @@ def collision() -> str | None:
 
 
 def impl():
-    """:mod:`reports.pytest_plugin`, imported on first use (one-line failure on a
+    """:mod:`reports.regression.pytest_plugin`, imported on first use (one-line failure on a
     collision, never an import error deep in the tool)."""
     msg = collision()
     if msg:
         pytest.fail(msg, pytrace=False)
-    from reports import pytest_plugin
+    from reports.regression import pytest_plugin
     return pytest_plugin
 
 
@@ -154,7 +154,7 @@ def pytest_collection_modifyitems(config, items) -> None:
 @pytest.fixture(scope="session")
 def xval(pytestconfig):
     """Engine-against-analytic assertions with a session-wide run cache
-    (:class:`reports.pytest_plugin.Xval`)."""
+    (:class:`reports.regression.pytest_plugin.Xval`)."""
     return impl().make_xval(pytestconfig)
 
 
@@ -171,7 +171,7 @@ def xval_baseline(xval, pytestconfig, request):
 def pytest_sessionfinish(session) -> None:
     """An xdist worker hands its run count to the controller (``workeroutput``)."""
     out = getattr(session.config, "workeroutput", None)
-    mod = sys.modules.get("reports.pytest_plugin")
+    mod = sys.modules.get("reports.regression.pytest_plugin")
     if out is not None and mod is not None:
         out["xval_stats"] = dict(mod._STATS)
 
@@ -185,7 +185,7 @@ def pytest_testnodedown(node, error) -> None:
 
 
 def pytest_terminal_summary(terminalreporter) -> None:
-    mod = sys.modules.get("reports.pytest_plugin")
+    mod = sys.modules.get("reports.regression.pytest_plugin")
     stats = [dict(mod._STATS)] if mod is not None else []
     stats += _WORKER_STATS
     runs = sum(s["runs"] for s in stats)

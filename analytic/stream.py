@@ -176,7 +176,7 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
     output, or an open text file; ``parquet``: a Parquet file) block by block.
 
     ``convert`` maps each block's table before it is written (display units and the
-    round-off snapping of :func:`reports.display_units.convert_frame`, which reads each
+    round-off snapping of :func:`reports.figures.display_units.convert_frame`, which reads each
     row alone: the block size changes no cell).
 
     Returns a :class:`analytic.sweep.SweepResult` whose ``frame`` is ``None`` (the table

@@ -1,7 +1,7 @@
 """Every numerical tolerance of the solver and its checks, with why it has its size.
 
 Relative errors elsewhere in the project are normalised by the peak magnitude of
-the quantity over the cycle (see :func:`reports.compare.compare`), so zero
+the quantity over the cycle (see :func:`reports.comparison.compare.compare`), so zero
 crossings do not blow them up.
 """
 

@@ -365,7 +365,7 @@ def cli_sweep(points: int) -> dict:
     """``xval sweep seed-four-bar --points N --csv F`` under ``/usr/bin/time -v``."""
     with tempfile.TemporaryDirectory() as d:
         csv = os.path.join(d, "sweep.csv")
-        cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "reports.cli", "sweep",
+        cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "reports.cli.xval", "sweep",
                "seed-four-bar", "--points", str(points), "--csv", csv]
         t0 = time.perf_counter()
         p = subprocess.run(cmd, capture_output=True, text=True)

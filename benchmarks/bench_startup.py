@@ -118,7 +118,7 @@ def best_of(cmd: list[str], n: int = 5) -> float:
 
 
 def cli() -> dict:
-    xval = [sys.executable, "-m", "reports.cli"]
+    xval = [sys.executable, "-m", "reports.cli.xval"]
     return {"xval cases": best_of(xval + ["cases"]),
             "xval --help": best_of(xval + ["--help"]),
             "xval solve seed-four-bar --json": best_of(xval + ["solve", "seed-four-bar",

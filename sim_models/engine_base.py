@@ -12,7 +12,7 @@ Data flow (one compiled object passed down)::
     mech = load_case(...)                    # description (analytic.Mechanism)
     tree = compile_linkage(mech)             # SimTree: Linkage + reference solution + tree
     run_ = run(tree, "mujoco", settings)     # EngineRun (carries tree.mech and settings)
-    comps = compare_run(run_, tree.linkage)  # reports.compare, the same Linkage
+    comps = compare_run(run_, tree.linkage)  # reports.comparison.compare, the same Linkage
 
 Writing an engine
 -----------------

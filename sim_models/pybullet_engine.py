@@ -61,7 +61,7 @@ from .urdf import build_urdf, link_offsets
 @dataclass(frozen=True)
 class PybulletSettings(EngineSettings):
     """PyBullet settings (recommended defaults; evidence in the README "Engines" section and
-    the speed-against-error grid of :mod:`reports.studies`).
+    the speed-against-error grid of :mod:`reports.studies.speed_accuracy`).
 
     Parameters
     ----------

@@ -5,7 +5,7 @@ Every door checks these: the settings dataclasses (``__post_init__`` of
 option flags such as ``--timestep`` and a baseline file's ``settings.fields`` all pass
 through it), :class:`sim_models.engine_run.RunRequest` (``--revolutions``,
 ``--samples`` and a baseline file's ``request``) and the command line's option types
-(:mod:`reports.cli_options`, which reads the bounds from here).  A value outside its
+(:mod:`reports.cli.options`, which reads the bounds from here).  A value outside its
 range is a setting the run cannot honour (an impossible physical value, or a run of
 hours); it is refused before any engine runs.  A value inside the range may still give
 a failed verdict: that is a measurement, not a user error.

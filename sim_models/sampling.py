@@ -26,7 +26,7 @@ def near_limit(condition, limit: float = LIMITED_RANGE_CONDITION) -> np.ndarray:
     """Where a sample sits at or near a limit or singular position: its analytic
     loop-Jacobian condition number ``condition`` (array) above ``limit``, or NaN.  The one
     decision of "near a limit position": a limited-range run stops before the first such
-    sample, and the verdicts leave such samples out (:mod:`reports.reference`)."""
+    sample, and the verdicts leave such samples out (:mod:`reports.comparison.reference`)."""
     return ~(np.asarray(condition, float) <= limit)
 
 

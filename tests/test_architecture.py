@@ -30,25 +30,25 @@ TOP_MODULES = ("xval_pytest_plugin",)
 #: The command line: the modules that build ``xval``'s parser and turn its arguments into
 #: calls of the library (:func:`command_line_modules`):
 #:
-#: * ``reports.cli`` (the parser, the ``COMMANDS`` table, its own commands ``cases``,
-#:   ``solve``, ``sweep``), ``reports.cli_options`` (option types, ``OneLineParser``),
-#:   ``reports.cli_paths`` (what a command may write);
-#: * every module named in ``reports.cli.COMMANDS`` (each adds its commands with
+#: * ``reports.cli.xval`` (the parser, the ``COMMANDS`` table, its own commands ``cases``,
+#:   ``solve``, ``sweep``), ``reports.cli.options`` (option types, ``OneLineParser``),
+#:   ``reports.cli.paths`` (what a command may write);
+#: * every module named in ``reports.cli.xval.COMMANDS`` (each adds its commands with
 #:   ``register(sub)``);
 #: * the command modules a command hands its work to, named ``*_cmd`` or ``*_cli``
 #:   (``baseline_cli``, ``report_cmd``, ``plot_cmd`` ..., and ``studies_cmd``, the
-#:   maintainer's ``python -m reports.studies_cmd``);
+#:   maintainer's ``python -m reports.cli.studies``);
 #: * ``xval_pytest_plugin``, pytest's entry point (it adds pytest options).
 #:
 #: Everything else is library code: it takes typed values, never an ``argparse``
 #: parser or namespace, and imports none of the modules above.
-COMMAND_LINE_CORE = frozenset({"reports.cli", "reports.cli_options", "reports.cli_paths",
+COMMAND_LINE_CORE = frozenset({"reports.cli.xval", "reports.cli.options", "reports.cli.paths",
                                "xval_pytest_plugin"})
 #: Modules that read ``sys.argv`` without being the command line: the README-figure
-#: maintainer script (``python -m reports.readme_figures``; issue 19 moves it out of the
+#: maintainer script (``python -m reports.report.readme_figures``; issue 19 moves it out of the
 #: package) and the background kernel compiler's worker process, whose arguments are
 #: written by :func:`analytic.kernels.background.start`, not typed by a user.
-ARGV_READERS = frozenset({"reports.readme_figures", "analytic.kernels.background"})
+ARGV_READERS = frozenset({"reports.report.readme_figures", "analytic.kernels.background"})
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ class Import:
 
 
 def module_name(path: Path, root: Path | None = None) -> str:
-    """``reports/cli.py`` -> ``reports.cli``; a package's ``__init__`` -> the package."""
+    """``reports/cli/xval.py`` -> ``reports.cli.xval``; a package's ``__init__`` -> the package."""
     rel = path.relative_to(root or ROOT).with_suffix("")
     parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
     return ".".join(parts)
@@ -122,7 +122,7 @@ def imports_of(name: str, path: Path) -> list[Import]:
 def imports_by_name(name: str, path: Path, modules) -> list[Import]:
     """A module that calls ``importlib.import_module`` imports, when asked, the project
     modules it names in string constants (``sim_models.registry.BUILTIN``,
-    ``reports.cli.COMMANDS``): one edge each, its own name left out."""
+    ``reports.cli.xval.COMMANDS``): one edge each, its own name left out."""
     text = path.read_text(encoding="utf-8")
     if "import_module" not in text:
         return []
@@ -241,19 +241,21 @@ def upward_imports(files, imports: list[Import]) -> list[str]:
 
 
 def command_line_modules() -> frozenset[str]:
-    """:data:`COMMAND_LINE_CORE`, the ``reports`` modules named ``*_cmd``/``*_cli``, and
-    every module named in ``reports.cli.COMMANDS`` (read from the source: the first
+    """:data:`COMMAND_LINE_CORE`, every module of ``reports/cli/`` (and any ``reports``
+    module named ``*_cmd``/``*_cli``), and
+    every module named in ``reports.cli.xval.COMMANDS`` (read from the source: the first
     string of each of the table's values)."""
-    named = {f"reports.{p.stem}" for p in (ROOT / "reports").glob("*.py")
-             if p.stem.endswith(("_cmd", "_cli"))}
-    tree = ast.parse((ROOT / "reports" / "cli.py").read_text(encoding="utf-8"))
+    named = {module_name(p) for p in (ROOT / "reports" / "cli").rglob("*.py")}
+    named |= {f"reports.{p.stem}" for p in (ROOT / "reports").glob("*.py")
+              if p.stem.endswith(("_cmd", "_cli"))}
+    tree = ast.parse((ROOT / "reports" / "cli" / "xval.py").read_text(encoding="utf-8"))
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign | ast.AnnAssign):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             if any(isinstance(t, ast.Name) and t.id == "COMMANDS" for t in targets):
                 table = ast.literal_eval(node.value)
                 return COMMAND_LINE_CORE | named | {module for module, _ in table.values()}
-    raise AssertionError("reports/cli.py has no COMMANDS table")
+    raise AssertionError("reports/cli/xval.py has no COMMANDS table")
 
 
 # ============================================================================ the checker
@@ -337,7 +339,7 @@ def test_only_the_command_line_reads_arguments():
     cli = command_line_modules()
     files = project_files()
     assert cli <= set(files), f"unknown command modules: {sorted(cli - set(files))}"
-    assert "reports.cli_engines" in cli and "reports.baseline_cli" in cli  # the rule's reach
+    assert "reports.cli.engines" in cli and "reports.cli.baseline" in cli  # the rule's reach
     bad = []
     for name, path in files.items():
         if name in cli:

@@ -9,7 +9,7 @@ acceleration.  It goes
 * through the API: ``Linkage(mech).kinematics`` at three input values and
   ``Linkage.forces``: every array of the result must be finite, or the call must
   raise a :class:`analytic.LinkageError` (a typed error);
-* through the command line in-process (``reports.cli.main``) from a TOML file of
+* through the command line in-process (``reports.cli.xval.main``) from a TOML file of
   the same description: ``xval solve FILE --json`` must exit 0 with finite JSON or
   exit 2 with one line on standard error;
 * every SWEEP_EVERY-th example also through ``Linkage.sweep`` (via
@@ -45,7 +45,7 @@ from hypothesis import strategies as st
 from analytic import Assembly, Linkage, LinkageError
 from analytic.tolerances import SINGULAR_CONDITION
 from analytic.toml_io import mechanism_to_toml
-from reports.cli import main
+from reports.cli.xval import main
 from tests.conftest import four_bar, slider_crank
 
 EXAMPLES = int(os.environ.get("XVAL_FUZZ_EXAMPLES", 10_000))

@@ -13,7 +13,7 @@ import pytest
 
 from analytic import Linkage, load_case
 from analytic.sweep import nearest_event
-from reports.cli import main
+from reports.cli.xval import main
 
 from .conftest_helpers import four_bar
 

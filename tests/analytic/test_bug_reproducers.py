@@ -16,7 +16,7 @@ import pytest
 
 from analytic import AssemblyError, Linkage, load_case
 from analytic.positions import size_of
-from reports.cli import main
+from reports.cli.xval import main
 
 from .stephenson_by_hand import Stephenson
 

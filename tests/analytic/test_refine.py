@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from analytic import Linkage, load_case
-from reports.cli import main
+from reports.cli.xval import main
 
 from .conftest_helpers import four_bar
 

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from analytic import Linkage
-from reports.cli import main
+from reports.cli.xval import main
 
 from .conftest_helpers import four_bar, slider_crank
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 from contextlib import redirect_stdout
 
-from reports.cli import main
+from reports.cli.xval import main
 
 
 def run(*argv) -> tuple[int, str]:

@@ -2,7 +2,7 @@
 body, joint, option or input value, with exit status 2 (issue 8, "What to build" 5, 8, 9).
 
 Each row is one distinct bad input: a file (written from the seed four-bar with one
-change) or a command line.  The test runs ``reports.cli.main`` in-process and asserts
+change) or a command line.  The test runs ``reports.cli.xval.main`` in-process and asserts
 the exit status, that standard error is exactly one line matching the row's message
 class, that it holds no traceback, and that nothing was written to standard output.
 A few rows that need a real pipe run ``xval`` in a subprocess.
@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from analytic.cases import case_path
-from reports.cli import main
+from reports.cli.xval import main
 
 SEED = case_path("seed-four-bar").read_text()
 HARD = Path(__file__).resolve().parents[2] / "analytic" / "cases" / "hard"
@@ -365,7 +365,7 @@ def _writable(d: Path) -> bool:
 def _xval(cmd: str, cwd=None) -> subprocess.CompletedProcess:
     """``cmd`` in bash with xval from this interpreter; PIPESTATUS of the first command
     is printed last on standard output."""
-    xval = f"{sys.executable} -m reports.cli"
+    xval = f"{sys.executable} -m reports.cli.xval"
     script = cmd.replace("xval", xval) + '; echo "rc=${PIPESTATUS[0]}"'
     return subprocess.run(["bash", "-c", script], capture_output=True, text=True,
                           cwd=cwd or os.getcwd(), timeout=120)
@@ -424,7 +424,7 @@ def test_report_markdown_shows_names_literally(tmp_path):
     import pandas as pd
     from markdown_it import MarkdownIt
 
-    from reports.report import Document
+    from reports.report.build import Document
     doc = Document(tmp_path)
     doc.h(2, NASTY)
     doc.p(NASTY)
@@ -440,7 +440,7 @@ def test_report_markdown_shows_names_literally(tmp_path):
 
 def test_report_image_of_a_case_given_as_a_path(tmp_path):
     """--cases sub/f.toml: the case's figures are written under a file-safe name."""
-    from reports.report import Document
+    from reports.report.build import Document
     doc = Document(tmp_path)
     doc.image(b"\x89PNG", "sub/f.toml-angle", "sub/f.toml: angle")
     md = doc.markdown("t")

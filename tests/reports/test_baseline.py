@@ -5,7 +5,7 @@ the baseline (an error divided by 100 must read as a 100x growth; a tolerance se
 the recorded error must be exceeded); the JUnit documents are validated against a schema
 written from the format's own description (``junit.xsd`` beside this file) and their
 counts against the cases run.  Runs go through the session cache of the pytest plugin
-(:func:`reports.pytest_plugin.cached_runner`), shared with the engine tests and the
+(:func:`reports.regression.pytest_plugin.cached_runner`), shared with the engine tests and the
 committed-baseline check, so most cost nothing extra; the command-line checks re-run.
 """
 
@@ -20,9 +20,9 @@ from pathlib import Path
 import pytest
 
 from analytic.cases import case_names, case_path
-from reports import baseline as bl
-from reports.cli import main
-from reports.pytest_plugin import baseline_params, cached_runner
+from reports.cli.xval import main
+from reports.regression import baseline as bl
+from reports.regression.pytest_plugin import baseline_params, cached_runner
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILTIN = ROOT / "tests" / "baselines" / "builtin.json"
@@ -222,7 +222,7 @@ def test_over_tolerance_missing_quantity_and_missing_case_fail(mujoco_baseline, 
     assert "'no-such-case' no longer exists" in checks["quick-return"].problems[0]
     assert sum(not c.passed for c in checks.values()) == 3
     # in JUnit: two failures (tolerance, missing quantity) and one error (case gone)
-    from reports.ci_formats import from_baseline, junit_xml
+    from reports.regression.ci_formats import from_baseline, junit_xml
     junit = tmp_path / "j.xml"
     junit.write_text(junit_xml("check", from_baseline(list(checks.values()))))
     _validate_junit(junit, tests=len(checks), failures=2, errors=1)
@@ -288,7 +288,7 @@ def test_model_identity_names_removed_and_added_items():
     from dataclasses import replace
 
     from analytic import load_case
-    from reports import model_identity as mid
+    from reports.regression import model_identity as mid
     mech = load_case("seed-four-bar")
     before = mid.content(mech)
     after = mid.content(replace(mech, gravity=(0.0, -9.81)))

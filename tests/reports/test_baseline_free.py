@@ -18,10 +18,10 @@ import re
 
 import pytest
 
-from reports import baseline as bl
-from reports.baseline_free import free_request
-from reports.cli import main
-from reports.pytest_plugin import cached_runner
+from reports.cli.xval import main
+from reports.regression import baseline as bl
+from reports.regression.baseline_free import free_request
+from reports.regression.pytest_plugin import cached_runner
 from tests.reports.test_bad_inputs import assert_one_line_error
 
 #: The recorded runs: A01 in MuJoCo (within every tolerance; no loop) and the released
@@ -255,7 +255,7 @@ BAD.update({
 
 @pytest.fixture
 def no_free_run(monkeypatch):
-    import reports.baseline_free as bf
+    import reports.regression.baseline_free as bf
 
     def ran(*a, **k):
         pytest.fail("a free run started for an unusable baseline")

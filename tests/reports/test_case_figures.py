@@ -1,10 +1,10 @@
 """A case plot can never disagree with its verdict.
 
 For every built-in case and every registered engine, the figures' own plotted arrays
-(:class:`reports.case_figures.CurveFigure`: the analytic line and the engine markers)
+(:class:`reports.figures.case_figures.CurveFigure`: the analytic line and the engine markers)
 are read back: at each judged marker, the distance to the analytic line at the same
 input, divided by the quantity's peak over the plotted samples, must not exceed that
-quantity's verdict error (:func:`reports.compare.compare_run`) plus round-off; for a
+quantity's verdict error (:func:`reports.comparison.compare.compare_run`) plus round-off; for a
 quantity the verdict does not judge (angles, omegas) the line must be the verdict's own
 reference at every sample and the marker the engine's own value.
 The error panels' largest value per family must equal the verdict's.  A figure drawn
@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from analytic import case_names, load_case
-from reports.case_figures import curve_figures, error_figure
-from reports.compare import compare_run
-from reports.reference import family_of
+from reports.comparison.compare import compare_run
+from reports.comparison.reference import family_of
+from reports.figures.case_figures import curve_figures, error_figure
 from sim_models import compile_linkage
 from sim_models.engines import run
 from sim_models.registry import available_engines
@@ -66,7 +66,7 @@ def plotted_excess(fig, comps: dict, refs: dict | None = None) -> list[str]:
     from the line at its input, over the curve's peak there, within the quantity's
     verdict error.  A curve the verdict does not judge (angle, omega): the line at each
     marker is the verdict's reference there (``refs[engine]``:
-    :func:`reports.reference.reference_of`), to round-off, and the marker is the
+    :func:`reports.comparison.reference.reference_of`), to round-off, and the marker is the
     engine's own value (angles: the same difference modulo a turn)."""
     by_q = {e: {c.quantity: c for c in cs} for e, cs in comps.items()}
     out = []
@@ -123,7 +123,7 @@ def plotted_excess(fig, comps: dict, refs: dict | None = None) -> list[str]:
 
 
 def refs_of(tree, runs):
-    from reports.reference import reference_of
+    from reports.comparison.reference import reference_of
     return {e: (reference_of(r, tree.linkage), r) for e, r in runs.items()}
 
 
@@ -158,7 +158,7 @@ def test_error_panels_are_the_verdict(case):
 def nominal_line(runs, linkage):
     """The reference case_figures drew before: the description's nominal driver speed
     at every input (``lk.sweep(360)``), here at the plotted inputs."""
-    from reports.reference import analytic_line
+    from reports.comparison.reference import analytic_line
     u, kin, _ = analytic_line(runs, linkage)
     nominal = linkage.kinematics(kin.value, on_singular="flag")
     frc = linkage.forces(nominal) if linkage.mech.has_mass else None

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from analytic import case_names
-from reports.cli import main
+from reports.cli.xval import main
 
 
 def run(capsys, *argv):

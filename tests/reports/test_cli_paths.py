@@ -20,8 +20,8 @@ import pytest
 
 from analytic import LinkageError, load_case
 from analytic.cases import case_path
-from reports.cli import main
-from reports.cli_paths import check_outputs, safe_stem
+from reports.cli.paths import check_outputs, safe_stem
+from reports.cli.xval import main
 
 
 def _with_name(tmp_path: Path, name_toml: str, file: str = "case.toml",
@@ -118,7 +118,7 @@ def test_check_outputs_ignores_standard_output_and_builtin_names(tmp_path):
 def test_explicit_output_folders_are_created(tmp_path):
     """The README's CI example writes ``--out tests/baselines/engines.json``; the folder
     did not exist and record refused.  An explicitly named file now gets its folders."""
-    from reports.cli_options import output_file
+    from reports.cli.options import output_file
     target = tmp_path / "ci" / "baselines" / "engines.json"
     assert output_file(str(target)) == str(target)
     assert target.parent.is_dir() and not target.exists()
@@ -165,7 +165,7 @@ def test_every_accepted_name_gives_well_formed_xml(tmp_path, capsys):
 def test_junit_text_is_cleaned_of_what_xml_cannot_hold():
     """A baseline's case name or a path may still carry control characters or a lone
     surrogate (a file name's undecodable byte): the JUnit file must stay well formed."""
-    from reports.ci_formats import CiCase, junit_xml
+    from reports.regression.ci_formats import CiCase, junit_xml
     text = junit_xml("suite \udcff\x01", [CiCase("case\x0b", "mujoco\x01", "fail",
                                                  message="m\x02", details="d\x1b")])
     root = ET.fromstring(text.encode("utf-8"))

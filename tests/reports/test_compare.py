@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 
-from reports.compare import compare
+from reports.comparison.compare import compare
 
 
 def test_normalised_by_peak_not_pointwise():
@@ -50,7 +50,7 @@ def test_a_failed_run_is_strict_json_and_says_not_measured(tmp_path, capsys):
     pytest.importorskip("pybullet")
     import json
 
-    from reports.cli import main
+    from reports.cli.xval import main
     from tests.reports.test_bad_inputs import NANOMETRE
     f = tmp_path / "nano.toml"
     f.write_text(NANOMETRE)
@@ -84,7 +84,7 @@ def test_compare_any_driver_motion_ends_in_a_verdict(name, capsys):
     never a traceback (it was ``ValueError: zero-size array``, exit 1)."""
     import os
 
-    from reports.cli import main
+    from reports.cli.xval import main
     path = os.path.join(BUGS, name)
     if not os.path.isfile(path):
         pytest.skip("bug reproducers not present")
@@ -105,7 +105,7 @@ def test_nothing_to_compare_is_typed():
     import dataclasses
 
     from analytic import LinkageError
-    from reports.compare import NothingToCompare, compare_run
+    from reports.comparison.compare import NothingToCompare, compare_run
     from sim_models import compile_linkage
     from sim_models.engines import run
     pytest.importorskip("mujoco")
@@ -122,8 +122,8 @@ def test_failed_verdict_near_a_singular_position_says_so():
     rocker collinear with the ground, by construction of the file) is reported with the
     distance; one 40 deg away, or at a rocker's extreme angle, is not."""
     from analytic import Linkage, load_case
-    from reports.compare import Comparison, near_event
-    from reports.studies import load
+    from reports.comparison.compare import Comparison, near_event
+    from reports.studies.speed_accuracy import load
     lk = Linkage(load("parallelogram-four-bar"))
     msg = near_event([Comparison("rocker.alpha", 1.0, 1.0, 1.0, 182.0, 1e-3, False)], lk)
     assert msg and "2 deg from the" in msg and "180 deg" in msg
@@ -145,8 +145,8 @@ def test_parallelogram_passes_in_both_engines():
     from analytic import Linkage
     if not hasattr(Linkage, "branch_crossings"):
         pytest.skip("this solver holds its dyad signs through change points")
-    from reports.studies import load
-    from reports.verdict_runs import run_comparison
+    from reports.comparison.runs import run_comparison
+    from reports.studies.speed_accuracy import load
     from sim_models import compile_linkage
     tree = compile_linkage(load("parallelogram-four-bar"))
     for eng in ("mujoco", "pybullet"):
@@ -156,7 +156,7 @@ def test_parallelogram_passes_in_both_engines():
 
 
 def test_compare_set_and_integrator_options(capsys):
-    from reports.cli import main
+    from reports.cli.xval import main
     pytest.importorskip("mujoco")
     code = main(["compare", "seed-four-bar", "--engine", "mujoco", "--samples", "8",
                  "--integrator", "Euler", "--set", "timestep=1e-4", "--json"])
@@ -181,7 +181,7 @@ def test_prismatic_normal_and_moment_are_judged():
     import dataclasses
 
     from analytic import load_case
-    from reports.compare import compare_run
+    from reports.comparison.compare import compare_run
     from sim_models.engines import run
     r = run(load_case("quick-return"), "mujoco", samples=12)
     names = {c.quantity: c for c in compare_run(r)}
@@ -206,7 +206,7 @@ def test_a_failed_verdict_says_how_far_the_input_moves_per_step():
     import re
 
     from analytic import load_mechanism
-    from reports.compare import compare_run, step_note, verdict
+    from reports.comparison.compare import compare_run, step_note, verdict
     from sim_models.engines import run
     from sim_models.registry import make_settings
     mech = load_mechanism(os.path.join(BUGS, "fast-accelerating.toml"))

@@ -7,7 +7,7 @@ import math
 
 import pandas as pd
 
-from reports.console import WIDTH, counts_line, sig2, verdict_table
+from reports.report.console import WIDTH, counts_line, sig2, verdict_table
 
 
 def _summary():

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from analytic import load_case
-from reports.cli import main
+from reports.cli.xval import main
 
 from .cli_run import run
 

@@ -20,7 +20,7 @@ import pytest
 import sympy as sp
 
 from analytic import case_names
-from reports.cli import main
+from reports.cli.xval import main
 
 from .cli_run import run
 
@@ -279,8 +279,8 @@ def test_calc_lines_over_the_cycle(case):
     expressions are ill-conditioned and need more digits)."""
     from analytic import Linkage, load_case
     from analytic.sweep import input_values
-    from reports.explain_doc import explain as explain_doc
-    from reports.explain_render import render
+    from reports.explain.doc import explain as explain_doc
+    from reports.explain.render import render
     mech = load_case(case)
     for v in input_values(Linkage(mech), 4)[0]:
         md = render(explain_doc(mech, float(v)), "md")
@@ -445,8 +445,8 @@ def scaled(case: str, k_len: float, k_mass: float):
 
 
 def worked(mech, angle_deg: float) -> str:
-    from reports.explain_doc import explain as explain_doc
-    from reports.explain_render import render
+    from reports.explain.doc import explain as explain_doc
+    from reports.explain.render import render
     return render(explain_doc(mech, math.radians(angle_deg)), "md")
 
 
@@ -482,8 +482,8 @@ def test_a_nano_mechanism_prints_its_lengths():
 
 
 def test_the_self_check_refuses_a_zero_that_hides_a_value():
-    from reports import explain_sym as S
-    from reports.explain_blocks import Math
+    from reports.explain import sym as S
+    from reports.explain.blocks import Math
     assert not S.reproduces("6.73337865e-13*15", "0")        # the micro four-bar's power
     assert S.reproduces("-(0.2*sind(180) + 0*sind(270))", "0")  # a true zero
     assert S.reproduces("6.73337865e-13*15", "1.01001e-11")

@@ -12,8 +12,8 @@ import pytest
 from PIL import Image
 
 from analytic import Linkage, load_case
-from reports import plots
-from reports.case_figures import linkage_figure
+from reports.figures import plots
+from reports.figures.case_figures import linkage_figure
 
 #: The brief's floor for legend text at the page's width (pt).
 MIN_LEGEND_PT = 9.0

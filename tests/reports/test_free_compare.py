@@ -1,4 +1,4 @@
-"""Judging a free trajectory (reports.free_compare) on synthetic engine runs whose errors
+"""Judging a free trajectory (reports.comparison.free_compare) on synthetic engine runs whose errors
 are known in closed form: IFToMM A01, the simple pendulum released from the horizontal
 (amplitude 90 deg: over half a period, 1.18 s, the joint angle's range is exactly pi, its
 largest kinetic energy m g L = 9.81 J equals the range of its potential energy), and the
@@ -13,7 +13,7 @@ import pytest
 
 from analytic import load_case
 from analytic.free_motion import simulate
-from reports import free_compare as fc
+from reports.comparison import free_compare as fc
 from sim_models.free_cases import released
 
 from .free_synthetic import synthetic_run

@@ -10,12 +10,12 @@ import math
 import pandas as pd
 import pytest
 
-from reports import free_studies as FS
-from reports import report_free
-from reports.console import free_counts_line, free_failure_lines
-from reports.free_limits import KNOWN_LIMITS, KnownLimit, known_limit, verdict_of
-from reports.page import Document
-from reports.report_cmd import exit_status
+from reports.cli.report import exit_status
+from reports.comparison.free_limits import KNOWN_LIMITS, KnownLimit, known_limit, verdict_of
+from reports.report import free_section as report_free
+from reports.report.console import free_counts_line, free_failure_lines
+from reports.report.document import Document
+from reports.studies import free_studies as FS
 
 LIMIT = KnownLimit("e", "c", 1.0, 0.1, "first order at its step")
 
@@ -83,7 +83,7 @@ def test_a_free_case_that_did_not_run_is_a_failed_verdict(tmp_path):
 def test_every_listed_limit_is_a_run_of_the_report():
     """Every listed limit names a case and duration the report runs (a stale entry is
     an error of the list)."""
-    from reports.free_cases import free_case
+    from reports.comparison.free_cases import free_case
     runs = {(free_case(c, d).name, d) for mode in (True, False)
             for c, d in FS.VERDICT_CASES[mode]}
     for k in KNOWN_LIMITS:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from reports.pytest_plugin import Xval
+from reports.regression.pytest_plugin import Xval
 
 
 @pytest.fixture(autouse=True)

@@ -9,9 +9,9 @@ import math
 import pandas as pd
 import pytest
 
-from reports import free_studies as FS
-from reports import report_free
-from reports.page import Document
+from reports.report import free_section as report_free
+from reports.report.document import Document
+from reports.studies import free_studies as FS
 
 
 @pytest.fixture(autouse=True)
@@ -114,8 +114,8 @@ def test_a_mechanism_without_a_loop_has_no_loop_drift_not_a_zero():
 
     from analytic import load_case
     from analytic.free_motion import simulate
-    from reports.free_compare import compare_free, reference_samples
-    from reports.free_studies import _loop_drift
+    from reports.comparison.free_compare import compare_free, reference_samples
+    from reports.studies.free_studies import _loop_drift
     from sim_models.free_run import FreeEngineRun
 
     traj = simulate(load_case("iftomm-a01-pendulum"), duration=0.5)

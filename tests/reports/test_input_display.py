@@ -53,14 +53,14 @@ def test_wrap_and_units_from_independent_values():
 def test_failed_slider_run_is_shown_in_metres():
     """report_tables once turned a slider-driven run that failed at 0.1 m into
     'at input 5.73 m' (degrees of 0.1 rad)."""
-    from reports.report_tables import failed_at, summary_table, verdict_table
+    from reports.report.tables import failed_at, summary_table, verdict_table
     r = types.SimpleNamespace(ok=False, fail_value=0.1, reason="diverged",
                               mechanism=load_case("hibbeler-16-30"), settings_text="")
     assert failed_at(r) == 0.1
     crank = types.SimpleNamespace(ok=False, fail_value=math.radians(390.0),
                                   mechanism=load_case("seed-four-bar"))
     assert failed_at(crank) == pytest.approx(30.0)
-    import reports.compare as cmp
+    import reports.comparison.compare as cmp
     orig = cmp.comparison_frame
     cmp.comparison_frame = lambda run_, comps: orig(run_, [])  # no quantities: the row only
     try:
@@ -80,8 +80,9 @@ def _title_input(title: str) -> str:
 
 
 def test_table_figure_and_junit_name_the_same_worst_input(tmp_path):
-    from reports import plot_cmd, plots
-    from reports.verdict_runs import settings_for
+    from reports.cli import plot as plot_cmd
+    from reports.comparison.runs import settings_for
+    from reports.figures import plots
     junit = tmp_path / "j.xml"
     code, out = run("compare", CASE, "--engine", ENGINE, "--timestep", str(TIMESTEP),
                     "--junit", str(junit))

@@ -16,8 +16,9 @@ import pytest
 from PIL import Image
 
 from analytic import Linkage, load_case
-from reports import animate, plot_cmd
-from reports.cli import main
+from reports.cli import animate
+from reports.cli import plot as plot_cmd
+from reports.cli.xval import main
 
 from .cli_run import run
 
@@ -69,7 +70,7 @@ def test_plot_png_shows_the_analytic_cycle(tmp_path):
 def test_plot_units_convert_the_same_figures():
     mech = load_case("seed-four-bar")
     (om,), _, _, _ = plot_cmd.case_figures(mech, ["omega"], [], {})
-    from reports.display_units import DisplayUnits, convert_figure
+    from reports.figures.display_units import DisplayUnits, convert_figure
     c = convert_figure(om, DisplayUnits.parse("mm,rad,rpm"))
     assert c.ylabel == "omega (rpm)" and c.xlabel == "input angle (rad)"
     np.testing.assert_allclose(c.curves[1].y, om.curves[1].y * 60 / (2 * math.pi), rtol=1e-15)
@@ -115,7 +116,7 @@ def test_plot_with_engine_has_markers_and_errors(tmp_path):
 
 
 def _settings(engine):
-    from reports.verdict_runs import settings_for
+    from reports.comparison.runs import settings_for
     return settings_for([engine])
 
 

@@ -22,10 +22,10 @@ import pytest
 
 from analytic import load_case
 from analytic.input_display import convention_of, display_input
-from reports.ci_formats import from_compare, junit_xml, markdown_summary
-from reports.compare import compare_run, verdict, verdict_word
-from reports.report_tables import accepted, summary_table, verdict_table
-from reports.verdict_runs import Verdict
+from reports.comparison.compare import compare_run, verdict, verdict_word
+from reports.comparison.runs import Verdict
+from reports.regression.ci_formats import from_compare, junit_xml, markdown_summary
+from reports.report.tables import accepted, summary_table, verdict_table
 from sim_models import compile_linkage, run
 from sim_models.mjcf import MujocoSettings
 from sim_models.precision import FLOAT32, FLOAT64

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 import time
 
-from reports.progress import engine_progress
+from reports.comparison.progress import engine_progress
 
 
 class Tty(io.StringIO):

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
-from reports import baseline as bl
-from reports import pytest_plugin
-from reports.pytest_plugin import cached_runner
+from reports.regression import baseline as bl
+from reports.regression import pytest_plugin
+from reports.regression.pytest_plugin import cached_runner
 
 #: A user's own crank-rocker (Grashof: 40 + 150 <= 120 + 100), with gravity, in mm.
 USER_TOML = """\
@@ -395,7 +395,7 @@ def test_a_loose_baseline_warns_and_fails_with_the_flag(user_project, xval, tmp_
     pytest warning naming it; with ``--xval-fail-loose`` (``fail_loose``) a failure."""
     import json
 
-    from reports.pytest_plugin import Xval, XvalLooseWarning
+    from reports.regression.pytest_plugin import Xval, XvalLooseWarning
     doc = json.loads((user_project / "tests" / "baseline.json").read_text())
     q = max(doc["runs"][0]["quantities"], key=lambda q: q["error"])
     q["error"] *= 1000

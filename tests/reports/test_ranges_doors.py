@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from reports.cli import main
+from reports.cli.xval import main
 from sim_models.registry import get_engine
 
 from ..sim_models.test_settings_ranges import ENGINES, IMPOSSIBLE
@@ -29,8 +29,8 @@ BUILTIN = Path(__file__).resolve().parents[1] / "baselines" / "builtin.json"
 @pytest.fixture
 def no_run(monkeypatch):
     """Fail the test if any engine run or comparison starts."""
-    import reports.baseline as bl
-    import reports.verdict_runs as vr
+    import reports.comparison.runs as vr
+    import reports.regression.baseline as bl
     from sim_models import engines
 
     def ran(*a, **k):
@@ -217,7 +217,7 @@ def test_baseline_file_edits(capsys, no_run, tmp_path, name):
 
 def test_the_unedited_base_of_the_edits_loads(tmp_path):
     """The edits above change one thing of a file that is otherwise accepted."""
-    import reports.baseline as bl
+    import reports.regression.baseline as bl
     doc = json.loads((BUGS / "baseline-zero-revolutions.json").read_text())
     doc["runs"][0]["request"]["revolutions"] = 2
     p = tmp_path / "b.json"

@@ -10,7 +10,7 @@ from html.parser import HTMLParser
 import pandas as pd
 import pytest
 
-from reports.report import ReportConfig, build_report
+from reports.report.build import ReportConfig, build_report
 
 
 class _Images(HTMLParser):
@@ -74,7 +74,7 @@ def test_markdown_links_its_images(report_dir):
 
 def test_missing_engine_still_reports(tmp_path, monkeypatch):
     """An engine that cannot be imported becomes a failed row, not a crash."""
-    import reports.report as rep
+    import reports.report.build as rep
 
     real = rep.engine_task
 

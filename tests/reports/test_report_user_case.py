@@ -24,7 +24,7 @@ def _snapshot(*dirs: Path) -> dict:
 
 
 def test_user_case_report_writes_only_under_out(tmp_path, monkeypatch):
-    from reports.cli import main
+    from reports.cli.xval import main
     user = tmp_path / "my"
     user.mkdir()
     toml = user / "crank-rocker.toml"

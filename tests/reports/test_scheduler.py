@@ -8,7 +8,7 @@ from concurrent.futures import ThreadPoolExecutor, wait
 
 import pytest
 
-from reports.scheduler import PriorityExecutor
+from reports.studies.scheduler import PriorityExecutor
 
 
 def test_most_urgent_first_and_every_result():

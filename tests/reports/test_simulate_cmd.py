@@ -98,7 +98,7 @@ def test_builtin_case_without_motion_is_released_as_the_report_does():
     9.81 m/s^2, and says so; the trajectory starts there with KE 0."""
     import json
 
-    from reports.free_cases import free_case
+    from reports.comparison.free_cases import free_case
     code, text = run("simulate", "seed-four-bar", "--duration", "0.1", "--json")
     out = json.loads(text)
     assert code == 0 and out["case"] == free_case("seed-four-bar").name

@@ -135,7 +135,7 @@ def test_streamed_rows_are_the_rows(tmp_path, block):
 
     from analytic import Linkage, load_case
     from analytic.stream import sweep_csv
-    from reports.display_units import DisplayUnits, convert_frame
+    from reports.figures.display_units import DisplayUnits, convert_frame
     f = str(DATA / "limited-sweep-zeroed-forces.toml")
     csv = tmp_path / "t.csv"
     assert run("sweep", f, "--csv", str(csv))[0] == 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from reports.cli import main
+from reports.cli.xval import main
 
 
 @pytest.mark.parametrize("case, lo, hi, message", [

@@ -1,4 +1,4 @@
-"""The one compile -> run -> compare (reports.verdict_runs.run_verdict): every door that
+"""The one compile -> run -> compare (reports.comparison.runs.run_verdict): every door that
 runs an engine and compares it goes through it with the request it was given, and its
 :class:`Verdict` answers ok / near_event / judged as the comparison module decides them."""
 
@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import pytest
 
-import reports.verdict_runs as vr
+import reports.comparison.runs as vr
 from analytic import load_case
-from reports.compare import Comparison, verdict
+from reports.comparison.compare import Comparison, verdict
 from sim_models.engine_run import RunRequest
 
 
@@ -37,7 +37,7 @@ def calls(monkeypatch):
 
 
 def test_every_caller_runs_through_run_verdict(calls, monkeypatch):
-    from reports import baseline, pytest_plugin
+    from reports.regression import baseline, pytest_plugin
     monkeypatch.setattr(pytest_plugin, "_STATS", {"runs": 0, "hits": 0, "seconds": 0.0})
     mech = load_case("seed-four-bar")
     req = baseline.request_dict(3, 24, 2e-3, 3e-2, "moving")
@@ -72,7 +72,7 @@ def test_near_a_limit_is_one_decision():
     limited-range run stops and what the verdict leaves out (the same predicate)."""
     import numpy as np
 
-    from reports.reference import MAX_CONDITION
+    from reports.comparison.reference import MAX_CONDITION
     from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
     assert MAX_CONDITION == LIMITED_RANGE_CONDITION == 100.0
     np.testing.assert_array_equal(near_limit([1.0, 99.9, 100.0, 100.1, np.inf, np.nan]),

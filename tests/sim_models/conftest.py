@@ -15,7 +15,7 @@ MUJOCO_INSTANTANEOUS = getattr(tolerances, "MUJOCO_INSTANTANEOUS", 1e-4)
 def assert_run_within(run_, mech, tol, what=""):
     """Every quantity this project computes from the run within ``tol`` of its peak
     (the engines' own readings, flagged ``[engine]``, are reported separately)."""
-    from reports.compare import compare_run
+    from reports.comparison.compare import compare_run
     comps = [c for c in compare_run(run_, mech, tol) if not c.quantity.endswith("[engine]")]
     assert comps, f"{what}: nothing compared"
     bad = [str(c) for c in comps if not c.passed]
@@ -25,7 +25,7 @@ def assert_run_within(run_, mech, tol, what=""):
 
 def engine_reading(run_, mech, quantity):
     """The comparison of one of the engine's own readings, e.g. ``O4.force[engine]``."""
-    from reports.compare import compare_run
+    from reports.comparison.compare import compare_run
     return next(c for c in compare_run(run_, mech) if c.quantity == quantity)
 
 

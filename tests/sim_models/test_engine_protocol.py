@@ -199,7 +199,7 @@ def test_reversing_input_runs_to_a_verdict(name):
     if not (BUGS / "reversing-input.toml").is_file():
         pytest.skip("no bug files")
     _available(name)
-    from reports.compare import compare_run
+    from reports.comparison.compare import compare_run
     tree = compile_linkage(load_mechanism(BUGS / "reversing-input.toml"))
     r = run(tree, name)
     comps = compare_run(r, tree.linkage)
@@ -238,7 +238,7 @@ def test_limited_range_reversing_input_stays_off_its_limits():
     spacing of a limit position of the solver's feasible range, and it passes."""
     from dataclasses import replace
 
-    from reports.compare import compare_run, verdict
+    from reports.comparison.compare import compare_run, verdict
     mech = load_case("hibbeler-16-30")
     mech = replace(mech, driver=replace(mech.driver, acceleration=-12.0))
     tree = compile_linkage(mech)

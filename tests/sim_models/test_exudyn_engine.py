@@ -39,7 +39,7 @@ def _prismatic_reactions(r, mech, tol):
     normal force times the mechanism's size (the couple a normal force could make)."""
     if not mech.has_mass or not r.prismatic_names:
         return
-    from reports.compare import analytic_at, compare
+    from reports.comparison.compare import analytic_at, compare
     _, kin, frc = analytic_at(r, mech)
     keep = (kin.condition <= 100.0) & np.all(np.isfinite(r.alpha), axis=1)
     size = compile_linkage(mech).size
@@ -193,7 +193,7 @@ def test_all_massless_linkage_gives_the_statics():
     r = run(mech, "exudyn", revolutions=2, samples=36)
     assert r.ok, r.reason
     assert_run_within(r, mech, EXUDYN_MUST_SHOW, mech.name)
-    from reports.compare import compare_run
+    from reports.comparison.compare import compare_run
     forces = [c for c in compare_run(r, mech) if c.quantity.endswith(".force")
               or c.quantity == "drive.effort"]
     assert forces and max(c.normalised for c in forces) < 1e-9

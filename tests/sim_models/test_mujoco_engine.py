@@ -9,7 +9,7 @@ import pytest
 
 from analytic import Linkage, case_names, load_case
 from analytic.sweep import input_values
-from reports.pytest_plugin import session_run
+from reports.regression.pytest_plugin import session_run
 from sim_models.engines import EngineRun, mujoco_instantaneous, run
 from sim_models.mjcf import MujocoSettings, direct_solref
 
@@ -76,7 +76,7 @@ def test_short_run_matches_analytic(case):
 def test_every_case_runs(case):
     """The recommended settings, two revolutions: every built-in case runs and agrees."""
     mech = load_case(case)
-    # the session's run (reports.pytest_plugin), shared with the committed-baseline check
+    # the session's run (reports.regression.pytest_plugin), shared with the committed-baseline check
     r = session_run(mech, "mujoco", MujocoSettings(), revolutions=2, samples=24)
     assert r.ok, r.reason
     assert_run_within(r, mech, ENGINE_RELATIVE, case)

@@ -88,9 +88,9 @@ def test_report_states_the_precision_beside_the_verdict():
     """The verdict rows carry the engine's precision; at a tolerance (1e-6) under the
     measured float32 floor, each of MuJoCo Warp's quantities over it is judged against its
     float32 floor (precision limit within it, FAIL above), MuJoCo's (float64) plainly."""
-    from reports.compare import compare_run, verdict_word
-    from reports.console import verdict_table as console_table
-    from reports.report_tables import summary_table, verdict_table
+    from reports.comparison.compare import compare_run, verdict_word
+    from reports.report.console import verdict_table as console_table
+    from reports.report.tables import summary_table, verdict_table
     mech = load_case("seed-slider-crank")
     results = []
     for engine in ("mujoco_warp", "mujoco"):

@@ -119,8 +119,8 @@ def test_missing_optional_library_is_skipped_and_explained(capsys):
     says how to install it, status 2 (an ImportError as well, for library callers).  The
     pinocchio entry is pointed at a library that does not exist (the command line's
     ``--engine`` choices are built once per process, from the registered names)."""
-    from reports.cli import main
-    from reports.cli_engines import note_skipped_engines
+    from reports.cli.engines import note_skipped_engines
+    from reports.cli.xval import main
     keep = _REGISTRY["pinocchio"]
     register_engine("pinocchio", keep.module, keep.session, keep.description,
                     "no_such_library_xval", "pip install 'linkage-xval[nolib]'")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from analytic import case_names, load_case
-from reports.pytest_plugin import session_run
+from reports.regression.pytest_plugin import session_run
 from sim_models.engines import run
 from sim_models.tree import SimTree
 
@@ -46,7 +46,7 @@ def test_short_run_matches_analytic(case):
 @pytest.mark.parametrize("case", [c for c in case_names() if c not in SETTINGS])
 def test_every_case_runs(case):
     mech = load_case(case)
-    # the session's run (reports.pytest_plugin), shared with the committed-baseline check
+    # the session's run (reports.regression.pytest_plugin), shared with the committed-baseline check
     r = session_run(mech, "pybullet", PybulletSettings(), revolutions=2, samples=24)
     assert r.ok, r.reason
     assert_run_within(r, mech, ENGINE_RELATIVE, case)

@@ -119,7 +119,7 @@ def test_the_studies_settings_are_inside_the_ranges():
     """The report's speed-against-error grid and hard-case plans (every case, the full
     variant) build their settings through the same ranges: none may be refused."""
     from analytic.cases import case_names
-    from reports import studies
+    from reports.studies import speed_accuracy as studies
     n = 0
     for case in case_names():
         for p in studies.grid_plan(case, quick=False):

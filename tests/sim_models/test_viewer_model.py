@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from analytic import load_case
-from reports.cli import main
+from reports.cli.xval import main
 
 mujoco = pytest.importorskip("mujoco")
 

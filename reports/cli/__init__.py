@@ -1,0 +1,60 @@
+"""The ``xval`` command line: the command table (:mod:`reports.cli.xval`, only the command
+that runs is imported), option types, output paths, one module per command.  The only
+modules that read command-line arguments.
+
+Modules:
+
+* :mod:`reports.cli.animate`: ``xval animate CASE|FILE --out F.gif|F.mp4|F.html``: the
+  linkage moving through a cycle.
+* :mod:`reports.cli.baseline`: ``xval baseline record`` and ``xval baseline check`` (see
+  :mod:`reports.regression.baseline`).
+* :mod:`reports.cli.engines`: Engine and report commands of ``xval`` (``models``,
+  ``compare``, ``report``).
+* :mod:`reports.cli.explain`: ``xval explain CASE|FILE [--angle DEG | --value M] [--format
+  md|html|tex] [--out F]``: the worked solution of one configuration in the course notes'
+  method and notation.
+* :mod:`reports.cli.options`: Command-line option types of ``xval``: every number and path
+  is checked where it enters.
+* :mod:`reports.cli.paths`: Where the command line may write: file names made from a
+  description's ``name``, and no output that is one of the command's own inputs or another
+  of its outputs.
+* :mod:`reports.cli.plot`: ``xval plot CASE|FILE``: the full-cycle curves of one linkage,
+  with engine runs overlaid.
+* :mod:`reports.cli.report`: ``xval report``'s run: the options into a
+  :class:`reports.report.build.ReportConfig`, progress by phase, the console verdict and the
+  wall time (registered with the engine commands in :mod:`reports.cli.engines`; the report
+  itself is :mod:`reports.report.build`).
+* :mod:`reports.cli.simulate`: ``xval simulate CASE|FILE``: a released linkage's exact
+  trajectory, tabulated.
+* :mod:`reports.cli.simulate_engines`: ``xval simulate CASE --engine NAME|all``: the engines
+  released from the exact state, each judged against the exact trajectory
+  (:mod:`reports.comparison.free_compare`).
+* :mod:`reports.cli.studies`: ``python -m reports.cli.studies [--quick] [--out DIR]
+  [--workers N] [--serial]``: the whole speed/accuracy study
+  (:func:`reports.studies.speed_accuracy.run_study`) printed as tables, and with ``--out``
+  written as CSV tables and PNG figures
+  (:func:`reports.studies.speed_accuracy.write_study`).
+* :mod:`reports.cli.view`: ``xval view CASE|FILE``: MuJoCo's viewer on the harness's own
+  session of a linkage.
+* :mod:`reports.cli.xval`: The ``xval`` command line.
+
+The public names below load their module on first use (PEP 562), so importing
+the package imports none of its modules.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: public name -> the module that defines it
+_EXPORTS = {
+    "main": "reports.cli.xval",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

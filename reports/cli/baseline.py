@@ -1,0 +1,243 @@
+"""``xval baseline record`` and ``xval baseline check`` (see :mod:`reports.regression.baseline`).
+
+Exit status of ``check``: 0 every recorded run re-ran within its tolerance and within
+``--factor`` of its baseline; 1 a drift, a quantity over its tolerance, a quantity,
+case, model file or engine gone, a changed model file or a failed run; 2 a baseline
+file that cannot be used (one line naming the file, entry and key).  ``record`` exits 1
+(and writes nothing) when a run already fails its tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from reports.cli import options as opt
+from reports.cli.paths import check_outputs
+from reports.regression import baseline as bl
+from reports.regression import ci_formats
+from reports.regression.messages import report_lines
+
+
+# ============================================================================ record
+def cmd_record(args) -> int:
+    from analytic.cases import case_names
+    from sim_models.registry import settings_from_options
+    check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
+    free = bool(getattr(args, "free", False))
+    _free_options(args, free)
+    engines = _engines(args.engine, free)
+    models = []
+    for m in args.models:
+        models += list(case_names()) if m == "all" else [m]
+    if free:
+        from reports.comparison.free_cases import RELEASE_DURATION, command_case
+        from reports.regression.baseline_free import free_mechanism, free_request
+        from sim_models.free_engine import free_session_class
+        settings = settings_from_options(
+            engines, args.set or (),
+            classes={e: free_session_class(e).settings_class for e in engines})
+        req = free_request(args.duration or RELEASE_DURATION, args.samples)
+        for m in dict.fromkeys(models):  # one line, status 2, before any run
+            mech, _ = command_case(m, req["duration"])
+            if mech.motion is None:  # a user's file is not guessed at (as xval simulate)
+                from analytic.errors import DescriptionError
+                raise DescriptionError(f"{m}: no [motion] table: free motion needs the "
+                                       "initial joint, value, rate and duration")
+            free_mechanism(mech, req)
+    else:
+        settings = settings_from_options(engines, args.set or ())
+        req = bl.request_dict(args.revolutions, args.samples)
+    base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
+                     args.tolerance)
+    problems = bl.record_problems(base)
+    for r in base.runs:
+        w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
+                default=None)
+        from analytic.input_display import format_input
+        of = "of range" if free else "of peak"
+        worst = f"worst {w.quantity} {w.error:.3g} {of} at {format_input(w.at, w.at_unit)}" \
+            if w else "nothing compared"
+        if free and w:
+            h = min(q.horizon for q in r.quantities)
+            worst += "; trusted horizon " + ("whole run" if math.isinf(h) else f"{h:.4g} s")
+        print(f"{r.label}: {len(r.quantities)} quantities, {worst}")
+    if problems:
+        for p in problems:
+            print(f"not recorded: {p}")
+        print(f"baseline not written: {len(problems)} quantities fail already "
+              "(a baseline records a passing state)")
+        return 1
+    counts = None
+    if not args.replace and os.path.exists(args.out):  # merge: nothing recorded is lost
+        try:
+            old = bl.load(args.out)
+        except bl.BaselineError as e:  # never overwrite what cannot be read back
+            raise bl.BaselineError(f"{e}; not overwritten (--replace writes a new "
+                                   "file)") from None
+        base, counts = bl.merge(old, base)
+    path = bl.save(base)
+    print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})"
+          + (f": {counts['updated']} updated, {counts['kept']} kept, {counts['added']} "
+             "added (--replace writes only the runs recorded now)" if counts else
+             " (replaced)" if args.replace and os.path.exists(args.out) else ""))
+    return 0
+
+
+def _engines(choice: list[str] | None, free: bool = False) -> list[str]:
+    from sim_models.registry import engine_names, get_engine
+    if free:
+        from sim_models.free_engine import free_engine_names, free_session_class
+        if not choice or "all" in choice:
+            return list(free_engine_names())
+        for e in choice:
+            free_session_class(e)  # an engine without a free run: one line, status 2
+        return list(dict.fromkeys(choice))
+    if not choice or "all" in choice:
+        return list(engine_names())
+    return list(dict.fromkeys(get_engine(e).name for e in choice))
+
+
+def _free_options(args, free: bool) -> None:
+    """The options that belong to one mode only: one line, status 2."""
+    if free:
+        bad = [k for k, v in (("--revolutions", args.revolutions),
+                              ("--tolerance", args.tolerance)) if v is not None]
+        if bad:
+            raise opt.UsageError(f"{bad[0]} does not apply to --free (a free run is read "
+                                 "over --duration at --samples times; its tolerances are "
+                                 "the named ones of reports/comparison/free_compare.py)")
+        from analytic.motion_spec import MAX_SAMPLES
+        args.samples = _checked_samples(args.samples, opt.int_range(2, MAX_SAMPLES))
+    elif args.duration is not None:
+        raise opt.UsageError("--duration needs --free (a prescribed run is read over "
+                             "--revolutions)")
+    else:
+        args.samples = _checked_samples(args.samples, opt.samples)
+
+
+def _checked_samples(text, typ):
+    """``--samples`` through the argparse type of its mode (None: not given)."""
+    import argparse
+    if text is None:
+        return None
+    try:
+        return typ(text)
+    except argparse.ArgumentTypeError as e:
+        raise opt.UsageError(f"argument --samples: {e}") from None
+
+
+# ============================================================================ check
+def cmd_check(args) -> int:
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the baseline", args.baseline)])
+    base = bl.load(args.baseline)
+    overrides = _check_overrides(args.set, base)
+    keep = None
+    if args.case or args.engine:
+        cases, engines = set(args.case or ()), set(args.engine or ())
+
+        def keep(rec):
+            return (not cases or rec.case in cases or rec.model.name in cases) and \
+                (not engines or rec.engine in engines)
+    checks = bl.check(base, args.factor, select=keep, fail_loose=args.fail_loose,
+                      overrides=overrides)
+    if keep is not None and not checks:
+        raise bl.BaselineError(f"{args.baseline}: no recorded run matches --case/--engine")
+    lines = report_lines(base, checks, args.factor)
+    if overrides:  # what --set changed, for a reader of the output
+        lines.insert(2, "settings changed for this check (--set): " + ", ".join(
+            f"{e}.{k}={v}" for e, kv in overrides.items() for k, v in kv.items()))
+    print("\n".join(lines))
+    if not all(c.passed for c in checks):
+        sets = "".join(f" --set {e}.{k}={v}" for e, kv in overrides.items()
+                       for k, v in kv.items())  # record what was checked
+        print("if the change is intended, record the baseline again: "
+              f"{bl.record_command(base)}{sets}")
+    ci_formats.write_outputs(f"xval baseline check {args.baseline}",
+                             ci_formats.from_baseline(checks, base.base_dir), args.junit,
+                             args.summary, intro=lines[:2],
+                             properties=_override_props(overrides), command="baseline")
+    return 0 if all(c.passed for c in checks) else 1
+
+
+def _check_overrides(pairs, base: bl.Baseline) -> dict:
+    """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
+    (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
+    classes = bl.override_classes(base)
+    return bl.overrides_for(pairs, [r.engine for r in base.runs if r.engine in classes],
+                            classes)
+
+
+def _override_props(overrides: dict) -> dict:
+    return {f"set.{e}.{k}": v for e, kv in overrides.items() for k, v in kv.items()}
+
+
+# ============================================================================ parser
+_tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
+                              why="an error relative to the quantity's peak")
+
+
+def _model(text: str) -> str:
+    from analytic.cases import free_case_names
+    return text if text == "all" or text in free_case_names() else opt.case_or_file(text)
+
+
+def register(sub) -> None:
+    """``xval baseline record|check``."""
+    from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+    from reports.comparison.free_cases import MIN_DURATION, RELEASE_DURATION
+    from reports.regression.baseline_free import DEFAULT_SAMPLES
+    from sim_models.engine_run import RunRequest
+    from sim_models.registry import engine_names
+    p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
+    bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
+    r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
+    r.add_argument("models", nargs="+", type=_model, metavar="CASE_OR_FILE",
+                   help="built-in case names, TOML files, or 'all' (every built-in case)")
+    r.add_argument("--engine", action="append", choices=[*engine_names(), "all"],
+                   help="an engine (repeatable; default all)")
+    r.add_argument("--out", required=True, type=opt.output_file, metavar="FILE",
+                   help="the baseline file to write (JSON)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
+    r.add_argument("--revolutions", type=opt.revolutions, default=None,
+                   help=f"1 to {opt.MAX_REVOLUTIONS} (default {RunRequest.revolutions})")
+    r.add_argument("--samples", default=None,  # its range depends on --free: _free_options
+                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES} (default "
+                        f"{RunRequest.samples}); with --free, sample times over the run, "
+                        f"2 to {MAX_SAMPLES} (default {DEFAULT_SAMPLES})")
+    r.add_argument("--free", action="store_true",
+                   help="record free-motion runs: each case released from the exact "
+                        "state (a built-in case without [motion] released at rest under "
+                        "gravity, as the report does) and judged over --duration")
+    r.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
+                   help=f"with --free: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
+                        f"(default {RELEASE_DURATION:g})")
+    r.add_argument("--tolerance", type=_tolerance, default=None,
+                   help="relative to peak, recorded per quantity (default 1e-3)")
+    r.add_argument("--replace", action="store_true",
+                   help="replace an existing file (default: record these runs into it, "
+                        "keeping the others)")
+    r.set_defaults(func=cmd_record)
+    c = bsub.add_parser("check", help="re-run a baseline's runs and fail on drift")
+    c.add_argument("baseline", metavar="BASELINE_JSON")
+    c.add_argument("--factor", type=opt.drift_factor, default=bl.DEFAULT_FACTOR,
+                   help=f"largest allowed growth over the baseline (default "
+                        f"{bl.DEFAULT_FACTOR:g}; errors below {bl.DRIFT_FLOOR:g} of peak "
+                        "count as that floor)")
+    c.add_argument("--case", action="append", metavar="CASE",
+                   help="check only this case (repeatable)")
+    c.add_argument("--engine", action="append", metavar="ENGINE",
+                   help="check only this engine (repeatable)")
+    c.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="run with this setting instead of the recorded one "
+                        "(ENGINE.KEY=VALUE for one engine only; named in the output)")
+    c.add_argument("--fail-loose", action="store_true",
+                   help="fail when an error shrank by more than the factor (the baseline "
+                        "is loose; default: a warning)")
+    opt.add_ci_outputs(c)
+    c.set_defaults(func=cmd_check)
+
+
+__all__ = ["cmd_check", "cmd_record", "register", "report_lines"]

@@ -1,0 +1,226 @@
+"""Engine and report commands of ``xval`` (``models``, ``compare``, ``report``).
+
+Kept apart from :mod:`reports.cli.xval` so that ``xval solve`` never imports an engine.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from reports.cli import options as opt
+from reports.cli.paths import check_outputs
+from reports.comparison.quantities import is_engine_reading
+
+
+def cmd_models(args) -> int:
+    from sim_models.models import MODELS_DIR, write_models
+    if args.case and not args.out:
+        raise opt.UsageError("xval models CASE_OR_FILE needs --out DIR (the default folder, "
+                             "sim_models/models, holds the built-in cases' committed files)")
+    paths = write_models(args.out or MODELS_DIR, [args.case] if args.case else None)
+    print(f"wrote {len(paths)} files to {args.out or MODELS_DIR}")
+    for p in paths:
+        if p.suffix == ".xml":
+            print(f"view it turning: python -m mujoco.viewer --mjcf={p}  (or xval view "
+                  f"{args.case or p.stem}; keyframe 'assembled' is the prescribed start)")
+            break
+    return 0
+
+
+def cmd_compare(args) -> int:
+    """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
+    from analytic import load_case
+    from reports.comparison.compare import json_safe
+    from reports.comparison.runs import engine_list, run_verdict, settings_for
+    from sim_models import compile_linkage
+    from sim_models.engine_run import RunRequest
+    mech = load_case(args.case)
+    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
+                  [("the case file", args.case)])
+    engines = engine_list(args.engine, args.mode)
+    settings = settings_for(engines, list(args.set or ()),
+                            {"--timestep": ("timestep", args.timestep),
+                             "--integrator": ("integrator", args.integrator)})
+    if args.engine == "all":  # after every input is checked: bad input stays one line
+        note_skipped_engines()
+    tree = compile_linkage(mech)  # the analytic solution, once, for every engine
+    request = RunRequest(args.revolutions, args.samples, mode=args.mode)
+    out = []
+    from reports.comparison.progress import engine_progress
+    for eng in engines:
+        with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
+            out.append(run_verdict(tree, eng, settings[eng], request))
+    all_ok = all(v.ok for v in out)
+    if args.json:
+        print(json.dumps(json_safe([_verdict_json(v, args.mode) for v in out]), indent=2,
+                         allow_nan=False))
+    else:
+        _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
+    from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
+    write_compare_outputs(mech, out, str(args.case or ""), args.junit, args.summary)
+    return 0 if all_ok else 1
+
+
+def _verdict_json(v, mode: str) -> dict:
+    """One engine's object in ``xval compare --json`` (a :class:`reports.comparison.runs.
+    Verdict`)."""
+    from reports.comparison.compare import PASS, step_note, verdict_word
+    r = v.run
+    word = verdict_word(list(v.comparisons), r.ok)  # pass, precision limit (float32), FAIL
+    return {
+        "case": r.case, "engine": r.engine, "mode": mode,
+        "settings": r.settings_text, "settings_fields": r.settings.as_dict(),
+        "sampled_by": "time" if r.by_time else "input",
+        "run_ok": r.ok, "reason": r.reason,
+        "verdict": "fail" if not v.ok else (PASS if word == PASS else word),
+        "precision": r.settings.arithmetic.name,
+        "near_event": v.near_event, "wall_seconds_per_revolution": r.wall_per_rev,
+        "timestep": r.timestep, "notes": list(r.notes),
+        "step_note": None if v.ok else step_note(r, v.tree.linkage.driver_is_revolute),
+        "comparisons": [c.as_json() for c in v.comparisons]}
+
+
+def _table(comps) -> list[list[str]]:
+    """The compare table's cells: numbers to 3 figures; a quantity the run did not reach
+    (a failed run's samples after it stopped) is "not measured", not the infinity that
+    stands for it."""
+    from analytic.input_display import input_number
+    rows = []
+    for c in comps:
+        err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
+            ["not measured"] * 2
+        # the engines' own readings are reported, not judged (reports.comparison.compare.verdict)
+        judged = "not judged" if is_engine_reading(c.quantity) else c.status
+        rows.append([c.quantity, err[0], f"{c.peak:.3g}", err[1], input_number(c.at),
+                     f"{c.tolerance:.3g}", judged])
+    return rows
+
+
+def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
+    """``xval compare``'s table per engine; prose lines wrapped to the terminal's width
+    (settings strings run to ~190 characters)."""
+    import shutil
+    import textwrap
+
+    import pandas as pd
+
+    from analytic.input_display import format_input
+    from reports.comparison.compare import FAIL, PASS, step_note, verdict_word
+    width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
+
+    def say(text: str) -> None:
+        print(textwrap.fill(text, width, subsequent_indent="  ", break_on_hyphens=False))
+
+    with pd.option_context("display.width", width, "display.max_columns", 20):
+        for v in out:
+            r, comps, ok, near = v.run, v.comparisons, v.ok, v.near_event
+            word = verdict_word(list(comps), r.ok)
+            print(f"== {mech.name} / {r.engine} ({mode}) : "
+                  f"{word.upper() if word in (PASS, FAIL) else word}")
+            say(f"settings: {r.settings_text}")
+            if r.by_time:
+                say(f"sampled at {r.n} equal times over {r.extra.get('t_end', 0):.4g} s "
+                    "(the input is not a monotonic turn); 'at' is the input there")
+            if not r.ok:
+                say(f"run failed: {r.reason}")
+            if near:
+                say(f"near an event: {near}")
+            if not ok and r.ok and (sn := step_note(r, revolute)):
+                say(f"step: {sn}")
+            df = pd.DataFrame(_table(comps), columns=["quantity", "max_abs", "peak",
+                                                      "normalised", "at", "tolerance",
+                                                      "passed"])
+            print(df.to_string(index=False))
+            lim = [c for c in comps if c.limited]
+            if lim:
+                w = max(lim, key=lambda c: c.normalised)
+                say(f"{w.status}: {len(lim)} quantities over the tolerance but within the "
+                    f"engine's {w.precision} error floor ({w.quantity}: "
+                    f"{w.normalised:.3g} of peak, floor {w.floor:.2g} from the steps taken "
+                    "and the loop condition number there, sim_models/precision.py): a "
+                    "precision limit of the engine, not a failure (status 0)")
+            if any(not c.measured for c in comps):
+                first = min(c.at for c in comps if not c.measured)
+                say(f"not measured: the engine has no values from the sample at "
+                    f"{format_input(first, 'deg' if revolute else 'm')} on (the run stopped "
+                    "there); the verdict is a failure")
+            if any(is_engine_reading(c.quantity) for c in comps):
+                say("rows marked [engine] are the engine's own readings, reported but not "
+                    "judged: PyBullet's jointReactionForces are known wrong for links with "
+                    "a moving parent or children (README, Engines)")
+            for n in r.notes:
+                say(f"note: {n}")
+            print(f"wall time {r.wall_per_rev * 1e3:.1f} ms per revolution, "
+                  f"dt {r.timestep:.3g} s")
+
+
+def note_skipped_engines() -> None:
+    """One stderr line per registered engine whose optional library is missing (what
+    ``--engine all`` and the report leave out, and how to install it)."""
+    from sim_models.registry import skipped_engines
+    for why in skipped_engines().values():
+        print(f"xval: note: {why}; skipped", file=sys.stderr)
+
+
+def cmd_report(args) -> int:
+    from analytic.errors import OutputError
+    from reports.cli.report import run
+    try:
+        status = run(args)
+        note_skipped_engines()  # the report ran every installed engine (after the
+        return status           # inputs were checked: bad input stays one line)
+    except OSError as e:  # the output folder was checked at --out; a race or a full disk
+        if e.filename is None:
+            raise
+        raise OutputError(f"cannot write {e.filename!r}: {e.strerror}") from None
+
+
+def register(sub) -> None:
+    s = sub.add_parser("models", help="write the MJCF/URDF files of one case or file, or of "
+                       "every built-in case")
+    s.add_argument("case", nargs="?", type=opt.case_or_file,
+                   help="built-in case name or TOML file (default: every built-in case)")
+    s.add_argument("--out", type=opt.output_dir, help="directory (default sim_models/models)")
+    s.set_defaults(func=cmd_models)
+    s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
+    s.add_argument("case", help="built-in case name or TOML file")
+    from sim_models.engine_run import RunRequest
+    from sim_models.registry import engine_names
+    s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
+    s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
+                   help="run: step through the driver's motion; instantaneous: the "
+                        "engine's forward dynamics at the analytic state (MuJoCo)")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="an engine setting (repeatable; ENGINE.KEY=VALUE for one engine "
+                        "only), e.g. --set integrator=Euler --set pybullet.erp=0.2")
+    s.add_argument("--integrator", choices=["RK4", "implicitfast", "implicit", "Euler"],
+                   help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
+    s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
+                   help=f"1 to {opt.MAX_REVOLUTIONS}")
+    s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,
+                   help=f"samples per revolution, 2 to {opt.MAX_SAMPLES}")
+    s.add_argument("--timestep", type=opt.timestep,
+                   help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
+                        f"{opt.MAX_TIMESTEP:g} s")
+    s.add_argument("--json", action="store_true")
+    from reports.cli import baseline as baseline_cli
+    opt.add_ci_outputs(s)
+    s.set_defaults(func=cmd_compare)
+    baseline_cli.register(sub)  # xval baseline record|check
+    s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
+    s.add_argument("--out", type=opt.output_dir,
+                   help="output directory (default reports/out/<timestamp>)")
+    s.add_argument("--quick", action="store_true",
+                   help="the quick variant (about 25 s on an idle 2-core machine)")
+    s.add_argument("--cases", nargs="+", type=opt.case_or_file,
+                   help="only these cases (built-in names or TOML files)")
+    s.add_argument("--workers", type=opt.workers,
+                   help=f"process-pool size, 1 to {opt.MAX_WORKERS} (default: cores)")
+    s.add_argument("--dask", metavar="SCHEDULER_ADDRESS", type=opt.scheduler_address,
+                   help="run the study tasks on an existing Dask distributed scheduler")
+    s.set_defaults(func=cmd_report)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(1)

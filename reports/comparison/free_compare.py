@@ -1,0 +1,532 @@
+"""Judging a free trajectory: one engine's free run against the exact trajectory.
+
+An engine released from the exact state integrates on its own, so its error grows with
+time (phase error) for any integrator; a verdict on free motion says what it judges:
+
+* per quantity (every joint coordinate and rate, every moving body's angle, rate and
+  acceleration, every joint reaction) the error at the same sample times, **normalised
+  by the quantity's range over the run** (max minus min of the reference; for a vector,
+  the norm of the per-component ranges), with the time of its maximum; a quantity whose
+  range is below :data:`reports.comparison.compare.ZERO_PEAK` of its family's scale (a reaction
+  that stays constant, a body that does not turn) is judged on the family's scale
+  instead, and says so in ``normalisation``;
+* the **trusted horizon**: the first time each quantity's normalised error exceeds its
+  tolerance (linear between samples; ``inf`` when it never does);
+* the energy drift (engine total energy minus the reference's, over the energy scale
+  ``max KE + range of PE`` of the reference) and the loop-closure drift (the largest gap
+  at the cut joints over the mechanism's size), over time;
+* for the IFToMM benchmark problems, the accuracy rule: the reference point's position
+  error over the run against 1e-1 m and 1e-3 m (:func:`iftomm_accuracy`).
+
+A failed verdict names the reference event (coordinate switch, singular position,
+limit position) nearest to where the trust was lost, and the engine's step in time and
+in the coordinate.  Results are frozen dataclasses (:class:`FreeComparison`,
+:class:`IftommAccuracy`, :class:`FreeVerdict`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from analytic.mechanism import Revolute, mechanism_size
+from reports.comparison.compare import ZERO_PEAK, json_safe
+
+# --- tolerances (each relative to the scale named in FreeComparison.normalisation) ---
+
+#: Joint coordinates and rates, body angles and rates, over their range in the run.  A
+#: free run accumulates phase error, so the prescribed runs' pointwise 1e-3
+#: (analytic.tolerances.ENGINE_RELATIVE) is not a property any fixed-step engine keeps
+#: for seconds; 1e-2 of the range is the offset a person sees on a plotted trajectory
+#: (one line width on a 10 cm axis), and the trusted horizon says when it is lost.
+FREE_KINEMATIC = 1e-2
+#: Body accelerations and joint reactions, over their range.  Constraint stabilisation
+#: (MuJoCo's soft equalities, PyBullet's ERP, Exudyn's index-3 projection) acts on the
+#: accelerations and reactions directly each step and on the positions only through two
+#: integrations, so their error runs several times that of the positions they produce:
+#: five times the kinematic tolerance.
+FREE_DYNAMIC = 5e-2
+#: Energy drift: |E_engine - E_reference| over the energy scale (max KE + range of PE of
+#: the reference).  1e-2 is the same 1 % as the kinematic tolerance: an energy off by
+#: more changes the amplitude of a swing by more than the kinematic tolerance allows.
+ENERGY_DRIFT = 1e-2
+#: Loop-closure drift: the largest gap at the cut joints over the mechanism's size
+#: (its longest in-body point distance).  1e-3: a gap of a tenth of a percent of the
+#: size moves a joint by a tenth of the kinematic tolerance; the engines' run ends at
+#: sim_models.free_run.FreeRequest.max_gap (1e-2), ten times more.
+LOOP_DRIFT = 1e-3
+#: The IFToMM benchmark's two precision levels for the reference point's position
+#: error over the run, m (Gonzalez et al. 2006: low and high precision).
+IFTOMM_LEVELS = (1e-1, 1e-3)
+#: A failed verdict names a reference event within this fraction of the run's duration
+#: of the time the trust was lost (the first tolerance excess): an error that starts
+#: growing there was started by the event (a singular crossing is where an engine picks
+#: a branch), one farther off was not.
+NEAR_EVENT_FRACTION = 0.05
+#: Reference events named for a failed verdict (a turning point of the motion is not a
+#: place where anything is singular).
+EVENT_KINDS = ("switch", "singular", "limit")
+
+#: The IFToMM problems among the cases, and their reference point (body, point): A01's
+#: lumped mass, A02's B0 (the tip of the first vertical link).  A03 (Andrews) publishes
+#: angles at 0.03 s, not a point's path: it has no position class.
+IFTOMM_POINTS = {"iftomm-a01-pendulum": ("link", "P1"),
+                 "iftomm-a02-n-four-bar": ("crank0", "B")}
+
+
+@dataclass(frozen=True)
+class FreeComparison:
+    """One quantity of a free run against the reference.
+
+    ``quantity``: e.g. ``"G0.x"`` (joint coordinate), ``"G0.xd"``, ``"crank.theta"``,
+    ``"crank.omega"``, ``"crank.alpha"``, ``"G0.force"`` (vector), ``"energy"``,
+    ``"loop.gap"``.  ``family``: ``coordinate``, ``rate``, ``angle``, ``angular rate``,
+    ``angular acceleration``, ``reaction``, ``energy``, ``loop``.  ``unit``: the SI unit
+    of ``max_abs`` and ``scale``.  ``max_abs``: the largest absolute error over the
+    measured samples; ``scale``: what it is divided by, named in ``normalisation``;
+    ``normalised = max_abs / scale``; ``at``: the time of the maximum, s;
+    ``horizon``: the first time the normalised error exceeds ``tolerance`` (``inf``:
+    never within the measured run); ``measured_until``: the last sample time with a
+    finite engine value (the run's duration unless the run stopped); ``error``: the
+    normalised error at each sample (NaN where not measured); ``unread``: samples before
+    ``measured_until`` with no engine value (an engine that cannot read the quantity
+    there, such as PyBullet's accelerations at t = 0), left out of the maximum."""
+
+    quantity: str
+    family: str
+    unit: str
+    max_abs: float
+    scale: float
+    normalisation: str
+    normalised: float
+    at: float
+    tolerance: float
+    horizon: float
+    measured_until: float
+    duration: float
+    error: np.ndarray = field(repr=False, compare=False)
+    unread: int = 0
+
+    @property
+    def measured(self) -> bool:
+        """True when the engine has a value at every sample (the run did not stop)."""
+        return self.measured_until >= self.duration
+
+    @property
+    def passed(self) -> bool:
+        """Within tolerance over the whole run (a run that stopped early fails)."""
+        return self.measured and self.normalised <= self.tolerance
+
+    def as_json(self) -> dict:
+        """For JSON: non-finite numbers as null; ``horizon`` null means never exceeded."""
+        return json_safe({"quantity": self.quantity, "family": self.family,
+                          "unit": self.unit, "max_abs": self.max_abs, "scale": self.scale,
+                          "normalisation": self.normalisation,
+                          "normalised": self.normalised, "at_s": self.at,
+                          "tolerance": self.tolerance, "horizon_s": self.horizon,
+                          "measured_until_s": self.measured_until, "unread": self.unread,
+                          "measured": self.measured, "passed": self.passed})
+
+    def __str__(self) -> str:
+        verdict = "pass" if self.passed else "FAIL"
+        hz = "never exceeded" if math.isinf(self.horizon) else f"exceeded from {self.horizon:.4g} s"
+        stop = "" if self.measured else f"; not measured from {self.measured_until:.4g} s on"
+        if self.unread:
+            stop += f"; {self.unread} sample(s) not read by the engine"
+        return (f"{self.quantity}: max error {self.max_abs:.3g} {self.unit} at {self.at:.4g} s "
+                f"({self.normalised:.3g} of {self.normalisation} {self.scale:.4g}; tolerance "
+                f"{self.tolerance:g}, {hz}{stop}) {verdict}")
+
+
+def horizon_of(times: np.ndarray, error: np.ndarray, tolerance: float) -> float:
+    """The first time ``error`` (normalised, per sample) exceeds ``tolerance``, linear
+    between the last sample within it and the first beyond; 0 when the first sample is
+    beyond; ``inf`` when no finite sample is.  A NaN sample (not measured) is not an
+    excess: the measured span is reported apart (``measured_until``)."""
+    over = np.flatnonzero(np.nan_to_num(error, nan=-1.0) > tolerance)
+    if not over.size:
+        return math.inf
+    k = int(over[0])
+    if k == 0:
+        return float(times[0])
+    e0, e1 = float(error[k - 1]), float(error[k])
+    t0, t1 = float(times[k - 1]), float(times[k])
+    if not math.isfinite(e0):
+        return t1
+    return t0 + (t1 - t0) * (tolerance - e0) / (e1 - e0)
+
+
+def _range(ref: np.ndarray) -> float:
+    """The range of a quantity over the run: max - min, for vectors the norm of the
+    per-component ranges."""
+    if not len(ref) or not np.isfinite(ref).any():
+        return 0.0
+    with np.errstate(invalid="ignore"):  # a reaction the reference leaves NaN (singular)
+        r = np.nanmax(ref, axis=0) - np.nanmin(ref, axis=0)
+    return float(np.linalg.norm(np.nan_to_num(np.atleast_1d(r))))
+
+
+def judge(quantity: str, family: str, unit: str, times, reference, test, tolerance: float,
+          family_scale: float, scale: float | None = None,
+          normalisation: str = "range over the run") -> FreeComparison:
+    """Compare ``test`` with ``reference`` at ``times`` (arrays ``(N,)`` or ``(N, k)``).
+
+    The scale is ``scale`` when given (named by ``normalisation``), else the reference's
+    range over the run, or ``family_scale`` when that range is at most
+    :data:`reports.comparison.compare.ZERO_PEAK` of it (a quantity that does not change)."""
+    t = np.asarray(times, float)
+    ref = np.asarray(reference, float)
+    tst = np.asarray(test, float)
+    if ref.shape != tst.shape:
+        raise ValueError(f"{quantity}: reference shape {ref.shape} != test shape {tst.shape}")
+    err = np.abs(ref - tst) if ref.ndim == 1 else \
+        np.linalg.norm((ref - tst).reshape(len(ref), -1), axis=1)
+    if scale is None:
+        own = _range(ref)
+        if own > ZERO_PEAK * family_scale:
+            scale = own
+        else:
+            scale, normalisation = family_scale, f"{family} scale (own range {own:.3g})"
+    finite = np.isfinite(err)
+    # trailing NaN rows: the run stopped (not measured from there on); a NaN before the
+    # last finite sample is a value the engine does not read there (PyBullet's
+    # accelerations at t = 0, from the last velocities): counted, not a stop
+    idx = np.flatnonzero(finite)
+    measured_until = float(t[idx[-1]]) if idx.size else float("-inf")
+    unread = int(np.count_nonzero(~finite[:idx[-1] + 1])) if idx.size else 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        norm = err / scale if scale > 0 else np.where(err == 0, 0.0, np.inf)
+    if finite.any():
+        k = int(np.nanargmax(np.where(finite, err, -1.0)))
+        max_abs, at = float(err[k]), float(t[k])
+    else:
+        max_abs, at = math.inf, float(t[0]) if len(t) else math.nan
+    normalised = max_abs / scale if scale > 0 else (0.0 if max_abs == 0 else math.inf)
+    return FreeComparison(quantity, family, unit, max_abs, float(scale), normalisation,
+                          normalised, at, tolerance, horizon_of(t, norm, tolerance),
+                          measured_until, float(t[-1]) if len(t) else 0.0, norm, unread)
+
+
+@dataclass(frozen=True)
+class IftommAccuracy:
+    """The IFToMM accuracy rule on one run: the reference point ``body.point``'s
+    position error (Euclidean, m) over the run, its time, and its class: ``"1e-3"``
+    (high precision: at most 1e-3 m), ``"1e-1"`` (low: at most 1e-1 m), ``"none"``
+    (beyond both, or not measured over the whole run)."""
+
+    problem: str
+    body: str
+    point: str
+    max_error: float
+    at: float
+    measured: bool
+    level: str
+
+    def as_json(self) -> dict:
+        return json_safe(self.__dict__.copy())
+
+
+@dataclass(frozen=True)
+class FreeVerdict:
+    """One engine's free run judged: every :class:`FreeComparison` (``comparisons``:
+    the judged quantities; ``energy`` and ``loop`` the drifts), the IFToMM accuracy
+    where the case is a benchmark problem, the run's own end, and for a failed verdict
+    the nearest reference event and the engine's step (``near_event``, ``step_note``)."""
+
+    case: str
+    engine: str
+    duration: float
+    times: np.ndarray = field(repr=False, compare=False)
+    comparisons: tuple[FreeComparison, ...]
+    energy: FreeComparison
+    loop: FreeComparison
+    iftomm: IftommAccuracy | None
+    run_ok: bool
+    reason: str | None
+    t_fail: float | None
+    cpu_per_simulated_second: float
+    timestep: float
+    integrator: str
+    settings: str
+    near_event: str | None
+    step_note: str | None
+    #: quantities the engine does not read at all (no value at any sample of a run that
+    #: did not stop): reported, not judged
+    not_read: tuple[str, ...] = ()
+    #: whether the mechanism has a loop (a pendulum has none: no loop drift to report)
+    has_loop: bool = True
+
+    @property
+    def judged(self) -> tuple[FreeComparison, ...]:
+        """Everything the verdict judges: the quantities and both drifts."""
+        return (*self.comparisons, self.energy, self.loop)
+
+    @property
+    def passed(self) -> bool:
+        return self.run_ok and all(c.passed for c in self.judged)
+
+    @property
+    def worst(self) -> FreeComparison:
+        """The judged quantity furthest beyond (or nearest to) its tolerance."""
+        return max(self.judged, key=_badness)
+
+    @property
+    def horizon(self) -> float:
+        """The trusted horizon of the run: the earliest excess of any judged quantity
+        (``inf``: none within the measured run), or where the run stopped if earlier."""
+        h = min(c.horizon for c in self.judged)
+        stop = min(c.measured_until for c in self.judged)
+        return min(h, stop) if stop < self.duration else h
+
+    @property
+    def lost_by(self) -> FreeComparison | None:
+        """The judged quantity whose error exceeds its tolerance first (None: none)."""
+        first = min(self.judged, key=lambda c: c.horizon)
+        return None if math.isinf(first.horizon) else first
+
+    def as_json(self) -> dict:
+        return json_safe({
+            "case": self.case, "engine": self.engine, "duration_s": self.duration,
+            "verdict": "pass" if self.passed else "fail", "run_ok": self.run_ok,
+            "reason": self.reason, "t_fail_s": self.t_fail,
+            "trusted_horizon_s": self.horizon,
+            "lost_by": self.lost_by.quantity if self.lost_by else None,
+            "worst": self.worst.quantity,
+            "worst_normalised": self.worst.normalised,
+            "energy_drift": self.energy.normalised,
+            "loop_drift": self.loop.normalised if self.has_loop else None,
+            "cpu_per_simulated_second": self.cpu_per_simulated_second,
+            "timestep": self.timestep, "integrator": self.integrator,
+            "settings": self.settings, "near_event": self.near_event,
+            "step_note": self.step_note, "not_read": list(self.not_read),
+            "iftomm": self.iftomm.as_json() if self.iftomm else None,
+            "comparisons": [c.as_json() for c in self.judged]})
+
+
+def _badness(c: FreeComparison) -> float:
+    if not c.measured or not math.isfinite(c.normalised):
+        return math.inf
+    return c.normalised / c.tolerance
+
+
+def _align_turns(ref: np.ndarray, test: np.ndarray) -> np.ndarray:
+    """``test`` (angles, rad, continuous) shifted by the whole turns that make its first
+    finite sample nearest the reference's: both start from the same state, so a
+    difference of 2 pi k at t = 0 is a convention, not an error."""
+    k = np.round((ref[0] - test[0]) / (2 * np.pi))
+    return test + 2 * np.pi * np.where(np.isfinite(k), k, 0.0)
+
+
+def _unwrap(a: np.ndarray) -> np.ndarray:
+    """A reference angle made continuous over turns (the solver's body angles may wrap);
+    the samples are far denser than half a turn per sample in every run judged."""
+    return np.unwrap(a, axis=0)
+
+
+def _family(out: list, family: str, unit: str, t, pairs, tol: float,
+            not_read: list | None = None) -> None:
+    """Append the comparisons of one family ``(name, ref, test)``; its scale is its
+    largest range (for a family that does not change at all: the largest magnitude).
+    With ``not_read`` (a run that did not stop): a quantity with no engine value at any
+    sample is one the engine does not read (Exudyn's prismatic joint forces): named
+    there, not judged."""
+    if not_read is not None:
+        gone = [n for n, _, x in pairs if not np.isfinite(x).any()]
+        not_read += gone
+        pairs = [p for p in pairs if p[0] not in gone]
+    ranges = [_range(r) for _, r, _ in pairs]
+    fam = max(ranges, default=0.0)
+    if fam == 0.0:
+        fam = max((float(np.nanmax(np.abs(r))) for _, r, _ in pairs
+                   if np.isfinite(r).any()), default=0.0)
+    for name, r, x in pairs:
+        out.append(judge(name, family, unit, t, r, x, tol, fam))
+
+
+def reference_samples(traj, times, forces: bool = True):
+    """The exact trajectory at a run's sample times (computed once per case and shared
+    by every engine's verdict): :class:`analytic.free_motion.FreeSamples`."""
+    t = np.clip(np.asarray(times, float), 0.0, traj.duration)
+    return traj.at(t, forces=forces)
+
+
+def energy_scale(ref) -> tuple[float, str]:
+    """The energy scale of a run, J, and its name: the reference's largest kinetic
+    energy plus the range of its potential energy (the energy that moves about); 1 J
+    for a mechanism that neither moves nor changes height."""
+    e = float(np.max(ref.kinetic) + np.ptp(ref.potential)) if len(ref.t) else 0.0
+    if e > 0 and math.isfinite(e):
+        return e, "energy scale (max KE + range of PE)"
+    return 1.0, "1 J (the reference has no kinetic energy and no change of potential)"
+
+
+def _quantities(run, ref, mech, not_read: list) -> list[FreeComparison]:
+    t = run.times
+    out: list[FreeComparison] = []
+    nr = not_read if run.ok else None
+    rev = {j.name: isinstance(j, Revolute) for j in mech.joints}
+    ref_j = list(ref.joints)
+    by_kind = {True: ([], []), False: ([], [])}
+    for k, name in enumerate(run.joint_names):
+        i = ref_j.index(name)
+        xr, xe = ref.x[:, i], run.x[:, k]
+        if rev[name]:
+            xe = _align_turns(xr, xe)
+        by_kind[rev[name]][0].append((f"{name}.x", xr, xe))
+        by_kind[rev[name]][1].append((f"{name}.xd", ref.xd[:, i], run.xd[:, k]))
+    for revolute, (xs, xds) in by_kind.items():
+        u = ("rad", "rad/s") if revolute else ("m", "m/s")
+        fam = ("joint angle", "joint rate") if revolute else ("slider", "slider rate")
+        if xs:
+            _family(out, fam[0], u[0], t, xs, FREE_KINEMATIC)
+            _family(out, fam[1], u[1], t, xds, FREE_KINEMATIC)
+    names = [b.name for b in mech.bodies]
+    moving = [(k, b, names.index(b)) for k, b in enumerate(run.body_names) if b != mech.ground]
+    _family(out, "angle", "rad", t,
+            [(f"{b}.theta", _unwrap(ref.theta[:, i]),
+              _align_turns(_unwrap(ref.theta[:, i]), run.theta[:, k])) for k, b, i in moving],
+            FREE_KINEMATIC)
+    _family(out, "angular rate", "rad/s", t,
+            [(f"{b}.omega", ref.omega[:, i], run.omega[:, k]) for k, b, i in moving],
+            FREE_KINEMATIC)
+    _family(out, "angular acceleration", "rad/s^2", t,
+            [(f"{b}.alpha", ref.alpha[:, i], run.alpha[:, k]) for k, b, i in moving],
+            FREE_DYNAMIC, nr)
+    if ref.reactions:
+        _family(out, "reaction", "N", t,
+                [(f"{n}.force", ref.reactions[n], run.joint_force[:, k])
+                 for k, n in enumerate(run.joint_names) if n in ref.reactions],
+                FREE_DYNAMIC, nr)
+    return out
+
+
+def compare_free(run, traj, ref=None) -> FreeVerdict:
+    """Judge :class:`sim_models.free_run.FreeEngineRun` ``run`` against the exact
+    trajectory ``traj`` (:class:`analytic.free_motion.FreeTrajectory`; ``ref``: its
+    :func:`reference_samples` at the run's times when already computed)."""
+    mech = traj.mech
+    ref = reference_samples(traj, run.times) if ref is None else ref
+    t = np.asarray(run.times, float)
+    not_read: list[str] = []
+    comps = _quantities(run, ref, mech, not_read)
+    e_scale, e_name = energy_scale(ref)
+    energy = judge("energy", "energy", "J", t, ref.kinetic + ref.potential,
+                   np.asarray(run.kinetic) + np.asarray(run.potential), ENERGY_DRIFT,
+                   e_scale, scale=e_scale, normalisation=e_name)
+    size = mechanism_size(mech.bodies) or 1.0
+    loop = judge("loop.gap", "loop", "m", t, np.zeros(len(t)), run.loop_gap, LOOP_DRIFT,
+                 size, scale=size, normalisation="mechanism size")
+    v = FreeVerdict(run.case, run.engine, float(t[-1]) if len(t) else 0.0, t, tuple(comps),
+                    energy, loop, iftomm_accuracy(run, ref, mech), bool(run.ok), run.reason,
+                    run.t_fail, float(run.cpu_per_simulated_second), float(run.timestep),
+                    str(run.integrator), run.settings.describe(), None, None,
+                    tuple(not_read), len(mech.joints) > len(mech.bodies) - 1)
+    if v.passed:
+        return v
+    from dataclasses import replace
+    return replace(v, near_event=near_free_event(v, traj.events),
+                   step_note=free_step_note(run, ref, mech))
+
+
+def grounded_point(mech, body: str, point: str, theta: np.ndarray) -> np.ndarray:
+    """``(N, 2)`` world position, m, of ``point`` of ``body`` when ``body`` is pinned to
+    the ground by a revolute joint and turned to the absolute angles ``theta`` (rad):
+    ``pin + R(theta) (p - pin_b)`` in the body frame.  Raises ValueError when the body
+    has no revolute joint to the ground."""
+    bodies = {b.name: b for b in mech.bodies}
+    for j in mech.joints:
+        if isinstance(j, Revolute) and {j.body_a, j.body_b} == {mech.ground, body}:
+            g_pt, b_pt = (j.point_a, j.point_b) if j.body_a == mech.ground else \
+                (j.point_b, j.point_a)
+            pin = np.asarray(bodies[mech.ground].points[g_pt], float)
+            rel = np.asarray(bodies[body].points[point], float) - \
+                np.asarray(bodies[body].points[b_pt], float)
+            c, s = np.cos(theta), np.sin(theta)
+            return pin + np.stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]], axis=1)
+    raise ValueError(f"body {body!r} has no revolute joint to the ground")
+
+
+def iftomm_level(max_error: float, measured: bool = True) -> str:
+    """The IFToMM precision class of a position error, m: ``"1e-3"``, ``"1e-1"`` or
+    ``"none"``."""
+    if not measured or not math.isfinite(max_error):
+        return "none"
+    for lim in sorted(IFTOMM_LEVELS):
+        if max_error <= lim:
+            return f"{lim:.0e}".replace("e-0", "e-")
+    return "none"
+
+
+def iftomm_accuracy(run, ref, mech) -> IftommAccuracy | None:
+    """The IFToMM accuracy rule where ``run.case`` is one of :data:`IFTOMM_POINTS`
+    (None otherwise): the reference point's position error over the run, from the body
+    angles of both (the point's body turns about a ground pin, so its angle fixes it)."""
+    where = IFTOMM_POINTS.get(run.case)
+    if where is None:
+        return None
+    body, point = where
+    names = [b.name for b in mech.bodies]
+    p_ref = grounded_point(mech, body, point, ref.theta[:, names.index(body)])
+    p_eng = grounded_point(mech, body, point, run.theta[:, list(run.body_names).index(body)])
+    err = np.linalg.norm(p_ref - p_eng, axis=1)
+    finite = np.isfinite(err)
+    if not finite.any():
+        return IftommAccuracy(run.case, body, point, math.inf, float(run.times[0]), False,
+                              "none")
+    k = int(np.argmax(np.where(finite, err, -1.0)))
+    return IftommAccuracy(run.case, body, point, float(err[k]), float(run.times[k]),
+                          bool(finite.all()), iftomm_level(float(err[k]), bool(finite.all())))
+
+
+def near_free_event(v: FreeVerdict, events) -> str | None:
+    """For a failed verdict: the reference event (:data:`EVENT_KINDS`) nearest the time
+    the trust was lost (its trusted horizon), when within :data:`NEAR_EVENT_FRACTION`
+    of the duration; else None."""
+    t_lost = v.horizon
+    if not math.isfinite(t_lost):
+        return None
+    evs = [e for e in events if e.kind in EVENT_KINDS]
+    if not evs:
+        return None
+    e = min(evs, key=lambda e: abs(e.t - t_lost))
+    dt = t_lost - e.t
+    if abs(dt) > NEAR_EVENT_FRACTION * v.duration:
+        return None
+    kind = {"switch": "coordinate switch", "singular": "singular position crossed",
+            "limit": "limit position"}[e.kind]
+    side = "after" if dt >= 0 else "before"
+    who = v.lost_by.quantity if v.lost_by else "the run stopped"
+    return (f"the trust is lost at t = {t_lost:.4g} s ({who}), {abs(dt):.3g} s "
+            f"{side} the reference's {kind} at t = {e.t:.6g} s ({e.joint}: {e.detail}): "
+            "there the motion picks a branch or a coordinate fails, so a small engine "
+            "offset becomes a large error")
+
+
+def free_step_note(run, ref, mech) -> str | None:
+    """For a failed verdict: the engine's step in time and how far the released joint
+    (``mech.motion.joint``) moves in one step at its fastest."""
+    dt = float(run.timestep)
+    if not (math.isfinite(dt) and dt > 0) or mech.motion is None:
+        return None
+    jn = mech.motion.joint
+    i = list(ref.joints).index(jn)
+    rate = np.abs(ref.xd[:, i])
+    rate = rate[np.isfinite(rate)]
+    if not rate.size:
+        return None
+    k = float(np.max(rate))
+    revolute = isinstance(next(j for j in mech.joints if j.name == jn), Revolute)
+    inc = (f"{k * dt:.3g} rad ({math.degrees(k * dt):.3g} deg)" if revolute
+           else f"{k * dt:.3g} m")
+    return (f"the engine steps {dt:.3g} s ({run.integrator}); joint {jn} moves up to {inc} "
+            f"per step ({k:.4g} {'rad/s' if revolute else 'm/s'} at its fastest): rerun with "
+            f"--timestep {dt / 4:.2g} to see whether the error falls with the step (the "
+            "integrator) or not (the model or the constraint stabilisation)")
+
+
+__all__ = ["ENERGY_DRIFT", "FREE_DYNAMIC", "FREE_KINEMATIC", "IFTOMM_LEVELS",
+           "IFTOMM_POINTS", "LOOP_DRIFT", "FreeComparison", "FreeVerdict", "IftommAccuracy",
+           "compare_free", "energy_scale", "grounded_point", "horizon_of", "iftomm_accuracy",
+           "iftomm_level", "judge", "reference_samples"]

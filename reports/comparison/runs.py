@@ -1,0 +1,121 @@
+"""Verdict runs: one engine on one compiled linkage, compared with its analytic solution.
+
+:func:`run_verdict` is the one compile -> run -> compare of the project: ``xval compare``
+(:mod:`reports.cli.engines`), the report's engine tasks (:mod:`reports.report.build`, through
+:func:`run_comparison`), ``xval plot --engine``, the baselines
+(:func:`reports.regression.baseline.run_and_compare`) and the pytest plugin
+(:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from
+:mod:`sim_models.registry` and their settings built there (``--set KEY=VALUE``); the
+compiled linkage (:func:`sim_models.compile_linkage`) is built once and passed down to
+the engine run and the comparison, and comes back in the :class:`Verdict`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+
+from analytic import Mechanism
+from analytic.sweep import input_values
+from reports.comparison import quantities
+from reports.comparison.compare import Comparison, compare_run, near_event, verdict
+from sim_models import SimTree, compile_linkage
+from sim_models.engine_run import EngineRun, RunRequest
+from sim_models.engines import instantaneous, run
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One engine's run on one compiled linkage and its comparison with the analytic
+    solution.
+
+    ``tree`` is the compiled linkage the run was made from (``tree.linkage`` the
+    reference), ``comparisons`` every compared quantity, the engines' own readings
+    included (:mod:`reports.comparison.quantities`; :meth:`judged` leaves them out).
+    """
+
+    tree: SimTree
+    run: EngineRun
+    comparisons: tuple[Comparison, ...]
+
+    @property
+    def ok(self) -> bool:
+        """The verdict: the run finished and every judged quantity is within tolerance."""
+        return self.run.ok and verdict(self.comparisons)
+
+    @cached_property
+    def near_event(self) -> str | None:
+        """For a failed verdict, the limit/singular position or change point the worst
+        error sits near (:func:`reports.comparison.compare.near_event`, a 720-point sweep, made once);
+        None for a pass or when none is near."""
+        return None if self.ok else near_event(list(self.comparisons), self.tree.linkage)
+
+    def judged(self) -> list[Comparison]:
+        """The comparisons the verdict judges."""
+        return quantities.judged(self.comparisons)
+
+
+def request_of(values: Mapping[str, object]) -> RunRequest:
+    """A :class:`RunRequest` from a mapping of its fields (a baseline record's
+    ``request``, a function's keyword arguments); a field not given, or None, takes the
+    request's default (the one holder of the run defaults)."""
+    names = {f.name for f in dataclasses.fields(RunRequest)}
+    return RunRequest(**{k: v for k, v in values.items() if k in names and v is not None})
+
+
+def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
+                request: RunRequest | None = None) -> Verdict:
+    """Compile ``linkage`` (unless already a :class:`SimTree`; with ``request.chords``),
+    run ``engine`` on it as ``request`` asks (default :class:`RunRequest`'s defaults) and
+    compare with the analytic solution.
+
+    ``request.mode == "instantaneous"``: the engine's forward dynamics at the analytic
+    state of the sweep's ``request.samples`` inputs (engines without one refuse).
+    ``settings``: the engine's settings object (None: its recommended settings)."""
+    req = request or RunRequest()
+    tree = linkage if isinstance(linkage, SimTree) else \
+        compile_linkage(linkage, chords=req.chords)
+    if req.mode == "instantaneous":
+        r = instantaneous(tree, engine, settings, input_values(tree.linkage, req.samples)[0])
+    else:
+        r = run(tree, engine, settings, revolutions=req.revolutions, samples=req.samples,
+                max_violation=req.max_violation, max_speed_error=req.max_speed_error)
+    return Verdict(tree, r, tuple(compare_run(r, tree.linkage)))
+
+
+def engine_list(choice: str, mode: str = "run") -> list[str]:
+    """``"all"`` -> every registered engine whose module is present (in the instantaneous
+    mode, those with a forward-dynamics call); else the one named."""
+    from sim_models.engines import has_instantaneous
+    from sim_models.registry import available_engines, get_engine
+    if choice == "all":
+        names = list(available_engines())
+        return [n for n in names if has_instantaneous(n)] if mode == "instantaneous" \
+            else names
+    return [get_engine(choice).name]
+
+
+def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
+                 options: Mapping[str, tuple[str, object]] | None = None) -> dict:
+    """Each engine's settings: its recommended defaults, then the option flags
+    ``options`` (``{"--timestep": ("timestep", 1e-4)}``, applied where the engine has the
+    field), then the ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``; every
+    value within the settings' ranges, a flag and a ``--set`` of the same setting
+    refused (:func:`sim_models.registry.settings_from_options`)."""
+    from sim_models.registry import settings_from_options
+    return settings_from_options(engines, pairs, options)
+
+
+def run_comparison(tree, engine: str, settings=None, mode: str = RunRequest.mode,
+                   revolutions: int = RunRequest.revolutions,
+                   samples: int = RunRequest.samples):
+    """:func:`run_verdict` on the compiled linkage ``tree`` as ``(run, comparisons)``
+    (the report's engine tasks and ``xval plot --engine``)."""
+    v = run_verdict(tree, engine, settings, RunRequest(revolutions, samples, mode=mode))
+    return v.run, list(v.comparisons)
+
+
+__all__ = ["Verdict", "engine_list", "request_of", "run_comparison", "run_verdict",
+           "settings_for"]

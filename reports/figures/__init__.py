@@ -1,0 +1,20 @@
+"""Figures: data in, image (PNG bytes, GIF, MP4) out; no argparse, no engine runs of their
+own.
+
+Modules:
+
+* :mod:`reports.figures.case_figures`: The figures of one case: drawn from the runs' own
+  analytic reference.
+* :mod:`reports.figures.display_units`: Display units of ``xval solve``, ``sweep`` and
+  ``plot`` (``--units mm,deg,rpm``).
+* :mod:`reports.figures.free_plots`: ``xval plot`` and ``xval animate`` of a released
+  linkage (free motion).
+* :mod:`reports.figures.free_report_plots`: Figures of free motion (PNG bytes): the released
+  joint's trajectory with engine markers on the exact curve, the error against time with the
+  tolerance and each engine's trusted horizon, the energy and loop-closure drift, and the
+  work-precision plot.
+* :mod:`reports.figures.plots`: Figures of the validation report (matplotlib, Agg backend,
+  PNG bytes out).
+* :mod:`reports.figures.study_plots`: Figures of the speed/accuracy studies
+  (:mod:`reports.studies.speed_accuracy`); PNG bytes out.
+"""
