@@ -16,6 +16,7 @@ accepts every name the report prints.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 from .errors import DescriptionError
@@ -61,3 +62,20 @@ def load_case(name_or_path: str | Path) -> Mechanism:
     if s.endswith(".toml") or Path(s).is_file():
         return load_mechanism(s)
     return load_mechanism(case_path(s))
+
+
+def case_description(name: str) -> str:
+    """The ``description`` of case ``name`` as its file writes it (what
+    :func:`load_case` puts in ``Mechanism.description``), read without building the
+    mechanism: TOML's top-level keys come before its first table, so only that head is
+    parsed (the whole file if the head does not parse alone, e.g. a multi-line string
+    with a line starting with ``[``)."""
+    text = case_path(name).read_text(encoding="utf-8")
+    cut = next((i for i, line in enumerate(text.splitlines(keepends=True))
+                if line.lstrip().startswith("[")), None)
+    head = "".join(text.splitlines(keepends=True)[:cut]) if cut is not None else text
+    try:
+        doc = tomllib.loads(head)
+    except tomllib.TOMLDecodeError:
+        doc = tomllib.loads(text)
+    return str(doc.get("description", ""))

@@ -42,3 +42,26 @@ def test_help_lists_every_command_without_importing_it():
                          text=True, timeout=120, check=True).stdout
     for name, (_, help_) in COMMANDS.items():
         assert name in out and help_.split()[0] in out, name
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["cases"]])
+def test_help_and_cases_start_without_numpy_or_the_solver(argv):
+    """``xval --help`` and ``xval cases`` read no array: neither numpy nor the solver's
+    modules are imported (``analytic``'s front door loads its names on first use)."""
+    code = ("import contextlib, io, json, sys\nfrom reports.cli.xval import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass\n"
+            "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] == 'numpy'"
+            " or m in ('analytic.kinematics', 'analytic.positions'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True).stdout
+    assert json.loads(out.strip().splitlines()[-1]) == []
+
+
+def test_case_description_is_what_load_case_reads():
+    """``xval cases`` reads each description from the file's head; the mechanism that
+    :func:`analytic.load_case` builds from the whole file carries the same text."""
+    from analytic import load_case
+    from analytic.cases import case_description, case_names, free_case_names, hard_case_names
+    for name in case_names() + hard_case_names() + free_case_names():
+        assert case_description(name) == load_case(name).description, name
