@@ -1,6 +1,6 @@
 """``python -m reports.cli.studies [--quick] [--out DIR] [--workers N] [--serial]``: the
-whole speed/accuracy study (:func:`reports.studies.speed_accuracy.run_study`) printed as tables, and
-with ``--out`` written as CSV tables and PNG figures (:func:`reports.studies.speed_accuracy.write_study`).
+whole speed/accuracy study (:func:`reports.studies.study.run_study`) printed as tables, and
+with ``--out`` written as CSV tables and PNG figures (:func:`reports.studies.study.write_study`).
 
 A maintainer's command, the only one of the studies that reads command-line arguments.
 """
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from reports.studies import speed_accuracy as studies
+from reports.studies.study import run_study, write_study
 
 
 def main(argv=None) -> int:
@@ -24,7 +24,7 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=None, help="process-pool size")
     ap.add_argument("--serial", action="store_true", help="no process pool")
     a = ap.parse_args(argv)
-    res = studies.run_study(a.quick, pool=False if a.serial else None, workers=a.workers)
+    res = run_study(a.quick, pool=False if a.serial else None, workers=a.workers)
     pd.set_option("display.width", 200)
     pd.set_option("display.max_colwidth", 60)
     print(res["cheapest"].drop(columns=["settings"]).to_string(index=False))
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     print("analytic seconds per revolution:", res["analytic_seconds_per_rev"])
     print("timings (s):", {k: round(v, 2) for k, v in res["timings"].items()})
     if a.out:
-        for p in studies.write_study(res, a.out):
+        for p in write_study(res, a.out):
             print("wrote", p)
     return 0
 

@@ -174,9 +174,9 @@ def _pareto_task(grid: pd.DataFrame, label: str, source: str, samples: int) -> d
 
 
 def _scene_task(quick: bool) -> dict:
-    from reports.studies import speed_accuracy as studies
-    table = studies.scene_economy(quick)
-    return {"table": table, "png": studies.scene_figure(table)}
+    from reports.studies.scene import scene_economy, scene_figure
+    table = scene_economy(quick)
+    return {"table": table, "png": scene_figure(table)}
 
 
 # ----------------------------------------------------------------------------- metadata
@@ -450,10 +450,10 @@ def _start_hard_cases(cfg: ReportConfig, ex, ph):
 
     def go():
         try:
-            from reports.studies import speed_accuracy as studies
+            from reports.studies.hard_cases import hard_cases
             # its own runs ahead of the speed grid's runs of the same function; its
             # long runs (function long_run_task) keep their own first place
-            box["hard"] = studies.hard_cases(cfg.quick, _HardLane(ex))
+            box["hard"] = hard_cases(cfg.quick, _HardLane(ex))
         except Exception as e:  # noqa: BLE001 - a study failure is a line of the report
             box["error"] = f"{type(e).__name__}: {e}"
     t = threading.Thread(target=go, name="hard-cases", daemon=True)

@@ -11,6 +11,8 @@ import pytest
 
 from analytic import Linkage
 from reports.studies import speed_accuracy as S
+from reports.studies.hard_cases import hard_cases
+from reports.studies.scene import SCENE_VARIANTS, scene_economy
 
 pytest.importorskip("mujoco")
 pytest.importorskip("pybullet")
@@ -176,7 +178,7 @@ def test_long_run_loop_short():
 
 
 def test_hard_cases_quick():
-    h = S.hard_cases(quick=True)
+    h = hard_cases(quick=True)
     assert h["long_run_revolutions"] == S.LONG_RUN_REVOLUTIONS[True]
     assert f"{h['long_run_revolutions']} revolutions" in h["notes"]
     for k in ("high_speed_plot", "near_toggle_plot", "change_point_plot", "long_run_plot",
@@ -208,8 +210,8 @@ def _executor_kind():
 
 
 def test_scene_economy_rows():
-    df = S.scene_economy(quick=True)
-    assert list(df["variant"]) == list(S.SCENE_VARIANTS)
+    df = scene_economy(quick=True)
+    assert list(df["variant"]) == list(SCENE_VARIANTS)
     assert {"variant", "seconds_per_rev", "accel_error", "force_error", "notes"} <= \
         set(df.columns)
     v = df.set_index("variant")

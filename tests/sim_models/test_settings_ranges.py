@@ -119,6 +119,7 @@ def test_the_studies_settings_are_inside_the_ranges():
     """The report's speed-against-error grid and hard-case plans (every case, the full
     variant) build their settings through the same ranges: none may be refused."""
     from analytic.cases import case_names
+    from reports.studies import hard_cases
     from reports.studies import speed_accuracy as studies
     n = 0
     for case in case_names():
@@ -126,7 +127,7 @@ def test_the_studies_settings_are_inside_the_ranges():
             if p["engine"] in ENGINES:
                 make_settings(p["engine"], p["settings"])
                 n += 1
-    for plans in studies._hard_plan(False).values():
+    for plans in hard_cases._hard_plan(False).values():
         for engine, rows in plans.items():
             for _, settings in (rows if isinstance(rows, list) else [rows]):
                 if engine in ENGINES:
