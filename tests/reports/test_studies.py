@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from analytic import Linkage
+from reports.studies import hard_cases as hard_cases_module
 from reports.studies import speed_accuracy as S
 from reports.studies.hard_cases import hard_cases
 from reports.studies.scene import SCENE_VARIANTS, scene_economy
@@ -165,7 +166,7 @@ def test_long_run_loop_short():
     from dataclasses import asdict
 
     from sim_models.mjcf import MujocoSettings
-    res = S.long_run_task("seed-four-bar", "mujoco", asdict(MujocoSettings()), 3)
+    res = hard_cases_module.long_run_task("seed-four-bar", "mujoco", asdict(MujocoSettings()), 3)
     per = pd.DataFrame(res["per_rev"])
     assert list(per["revolution"]) == [1, 2, 3]
     assert res["summary"]["ok"] and res["summary"]["revolutions_done"] == 3
@@ -173,7 +174,7 @@ def test_long_run_loop_short():
     assert (per["speed_deviation"] < 1e-6).all()
     assert (per["alpha_error"] < 1e-4).all() and (per["effort_error"] < 1e-4).all()
     assert (per["energy_balance"].abs() < 1e-4).all()
-    res = S.long_run_task("seed-four-bar", "pybullet", {"timestep": 1e-4}, 2)
+    res = hard_cases_module.long_run_task("seed-four-bar", "pybullet", {"timestep": 1e-4}, 2)
     assert res["summary"]["ok"] and len(res["per_rev"]["revolution"]) == 2
 
 
