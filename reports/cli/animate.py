@@ -26,12 +26,42 @@ status 2), HTML as one self-contained page (matplotlib's ``to_jshtml``).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import matplotlib
 import numpy as np
+from matplotlib import animation
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon, Rectangle
 
+from analytic import load_case
 from analytic.errors import LinkageError, OutputError
+from analytic.input_display import InputConvention, convention_of, input_text
+from analytic.mechanism import Prismatic, Revolute
+from analytic.motion_spec import MAX_DURATION
+from analytic.sweep import input_values
+from reports.cli import options as opt
+from reports.cli.paths import check_outputs
+from reports.cli.plot import check_out
+from reports.cli.simulate import MIN_DURATION
+from reports.comparison.progress import engine_progress
+from reports.comparison.runs import engine_list
+from reports.figures import plots
+from reports.figures.free_plots import (
+    FreeOptionError,
+    free_poses,
+    is_free,
+    sample_times,
+    swing_note,
+    trajectory,
+)
+from sim_models import compile_linkage
+from sim_models.engines import run
+from sim_models.registry import engine_names, get_engine
+from sim_models.sampling import plan_samples, times_plan, travel_time
 
 #: Frames per cycle by default (>= 36 so a turn is drawn every 5 deg at most).
 FRAMES = 72
@@ -79,9 +109,6 @@ def frame_times(linkage, frames: int = FRAMES, tree=None) -> np.ndarray:
     interval the engines run (:func:`sim_models.sampling.plan_samples`: until the input
     nears a limit position, or has travelled its range).  A driver with neither rate
     nor acceleration has no motion: one line, status 2."""
-    from analytic.sweep import input_values
-    from sim_models import compile_linkage
-    from sim_models.sampling import plan_samples, travel_time
     d = linkage.mech.driver
     if input_values(linkage, 2)[1]:
         T = travel_time(d, 2 * math.pi)
@@ -112,7 +139,6 @@ def analytic_frames(linkage, frames: int = FRAMES, forces: bool = False,
     """The analytic poses (and joint forces) at :func:`frame_times` along the
     prescribed motion (its rate and acceleration at each frame), on the branch the
     moving linkage follows from the reference assembly."""
-    from analytic.input_display import convention_of
     mech = linkage.mech
     times = frame_times(linkage, frames, tree)
     values, rate, acc = prescribed(linkage, times)
@@ -134,8 +160,6 @@ def free_frames(traj, frames: int, forces: bool = False):
     """:class:`Frames` at ``frames`` evenly spaced times from 0 to the
     duration: the poses, the ``[motion]`` joint's coordinate and rate, and with
     ``forces`` the joint reactions (N, by body_a on body_b)."""
-    from analytic.mechanism import Revolute
-    from reports.figures.free_plots import free_poses, sample_times
     mech = traj.mech
     t = sample_times(traj, frames)
     smp = traj.at(t, forces=forces)
@@ -202,9 +226,6 @@ def engine_run(mech, tree, engine: str, frames: int, times=None):
     """An engine run sampled at the frames: at their ``times`` (s, the prescribed
     motion from t = 0: one sample a frame) when given, else at the verdict's plan
     (``frames`` samples of the last of two turns)."""
-    from sim_models.engines import run
-    from sim_models.registry import get_engine
-    from sim_models.sampling import times_plan
     settings = get_engine(engine).settings({})
     if times is not None:
         return run(tree, engine, settings, plan=times_plan(tree, np.asarray(times, float)))
@@ -245,7 +266,6 @@ def body_outlines(mech, poses: Poses, i: int) -> dict[str, np.ndarray]:
 
 def joint_positions(mech, poses: Poses, i: int) -> dict[str, np.ndarray]:
     """World position of each joint at frame ``i`` (a prismatic joint: its slider point)."""
-    from analytic.mechanism import Prismatic
     names = [b.name for b in mech.bodies]
     out = {}
     for jt in mech.joints:
@@ -281,9 +301,7 @@ def _nice(x: float) -> float:
 
 def _ground_art(ax, mech, size: float, analytic: Poses) -> None:
     """The ground: a hatched block under each ground pivot and along each fixed guide."""
-    from matplotlib.patches import Polygon, Rectangle
 
-    from analytic.mechanism import Prismatic
     g = mech.body(mech.ground)
     w = 0.08 * size
     for jt in mech.joints:
@@ -344,7 +362,6 @@ def build_animation(fr: Frames, title: str = "", dpi: int = 80) -> Animator:
     info = fig.text(0.02, 0.01, "", va="bottom", ha="left", fontsize=9,
                     family="monospace", bbox=dict(fc="white", ec="0.7", alpha=0.9), zorder=9)
     ax.legend(fontsize=9, loc="upper right")
-    from analytic.input_display import InputConvention
     conv = fr.convention or InputConvention(fr.revolute, fr.revolute)
 
     def draw(i: int):
@@ -389,7 +406,6 @@ def info_text(fr: Frames, i: int, conv) -> str:
     prescribed rate (and acceleration) there, the time along the motion."""
     if fr.free_joint is not None:  # a free run: its [motion] joint and the clock
         return free_info_text(fr, i)
-    from analytic.input_display import input_text
     d = fr.mech.driver
     u = "rad/s" if fr.revolute else "m/s"
     rate = fr.rates[i] if fr.rates is not None else d.velocity
@@ -414,7 +430,6 @@ def free_info_text(fr: Frames, i: int) -> str:
 def _axes(fr: Frames, title: str, dpi: int):
     """``(fig, ax, size)``: equal axes around every frame's bodies, with room for the
     text box; ``size`` (m) the largest extent of the motion."""
-    from reports.figures import plots
     pts = np.array([p for i in range(fr.n)
                     for o in body_outlines(fr.mech, fr.analytic, i).values() for p in o])
     lo, hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
@@ -450,7 +465,6 @@ def _traces(ax, fr: Frames) -> list:
 def _bodies(ax, mech):
     """``(body_art, joints, jtext)``: per moving body its outline line, fill and name
     (a one-point body, a slider block, as a square); the joint markers; joint names."""
-    import matplotlib
     colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     body_art = {}
     for k, body in enumerate(mech.moving_bodies):
@@ -528,8 +542,6 @@ def frames_rgb(an: Animator):
 def _sprite(text, dpi: float):
     """``(rgb (h, w, 3) float, alpha (h, w, 1), (dx, dy))``: ``text`` rendered once
     alone, and the offset of its anchor from the image's top-left corner (pixels)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
     fig = Figure(figsize=(3, 1), dpi=dpi)
     fig.patch.set_alpha(0.0)
     canvas = FigureCanvasAgg(fig)
@@ -589,9 +601,7 @@ def write_gif(an: Animator, out: str, fps: int = 24) -> int:
 def write(an: Animator, out: str, fps: int = 24) -> None:
     """Write the animation to ``out`` by its extension: GIF (Pillow), MP4 (ffmpeg),
     HTML (matplotlib's self-contained JavaScript player)."""
-    from matplotlib import animation
 
-    from reports.figures import plots
     ext = Path(out).suffix.lower()
     try:
         if ext == ".gif":
@@ -623,7 +633,6 @@ _ICONS = {"fa fa-minus": "&minus;", "fa fa-fast-backward": "&#x23EE;",
 def offline_html(html: str) -> str:
     """matplotlib's JavaScript player without its one network reference (the icon
     font's stylesheet): the icons become characters."""
-    import re
     html = re.sub(r'<link rel="stylesheet"\s+href="https?://[^"]*font-awesome[^"]*">', "",
                   html)
     for cls, ch in _ICONS.items():
@@ -632,21 +641,15 @@ def offline_html(html: str) -> str:
 
 
 def cmd_animate(args) -> int:
-    from analytic import load_case
-    from reports.cli.plot import check_out
-    from sim_models import compile_linkage
     if args.out is None:
         raise OutputError("option --out is required: F.gif, F.mp4 or F.html")
     check_out(args.out, FORMATS)
-    from reports.cli.paths import check_outputs
     check_outputs([("--out", args.out)], [("the case file", args.case)])
     if Path(args.out).suffix.lower() == ".mp4":
-        from matplotlib import animation
         if not animation.writers.is_available("ffmpeg"):
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
                               "write .gif or .html instead (or install ffmpeg)")
     mech = load_case(args.case)
-    from reports.figures.free_plots import FreeOptionError, is_free
     if is_free(mech, args.free, args.driven):
         return _animate_free(args, mech)
     if args.duration is not None:
@@ -658,9 +661,7 @@ def cmd_animate(args) -> int:
     fr = analytic_frames(tree.linkage, args.frames, args.forces, tree)
     notes = []
     if args.engine:
-        from reports.comparison.runs import engine_list
         for e in engine_list(args.engine):
-            from reports.comparison.progress import engine_progress
             with engine_progress(f"{e}: {mech.name}, {fr.n} frames"):
                 r = engine_run(mech, tree, e, args.frames, times=fr.times)  # a frame a sample
             if not r.ok:
@@ -686,7 +687,6 @@ def cmd_animate(args) -> int:
 def _animate_free(args, mech) -> int:
     """The free motion of ``[motion]``: poses at ``--frames`` evenly spaced times from 0
     to the duration, with the clock."""
-    from reports.figures.free_plots import FreeOptionError, swing_note, trajectory
     if args.engine:
         raise FreeOptionError(f"option --engine: {mech.name!r} is animated in free motion (its "
                               "[motion] table), which draws no engine run; add --driven for "
@@ -705,7 +705,6 @@ def _animate_free(args, mech) -> int:
 
 
 def register(sub) -> None:
-    from reports.cli import options as opt
     s = sub.add_parser("animate", help="the linkage moving through a cycle, or its free "
                        "motion (GIF, MP4, HTML)")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -717,7 +716,6 @@ def register(sub) -> None:
                       help="animate the prescribed cycle of [driver] even when the "
                            "description has a [motion] table")
     s.add_argument("--out", type=opt.output_file, help="F.gif, F.mp4 (needs ffmpeg) or F.html")
-    from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
                    help="draw this engine's poses (dashed) over the analytic ones")
     s.add_argument("--forces", action="store_true",
@@ -725,8 +723,6 @@ def register(sub) -> None:
     s.add_argument("--frames", type=opt.int_range(36, 720, "frames per cycle"),
                    default=FRAMES, help=f"frames per cycle (free motion: over the run), 36 "
                                         f"to 720 (default {FRAMES})")
-    from analytic.motion_spec import MAX_DURATION
-    from reports.cli.simulate import MIN_DURATION
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")

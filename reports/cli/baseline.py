@@ -9,20 +9,28 @@ file that cannot be used (one line naming the file, entry and key).  ``record`` 
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 
+from analytic.cases import case_names, free_case_names
+from analytic.errors import DescriptionError
+from analytic.input_display import format_input
+from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
 from reports.cli import options as opt
 from reports.cli.paths import check_outputs
+from reports.comparison.free_cases import MIN_DURATION, RELEASE_DURATION, command_case
 from reports.regression import baseline as bl
 from reports.regression import ci_formats
+from reports.regression.baseline_free import DEFAULT_SAMPLES, free_mechanism, free_request
 from reports.regression.messages import report_lines
+from sim_models.engine_run import RunRequest
+from sim_models.free_engine import free_engine_names, free_session_class
+from sim_models.registry import engine_names, get_engine, settings_from_options
 
 
 # ============================================================================ record
 def cmd_record(args) -> int:
-    from analytic.cases import case_names
-    from sim_models.registry import settings_from_options
     check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
     free = bool(getattr(args, "free", False))
     _free_options(args, free)
@@ -31,9 +39,6 @@ def cmd_record(args) -> int:
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
     if free:
-        from reports.comparison.free_cases import RELEASE_DURATION, command_case
-        from reports.regression.baseline_free import free_mechanism, free_request
-        from sim_models.free_engine import free_session_class
         settings = settings_from_options(
             engines, args.set or (),
             classes={e: free_session_class(e).settings_class for e in engines})
@@ -41,7 +46,6 @@ def cmd_record(args) -> int:
         for m in dict.fromkeys(models):  # one line, status 2, before any run
             mech, _ = command_case(m, req["duration"])
             if mech.motion is None:  # a user's file is not guessed at (as xval simulate)
-                from analytic.errors import DescriptionError
                 raise DescriptionError(f"{m}: no [motion] table: free motion needs the "
                                        "initial joint, value, rate and duration")
             free_mechanism(mech, req)
@@ -54,7 +58,6 @@ def cmd_record(args) -> int:
     for r in base.runs:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
                 default=None)
-        from analytic.input_display import format_input
         of = "of range" if free else "of peak"
         worst = f"worst {w.quantity} {w.error:.3g} {of} at {format_input(w.at, w.at_unit)}" \
             if w else "nothing compared"
@@ -85,9 +88,7 @@ def cmd_record(args) -> int:
 
 
 def _engines(choice: list[str] | None, free: bool = False) -> list[str]:
-    from sim_models.registry import engine_names, get_engine
     if free:
-        from sim_models.free_engine import free_engine_names, free_session_class
         if not choice or "all" in choice:
             return list(free_engine_names())
         for e in choice:
@@ -107,7 +108,6 @@ def _free_options(args, free: bool) -> None:
             raise opt.UsageError(f"{bad[0]} does not apply to --free (a free run is read "
                                  "over --duration at --samples times; its tolerances are "
                                  "the named ones of reports/comparison/free_compare.py)")
-        from analytic.motion_spec import MAX_SAMPLES
         args.samples = _checked_samples(args.samples, opt.int_range(2, MAX_SAMPLES))
     elif args.duration is not None:
         raise opt.UsageError("--duration needs --free (a prescribed run is read over "
@@ -118,7 +118,6 @@ def _free_options(args, free: bool) -> None:
 
 def _checked_samples(text, typ):
     """``--samples`` through the argparse type of its mode (None: not given)."""
-    import argparse
     if text is None:
         return None
     try:
@@ -179,17 +178,11 @@ _tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
 
 
 def _model(text: str) -> str:
-    from analytic.cases import free_case_names
     return text if text == "all" or text in free_case_names() else opt.case_or_file(text)
 
 
 def register(sub) -> None:
     """``xval baseline record|check``."""
-    from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
-    from reports.comparison.free_cases import MIN_DURATION, RELEASE_DURATION
-    from reports.regression.baseline_free import DEFAULT_SAMPLES
-    from sim_models.engine_run import RunRequest
-    from sim_models.registry import engine_names
     p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
     r = bsub.add_parser("record", help="run cases in engines and write a baseline file")

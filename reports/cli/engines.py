@@ -6,15 +6,32 @@ Kept apart from :mod:`reports.cli.xval` so that ``xval solve`` never imports an 
 from __future__ import annotations
 
 import json
+import shutil
 import sys
+import textwrap
 
+import pandas as pd
+
+from analytic import load_case
+from analytic.errors import OutputError
+from analytic.input_display import format_input, input_number
+from reports.cli import baseline as baseline_cli
 from reports.cli import options as opt
 from reports.cli.paths import check_outputs
+from reports.cli.report import run
+from reports.comparison import runs as verdict_runs
+from reports.comparison.compare import FAIL, PASS, json_safe, step_note, verdict_word
+from reports.comparison.progress import engine_progress
 from reports.comparison.quantities import is_engine_reading
+from reports.comparison.runs import engine_list, settings_for
+from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
+from sim_models import compile_linkage
+from sim_models.engine_run import RunRequest
+from sim_models.models import MODELS_DIR, write_models
+from sim_models.registry import engine_names, skipped_engines
 
 
 def cmd_models(args) -> int:
-    from sim_models.models import MODELS_DIR, write_models
     if args.case and not args.out:
         raise opt.UsageError("xval models CASE_OR_FILE needs --out DIR (the default folder, "
                              "sim_models/models, holds the built-in cases' committed files)")
@@ -30,11 +47,6 @@ def cmd_models(args) -> int:
 
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
-    from analytic import load_case
-    from reports.comparison.compare import json_safe
-    from reports.comparison.runs import engine_list, run_verdict, settings_for
-    from sim_models import compile_linkage
-    from sim_models.engine_run import RunRequest
     mech = load_case(args.case)
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
@@ -47,17 +59,15 @@ def cmd_compare(args) -> int:
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     request = RunRequest(args.revolutions, args.samples, mode=args.mode)
     out = []
-    from reports.comparison.progress import engine_progress
     for eng in engines:
         with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
-            out.append(run_verdict(tree, eng, settings[eng], request))
+            out.append(verdict_runs.run_verdict(tree, eng, settings[eng], request))
     all_ok = all(v.ok for v in out)
     if args.json:
         print(json.dumps(json_safe([_verdict_json(v, args.mode) for v in out]), indent=2,
                          allow_nan=False))
     else:
         _print_compare_text(mech, args.mode, out, tree.linkage.driver_is_revolute)
-    from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
     write_compare_outputs(mech, out, str(args.case or ""), args.junit, args.summary)
     return 0 if all_ok else 1
 
@@ -65,7 +75,6 @@ def cmd_compare(args) -> int:
 def _verdict_json(v, mode: str) -> dict:
     """One engine's object in ``xval compare --json`` (a :class:`reports.comparison.runs.
     Verdict`)."""
-    from reports.comparison.compare import PASS, step_note, verdict_word
     r = v.run
     word = verdict_word(list(v.comparisons), r.ok)  # pass, precision limit (float32), FAIL
     return {
@@ -85,7 +94,6 @@ def _table(comps) -> list[list[str]]:
     """The compare table's cells: numbers to 3 figures; a quantity the run did not reach
     (a failed run's samples after it stopped) is "not measured", not the infinity that
     stands for it."""
-    from analytic.input_display import input_number
     rows = []
     for c in comps:
         err = [f"{c.max_abs:.3g}", f"{c.normalised:.3g}"] if c.measured else \
@@ -100,13 +108,8 @@ def _table(comps) -> list[list[str]]:
 def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
     """``xval compare``'s table per engine; prose lines wrapped to the terminal's width
     (settings strings run to ~190 characters)."""
-    import shutil
-    import textwrap
 
-    import pandas as pd
 
-    from analytic.input_display import format_input
-    from reports.comparison.compare import FAIL, PASS, step_note, verdict_word
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
 
     def say(text: str) -> None:
@@ -158,14 +161,11 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
 def note_skipped_engines() -> None:
     """One stderr line per registered engine whose optional library is missing (what
     ``--engine all`` and the report leave out, and how to install it)."""
-    from sim_models.registry import skipped_engines
     for why in skipped_engines().values():
         print(f"xval: note: {why}; skipped", file=sys.stderr)
 
 
 def cmd_report(args) -> int:
-    from analytic.errors import OutputError
-    from reports.cli.report import run
     try:
         status = run(args)
         note_skipped_engines()  # the report ran every installed engine (after the
@@ -185,8 +185,6 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_models)
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
-    from sim_models.engine_run import RunRequest
-    from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
                    help="run: step through the driver's motion; instantaneous: the "
@@ -204,7 +202,6 @@ def register(sub) -> None:
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s")
     s.add_argument("--json", action="store_true")
-    from reports.cli import baseline as baseline_cli
     opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
     baseline_cli.register(sub)  # xval baseline record|check

@@ -19,14 +19,37 @@ trajectory of ``xval simulate`` (same ``--duration`` and ``--samples``) against 
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 
+from analytic import Linkage, load_case
 from analytic.errors import LinkageError, OutputError
+from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+from analytic.sweep import input_values
+from analytic.tolerances import ENGINE_RELATIVE
+from reports.cli import options as opt
+from reports.cli.options import UsageError
+from reports.cli.paths import check_outputs, safe_stem
+from reports.cli.simulate import MIN_DURATION
+from reports.comparison import runs as verdict_runs
+from reports.comparison.progress import engine_progress
+from reports.comparison.runs import engine_list, settings_for
+from reports.figures import free_plots, plots
+from reports.figures import free_plots as fp
+from reports.figures.case_figures import curve_figures, error_figure, motion_text
+from reports.figures.display_units import DisplayUnits, convert_figure
+from reports.figures.free_plots import FREE_DEFAULT_WHAT, FREE_WHAT, FreeOptionError
+from reports.figures.plots import DPI
+from sim_models import compile_linkage
+from sim_models.engine_base import plan_samples
+from sim_models.engine_run import RunRequest
+from sim_models.registry import engine_names
 
 #: ``--what`` words -> curve figure names of :func:`reports.figures.case_figures.curve_figures`.
 WHAT = {"angle": ("angle",), "omega": ("omega",), "alpha": ("alpha",),
@@ -60,7 +83,6 @@ def cycle_plan(linkage, tree=None, points: int = CYCLE_POINTS) -> PlanSamples:
     """The sweep's inputs (full turn from 0 deg, or the feasible range) at
     the times the description's constant rate reaches them; for an accelerating or
     standing driver, the engines' plan (:func:`sim_models.engine_base.plan_samples`)."""
-    from analytic.sweep import input_values
     d = linkage.mech.driver
     if d.acceleration == 0.0 and d.velocity != 0.0:
         vals, _, _ = input_values(linkage, points, start=0.0)  # a full turn: 0 to 360 deg
@@ -68,8 +90,6 @@ def cycle_plan(linkage, tree=None, points: int = CYCLE_POINTS) -> PlanSamples:
         t = (vals - d.value) / d.velocity
         n = len(vals)
         return PlanSamples(t, vals, np.full(n, d.velocity), np.zeros(n))
-    from sim_models import compile_linkage
-    from sim_models.engine_base import plan_samples
     p = plan_samples(tree or compile_linkage(linkage.mech), 2, 72)
     return PlanSamples(p.times, p.values, p.velocity, p.acceleration, p.by_time)
 
@@ -89,21 +109,16 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
     case: the report's figure code on the analytic solution and the engine runs
     (``revolutions``/``samples`` None: :class:`sim_models.engine_run.RunRequest`'s)."""
-    from sim_models import compile_linkage
-    from sim_models.engine_run import RunRequest
     revolutions = RunRequest.revolutions if revolutions is None else revolutions
     samples = RunRequest.samples if samples is None else samples
 
-    from reports.figures.case_figures import curve_figures, error_figure
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     lk = tree.linkage
     runs, comps, notes = {}, {}, []
     if engines:
-        from reports.comparison.progress import engine_progress
-        from reports.comparison.runs import run_comparison
         for e in engines:
             with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
-                r, c = run_comparison(tree, e, settings[e], "run", revolutions, samples)
+                r, c = verdict_runs.run_comparison(tree, e, settings[e], "run", revolutions, samples)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
@@ -120,7 +135,6 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
                             " (no prismatic joint)" if w == "slider" else ""))
     err = None
     if runs:
-        from analytic.tolerances import ENGINE_RELATIVE
         err = error_figure(mech.name, runs, comps, lk, ENGINE_RELATIVE)
     return chosen, err, runs, notes
 
@@ -129,8 +143,6 @@ def motion_line(mech, runs: dict, units) -> str:
     """The header line of the input's motion over the plotted samples
     (:func:`reports.figures.case_figures.motion_text`): the runs' sample times, or those of
     :func:`cycle_plan` without engines."""
-    from analytic import Linkage
-    from reports.figures.case_figures import motion_text
     lk = Linkage(mech)
     if runs:
         times = np.concatenate([np.asarray(r.times, float) for r in runs.values()])
@@ -141,8 +153,6 @@ def motion_line(mech, runs: dict, units) -> str:
 
 def draw(figs, err, units, title: str, motion: str = ""):
     """One matplotlib figure: a panel per curve figure, then a row of error panels."""
-    from reports.figures import plots
-    from reports.figures.display_units import convert_figure
     plt = plots.plt
     figs = [convert_figure(f, units) for f in figs]
     err = convert_figure(err, units) if err is not None else None
@@ -184,9 +194,6 @@ def check_out(out: str | None, formats=FORMATS) -> None:
 
 
 def cmd_plot(args) -> int:
-    from analytic import load_case
-    from reports.figures import free_plots
-    from reports.figures.display_units import DisplayUnits
     check_out(args.out)
     if args.show:
         ok, why = has_display()
@@ -194,7 +201,6 @@ def cmd_plot(args) -> int:
             raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
     mech = load_case(args.case)
     free = free_plots.is_free(mech, args.free, args.driven)
-    from reports.cli.paths import check_outputs, safe_stem
     # the default name is made safe from the description's (never '../x' or '/x')
     stem = f"{safe_stem(mech.name)}-{'free-' if free else ''}plot.png"
     out = args.out or (None if args.show else stem)
@@ -215,7 +221,6 @@ def cmd_plot(args) -> int:
         print("note:", n)
     if out:
         try:
-            from reports.figures.plots import DPI
             fig.savefig(out, dpi=DPI, bbox_inches="tight")
         except OSError as e:
             raise OutputError(f"cannot write {out!r}: {e.strerror or e}") from None
@@ -230,9 +235,7 @@ def cmd_plot(args) -> int:
 
 def _option_range(option: str, parse, value) -> None:
     """``value`` of ``option`` through the argparse type ``parse``: one line if refused."""
-    import argparse
 
-    from reports.cli.options import UsageError
     try:
         parse(str(value))
     except argparse.ArgumentTypeError as e:
@@ -242,7 +245,6 @@ def _option_range(option: str, parse, value) -> None:
 def _integer(text: str) -> int:
     """An integer option whose range depends on the motion plotted (checked by
     :func:`_option_range` once the description is read)."""
-    import argparse
     try:
         return int(text)
     except ValueError:
@@ -251,8 +253,6 @@ def _integer(text: str) -> int:
 
 def _driven_plot(args, mech, units):
     """``(draw, summary, notes)`` of the prescribed cycle (with engine runs)."""
-    from reports.cli import options as opt
-    from reports.figures.free_plots import FreeOptionError
     if args.duration is not None:
         raise FreeOptionError("option --duration is for free motion (a description with "
                               "[motion]); the prescribed cycle's length is --revolutions")
@@ -263,7 +263,6 @@ def _driven_plot(args, mech, units):
     what = parse_what(args.what)
     engines, settings = [], {}
     if args.engine:
-        from reports.comparison.runs import engine_list, settings_for
         engines = engine_list(args.engine)
         settings = settings_for(engines)
     quiet = tuple(what) if args.what is None else ()  # no notes for the default
@@ -280,9 +279,6 @@ def _driven_plot(args, mech, units):
 def _free_plot(args, mech, units):
     """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
     evenly spaced times (``xval simulate``'s samples)."""
-    from analytic.motion_spec import MAX_SAMPLES
-    from reports.cli import options as opt
-    from reports.figures import free_plots as fp
     for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions")):
         if given is not None:
             raise fp.FreeOptionError(
@@ -307,7 +303,6 @@ def _free_plot(args, mech, units):
 def _interactive_backend() -> None:  # pragma: no cover - needs a display
     """Switch matplotlib (set to Agg by :mod:`reports.figures.plots`) to a toolkit that opens
     windows; a NoDisplay error when none can."""
-    import matplotlib
     import matplotlib.pyplot as plt
     for backend in ("TkAgg", "QtAgg", "GTK4Agg", "GTK3Agg", "MacOSX"):
         try:
@@ -322,8 +317,6 @@ def _interactive_backend() -> None:  # pragma: no cover - needs a display
 
 
 def register(sub) -> None:
-    from reports.cli import options as opt
-    from reports.figures.free_plots import FREE_DEFAULT_WHAT, FREE_WHAT
     s = sub.add_parser("plot", help="full-cycle curves of one linkage (engines optional), or "
                        "its free motion against time")
     s.add_argument("case", help="built-in case name or TOML file")
@@ -338,7 +331,6 @@ def register(sub) -> None:
     s.add_argument("--what",
                    help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT}); free "
                         f"motion: {', '.join(FREE_WHAT)} (default {FREE_DEFAULT_WHAT})")
-    from sim_models.registry import engine_names
     s.add_argument("--engine", choices=[*engine_names(), "all"],
                    help="overlay this engine's run (markers) and plot its error below")
     s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
@@ -352,8 +344,6 @@ def register(sub) -> None:
     s.add_argument("--samples", type=_integer,
                    help="engine samples per revolution (default 36); free motion: samples "
                         "of the trajectory, 2 to 1000000 (default the description's)")
-    from analytic.motion_spec import MAX_DURATION
-    from reports.cli.simulate import MIN_DURATION
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")

@@ -16,12 +16,23 @@ import json
 import math
 
 import numpy as np
+import pandas as pd
 
+from analytic.errors import OutputError
 from analytic.free_motion import simulate
 from analytic.mechanism import Revolute
 from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
 from reports.cli import options as opt
-from reports.comparison.free_cases import MIN_DURATION  # one definition for every door
+from reports.cli.paths import write_csv
+from reports.cli.simulate_engines import (
+    add_options,  # --engine, --set, ..., --junit, --summary
+    cmd_engines,
+    engine_options_given,
+)
+from reports.comparison.free_cases import (
+    MIN_DURATION,  # one definition for every door
+    command_case,
+)
 
 
 def register(sub) -> None:
@@ -37,13 +48,11 @@ def register(sub) -> None:
     s.add_argument("--csv", type=opt.output_file,
                    help="write the samples to this CSV file ('-': standard output)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
-    from reports.cli.simulate_engines import add_options  # --engine, --set, ..., --junit, --summary
     add_options(s)
     s.set_defaults(func=cmd_simulate)
 
 
 def _frame(mech, smp):
-    import pandas as pd
     cols = {"t_s": smp.t}
     for k, j in enumerate(mech.joints):
         u = ("rad", "rad/s", "rad/s^2") if isinstance(j, Revolute) else ("m", "m/s", "m/s^2")
@@ -62,12 +71,9 @@ def _frame(mech, smp):
 
 
 def cmd_simulate(args) -> int:
-    from analytic.errors import OutputError
-    from reports.cli.paths import write_csv
     if args.json and args.csv == "-":
         raise OutputError("--json and --csv - both write to standard output; give --csv a "
                           "file name")
-    from reports.cli.simulate_engines import cmd_engines, engine_options_given
     if not getattr(args, "engine", None) and (given := engine_options_given(args)):
         raise opt.UsageError(f"{', '.join(given)} need(s) --engine NAME|all (the engines' "
                              "free runs); without it xval simulate prints the exact "
@@ -75,7 +81,6 @@ def cmd_simulate(args) -> int:
     if getattr(args, "engine", None) and args.csv == "-":
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
-    from reports.comparison.free_cases import command_case
     mech, release = command_case(args.case, args.duration)
     traj = simulate(mech, args.duration)
     n = args.samples or mech.motion.samples

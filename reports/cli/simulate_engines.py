@@ -15,8 +15,20 @@ import json
 import math
 import shutil
 import textwrap
+from pathlib import Path
+
+import pandas as pd
 
 from reports.cli import options as opt
+from reports.cli.paths import check_outputs
+from reports.comparison.compare import json_safe
+from reports.comparison.free_compare import compare_free, reference_samples
+from reports.comparison.progress import engine_progress
+from reports.regression.baseline import versions
+from reports.regression.ci_formats import CiCase, write_outputs
+from sim_models.free_engine import free_engine_names, free_session_class, run_free
+from sim_models.free_run import FreeRequest
+from sim_models.registry import settings_from_options
 
 #: MuJoCo's integrators (``--integrator``: the same as ``--set mujoco.integrator=...``).
 INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
@@ -24,7 +36,6 @@ INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
 
 def add_options(s) -> None:
     """The engine options of ``xval simulate``."""
-    from sim_models.free_engine import free_engine_names
     s.add_argument("--engine", choices=[*free_engine_names(), "all"],
                    help="release the linkage in this engine (or all) and judge its run "
                         "against the exact trajectory; exit status 1 on a failed verdict")
@@ -49,8 +60,6 @@ def engine_options_given(args) -> list[str]:
 
 def free_settings_for(engines, args) -> dict:
     """Each engine's free-motion settings: recommended, then the flags, then ``--set``."""
-    from sim_models.free_engine import free_session_class
-    from sim_models.registry import settings_from_options
     return settings_from_options(
         engines, list(args.set or ()),
         {"--timestep": ("timestep", args.timestep),
@@ -60,10 +69,6 @@ def free_settings_for(engines, args) -> dict:
 
 def run_engines(mech, traj, args, samples: int):
     """Every chosen engine's free run, judged: a list of :class:`FreeVerdict`."""
-    from reports.comparison.free_compare import compare_free, reference_samples
-    from reports.comparison.progress import engine_progress
-    from sim_models.free_engine import free_engine_names, run_free
-    from sim_models.free_run import FreeRequest
     engines = list(free_engine_names()) if args.engine == "all" else [args.engine]
     settings = free_settings_for(engines, args)
     request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1))
@@ -80,13 +85,11 @@ def cmd_engines(args, mech, traj, samples: int, release=None) -> int:
     """The engine part of ``xval simulate``: run, judge, print; 0 pass, 1 fail.
     ``release``: the :class:`reports.comparison.free_cases.Release` of a built-in case without
     ``[motion]`` (in the JSON as ``released``; the text output says it before)."""
-    from reports.cli.paths import check_outputs
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
     results = run_engines(mech, traj, args, samples)
     verdicts = [v for _, v in results]
     if args.json:
-        from reports.comparison.compare import json_safe
         print(json.dumps(json_safe({
             "case": mech.name, "duration_s": traj.duration,
             "released": release.as_json() if release else None, "reference": {
@@ -114,7 +117,6 @@ def horizon_text(h: float, duration: float) -> str:
 
 def print_verdict(v, notes=()) -> None:
     """One engine's verdict as text: heading, the drifts, IFToMM, the table."""
-    import pandas as pd
     print(f"== {v.case} / {v.engine} (free motion, {v.duration:g} s): "
           f"{'PASS' if v.passed else 'FAIL'}")
     _say(f"settings: {v.settings}")
@@ -159,8 +161,6 @@ def print_verdict(v, notes=()) -> None:
 
 def ci_case(run, v, file: str = ""):
     """A :class:`reports.regression.ci_formats.CiCase` of one free verdict."""
-    from reports.regression.baseline import versions
-    from reports.regression.ci_formats import CiCase
     w = v.worst
     kind, msg = "", ""
     if not v.run_ok:
@@ -187,9 +187,7 @@ def write_ci(args, mech, results) -> None:
     """``--junit`` / ``--summary`` of ``xval simulate --engine``."""
     if not (getattr(args, "junit", None) or getattr(args, "summary", None)):
         return
-    from pathlib import Path
 
-    from reports.regression.ci_formats import write_outputs
     given = str(getattr(args, "case", "") or "")
     file = Path(given).as_posix() if given.endswith(".toml") else ""
     write_outputs(f"xval simulate {mech.name}", [ci_case(r, v, file) for r, v in results],

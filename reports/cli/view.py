@@ -9,15 +9,16 @@ assembled state with the prescribed rate.  Without a display it says so in one l
 
 from __future__ import annotations
 
+from analytic import load_case
+from reports.cli import options as opt
 from reports.cli.plot import NoDisplay, has_display
+from sim_models.viewer_model import run_viewer, viewer_unavailable
 
 
 def cmd_view(args) -> int:
-    from analytic import load_case
     mech = load_case(args.case)  # a bad case or file is reported before the display
     ok, why = has_display()
     if ok:
-        from sim_models.viewer_model import viewer_unavailable
         why = viewer_unavailable()
         ok = why is None
     if not ok:
@@ -25,13 +26,11 @@ def cmd_view(args) -> int:
                         f"model with 'xval models {args.case} --out DIR' and open "
                         "DIR/<name>.xml with 'python -m mujoco.viewer --mjcf=...' where "
                         "there is a display")
-    from sim_models.viewer_model import run_viewer
     print(run_viewer(mech, seconds=args.seconds))
     return 0
 
 
 def register(sub) -> None:
-    from reports.cli import options as opt
     s = sub.add_parser("view", help="MuJoCo's viewer on the linkage, driven as the harness "
                        "drives it (needs a display)")
     s.add_argument("case", type=opt.case_or_file, help="built-in case name or TOML file")

@@ -16,6 +16,8 @@ import pandas as pd
 from analytic.errors import LinkageError
 from analytic.input_display import convention_of, display_input, format_input, input_number
 from analytic.positions import size_of
+from analytic.sweep import nearest_event
+from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison.quantities import engine_reading, is_engine_reading, judged
 from reports.comparison.reference import MAX_CONDITION, analytic_reference, linkage_of
 from sim_models.sampling import near_limit
@@ -216,7 +218,6 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     make every quantity fail at the first such sample.  Raises
     :class:`NothingToCompare` when no sample is comparable.
     """
-    from analytic.tolerances import ENGINE_RELATIVE
     tol = ENGINE_RELATIVE if tolerance is None else tolerance
     lk, kin, frc = analytic_at(run_, reference)
     mech = lk.mech
@@ -330,7 +331,6 @@ def near_event(comparisons: list[Comparison], linkage) -> str | None:
     the nearest limit position, singular position or change point of the linkage's sweep
     (:func:`analytic.sweep.nearest_event`), when within :data:`NEAR_EVENT_DEG` (or
     :data:`NEAR_EVENT_STROKE` of the stroke); else None."""
-    from analytic.sweep import nearest_event
     bad = [c for c in judged(comparisons) if not c.accepted]
     if not bad:
         return None

@@ -10,13 +10,20 @@ judge exactly the mechanism the engines run.
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from analytic import Mechanism, load_case
 from analytic.errors import DescriptionError
+from analytic.free_motion import simulate
+from analytic.free_motion.iftomm import n_four_bar_toml
 from analytic.mechanism import Revolute
+from analytic.toml_io import mechanism_from_dict
+from reports.comparison.free_compare import compare_free, reference_samples
 from sim_models.free_cases import G, released
+from sim_models.free_engine import free_settings, run_free
+from sim_models.free_run import FreeRequest
 
 #: Shortest free-motion duration accepted through every door (``xval simulate
 #: --duration``, baseline files), s: one microsecond (the IFToMM A03 run is 0.03 s).
@@ -48,10 +55,7 @@ def free_case(name: str, duration: float | None = None) -> Mechanism:
 
 
 def _a02() -> Mechanism:
-    import tomllib
 
-    from analytic.free_motion.iftomm import n_four_bar_toml
-    from analytic.toml_io import mechanism_from_dict
     return mechanism_from_dict(tomllib.loads(n_four_bar_toml()), A02)
 
 
@@ -117,10 +121,6 @@ def release_and_judge(mech: Mechanism, engine: str, duration: float | None = Non
     ``(FreeEngineRun, FreeVerdict)``.  ``samples``: sample intervals; ``settings``:
     overrides of the engine's recommended free settings (typed values or
     ``key=value`` strings)."""
-    from analytic.free_motion import simulate
-    from reports.comparison.free_compare import compare_free, reference_samples
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
     if mech.motion is None:
         mech = released(mech, RELEASE_DURATION if duration is None else duration)
     traj = simulate(mech, duration)

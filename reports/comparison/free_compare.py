@@ -27,7 +27,7 @@ in the coordinate.  Results are frozen dataclasses (:class:`FreeComparison`,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -425,7 +425,6 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
                     tuple(not_read), len(mech.joints) > len(mech.bodies) - 1)
     if v.passed:
         return v
-    from dataclasses import replace
     return replace(v, near_event=near_free_event(v, traj.events),
                    step_note=free_step_note(run, ref, mech))
 

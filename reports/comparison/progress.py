@@ -14,6 +14,9 @@ import sys
 import threading
 from contextlib import contextmanager
 
+from rich.console import Console
+from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
 #: Seconds a run lasts before its progress line appears.
 SHOW_AFTER_S = 3.0
 
@@ -34,8 +37,6 @@ def engine_progress(what: str, stream=None, after: float = SHOW_AFTER_S):
     if not _is_terminal(stream):
         yield
         return
-    from rich.console import Console
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
     pg = Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
                   console=Console(file=stream), transient=True)
     lock = threading.Lock()

@@ -23,7 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analytic import Linkage
 from analytic.input_display import convention_of, display_input
+from analytic.mechanism import Prismatic
 from reports.comparison import quantities
 from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
 
@@ -63,7 +65,6 @@ def linkage_of(run_, reference=None):
     """The analytic :class:`Linkage` to compare ``run_`` with: ``reference`` when it is
     one (the compiled object passed down), else built from ``reference`` (a Mechanism)
     or from the run's own mechanism (never found again by name)."""
-    from analytic import Linkage
     if isinstance(reference, Linkage):
         return reference
     lk = getattr(reference, "linkage", None)  # a SimTree
@@ -195,7 +196,6 @@ def engine_slider_positions(run_, tree) -> dict[str, np.ndarray]:
     slider point's distance along the line from the guide's origin point, as
     :meth:`analytic.Kinematics.slider` measures it.  Empty when the run kept no tree
     coordinates; NaN where the engine has no sample."""
-    from analytic.mechanism import Prismatic
     if getattr(run_, "q", None) is None or tree is None:
         return {}
     q = np.asarray(run_.q, float)

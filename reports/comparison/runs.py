@@ -23,7 +23,8 @@ from reports.comparison import quantities
 from reports.comparison.compare import Comparison, compare_run, near_event, verdict
 from sim_models import SimTree, compile_linkage
 from sim_models.engine_run import EngineRun, RunRequest
-from sim_models.engines import instantaneous, run
+from sim_models.engines import has_instantaneous, instantaneous, run
+from sim_models.registry import available_engines, get_engine, settings_from_options
 
 
 @dataclass(frozen=True)
@@ -88,8 +89,6 @@ def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
 def engine_list(choice: str, mode: str = "run") -> list[str]:
     """``"all"`` -> every registered engine whose module is present (in the instantaneous
     mode, those with a forward-dynamics call); else the one named."""
-    from sim_models.engines import has_instantaneous
-    from sim_models.registry import available_engines, get_engine
     if choice == "all":
         names = list(available_engines())
         return [n for n in names if has_instantaneous(n)] if mode == "instantaneous" \
@@ -104,7 +103,6 @@ def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
     field), then the ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``; every
     value within the settings' ranges, a flag and a ``--set`` of the same setting
     refused (:func:`sim_models.registry.settings_from_options`)."""
-    from sim_models.registry import settings_from_options
     return settings_from_options(engines, pairs, options)
 
 

@@ -20,8 +20,10 @@ from analytic.mechanism import Revolute
 from analytic.toml_io import LENGTH_UNITS
 from reports.explain import sym as S
 from reports.explain.blocks import Document, Heading, Para, Table
+from reports.explain.forces import force_sections
 from reports.explain.kin import coupled_section, loop_sections, make_ctx, scales
 from reports.explain.loops import build_polygons
+from reports.explain.notes import notes_sections
 
 
 def file_unit(mech) -> str:
@@ -58,9 +60,7 @@ def explain(mech, value: float | None = None) -> Document:
             doc.add(*coupled_section(ctx, loop, n))
     doc.add(*_results(ctx))
     if mech.has_mass:
-        from reports.explain.forces import force_sections
         doc.add(*S.build_checked(force_sections, ctx))
-    from reports.explain.notes import notes_sections
     doc.add(*notes_sections(ctx))
     return doc
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import html
 import math
+import re
 
 from analytic.positions import size_of
 from reports.explain.blocks import Figure
@@ -127,7 +128,6 @@ def _svg(geo, segs) -> str:
 def _clamp_text(svg: str, W: float, H: float) -> str:
     """Keep every label inside the picture (angle labels of long arcs can fall
     outside)."""
-    import re
 
     def fix(m):
         x = min(max(float(m.group(1)), 4.0), W - 90.0)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import base64
 import html as _html
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from reports.explain import sym as S
@@ -210,7 +211,6 @@ def _ml_width(el) -> float:
 def _ml_tree(fragment: str):
     """A MathML fragment as an element tree; SymPy's named entities (the invisible
     times and function application, which take no width) dropped, others one glyph."""
-    import xml.etree.ElementTree as ET
     text = re.sub(r"&(InvisibleTimes|ApplyFunction|it|af);", "", fragment)
     return ET.fromstring("<r>" + re.sub(r"&[A-Za-z]+;", "x", text) + "</r>")
 

@@ -18,7 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analytic import Linkage
+from analytic.errors import LinkageError
 from analytic.input_display import convention_of, input_text
+from analytic.sweep import input_values
 from reports.comparison.reference import (
     analytic_line,
     axis_of,
@@ -29,6 +32,8 @@ from reports.comparison.reference import (
     sample_errors,
     wrap_deg,
 )
+from reports.figures import plots
+from reports.figures.display_units import DisplayUnits
 
 #: Families of judged quantities, in the order the error panels draw them.
 FAMILIES = ("body alpha", "slider s''", "drive effort", "joint forces",
@@ -217,7 +222,6 @@ _EVENT_KINDS = {"limit": "limit position", "singular": "singular position",
 def _events(linkage) -> list[tuple[str, float]]:
     """Input limit positions, singular positions and change points of the linkage's
     sweep as ``(kind, input)`` (deg or m); not a rocker's extreme angle."""
-    from analytic.errors import LinkageError
     try:
         e = linkage.sweep(720, forces=False).events
     except LinkageError:  # marks are advice; a linkage whose sweep fails gets none
@@ -279,7 +283,6 @@ def motion_text(linkage, times, units=None) -> str:
     default deg and rad/s): the prescribed rate actually reached between the first and
     last sample time ``times`` (s; NaN: unreached), and the description's law.  An
     accelerating crank's plotted turn runs at 5.8 to 7.7 rad/s, not its reference 3."""
-    from reports.figures.display_units import DisplayUnits
     u = units or DisplayUnits()
     d = linkage.mech.driver
     kv, kw, ka = u.input_kinds(linkage.driver_is_revolute)
@@ -299,7 +302,6 @@ def motion_text(linkage, times, units=None) -> str:
 
 def render(fig) -> bytes:
     """PNG bytes of a :class:`CurveFigure` or :class:`ErrorFigure`."""
-    from reports.figures import plots
     if isinstance(fig, ErrorFigure):
         return plots.error_panels(fig)
     return plots.curve_plot(fig)
@@ -308,7 +310,6 @@ def render(fig) -> bytes:
 def case_figure_data(label: str, runs: dict, comparisons: dict, mech_or_linkage,
                      tolerance: float, reference=reference_of) -> list:
     """Every data figure of a case (curves, then errors), not yet rendered."""
-    from analytic import Linkage
     lk = mech_or_linkage if isinstance(mech_or_linkage, Linkage) else Linkage(mech_or_linkage)
     figs = curve_figures(label, runs, lk, reference)
     ef = error_figure(label, runs, comparisons, lk, tolerance, reference)
@@ -317,9 +318,6 @@ def case_figure_data(label: str, runs: dict, comparisons: dict, mech_or_linkage,
 
 def linkage_figure(label: str, mech) -> bytes:
     """The drawing of the linkage at four inputs over its range."""
-    from analytic import Linkage
-    from analytic.sweep import input_values
-    from reports.figures import plots
     lk = Linkage(mech)
     vals, full, _ = input_values(lk, 4)
     if not full:

@@ -22,7 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from analytic.errors import LinkageError
+from analytic.free_motion import simulate
+from analytic.free_motion.dynamics import coefficients
 from analytic.mechanism import Revolute
+from reports.comparison.progress import engine_progress
+from reports.figures import plots
 from reports.figures.case_figures import Curve, CurveFigure
 
 #: ``--what`` words of a free-motion plot -> what each panel shows.
@@ -71,8 +75,6 @@ def trajectory(mech, duration: float | None = None):
     """:func:`analytic.free_motion.simulate` of ``mech`` (``duration`` s, default the
     description's), with a spinner and the elapsed time on a terminal's standard error
     after a few seconds (a long run is not a hang)."""
-    from analytic.free_motion import simulate
-    from reports.comparison.progress import engine_progress
     T = mech.motion.duration if duration is None else duration
     with engine_progress(f"free motion: {mech.name}, {T:g} s"):
         return simulate(mech, duration)
@@ -220,7 +222,6 @@ def motion_header(mech, traj, n: int, units) -> str:
 
 def draw_events(ax, traj) -> None:
     """The event strip: one row per kind met, every event marked at its time."""
-    from reports.figures import plots
     kinds = [k for k in EVENT_WORDS if any(e.kind == k for e in traj.events)]
     kinds += sorted({e.kind for e in traj.events} - set(kinds))
     for r, k in enumerate(kinds):
@@ -241,7 +242,6 @@ def draw_events(ax, traj) -> None:
 def draw_free(figs, traj, title: str, header: str, units):
     """One matplotlib figure: a panel per curve figure (time shared), then the event
     strip."""
-    from reports.figures import plots
     plt = plots.plt
     n = len(figs)
     fig = plt.figure(figsize=(9.0, 2.7 * n + 1.5 + 0.6))
@@ -262,7 +262,6 @@ def free_poses(traj, times) -> tuple[np.ndarray, np.ndarray]:
     """``(theta (F, B) rad, origin (F, B, 2) m)``: every body frame at ``times`` (s),
     from the solver's kinematics at the integrated coordinate of the segment each time
     falls in (the calls :meth:`FreeTrajectory.at` makes for the samples)."""
-    from analytic.free_motion.dynamics import coefficients
     y, si = traj.state(times)
     B = len(traj.mech.bodies)
     theta, origin = np.empty((len(y), B)), np.empty((len(y), B, 2))

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from analytic.mechanism import Revolute
 from reports.comparison.free_compare import ENERGY_DRIFT, FREE_KINEMATIC, LOOP_DRIFT
 from reports.figures.plots import (
     ENGINE_STYLE,
@@ -33,7 +34,6 @@ def _colour(engine: str) -> str:
 def trajectory_figure(ref, runs: dict, joint: str, title: str) -> bytes:
     """``joint``'s coordinate against time: the exact line, each engine's samples as
     markers (every k-th, about :data:`MARKERS` per engine)."""
-    from analytic.mechanism import Revolute
     fig, ax = plt.subplots(figsize=(7.4, 3.6))
     i = list(ref.joints).index(joint)
     mech = next(iter(runs.values())).mechanism

@@ -11,8 +11,16 @@ import io
 import matplotlib
 
 matplotlib.use("Agg")
+import re
+import textwrap
+
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
+
+from analytic.input_display import convention_of, format_input, input_text
+from analytic.mechanism import Prismatic
+from analytic.positions import size_of
 
 ENGINE_STYLE = {"analytic": dict(color="black", lw=1.6),
                 "mujoco": dict(color="tab:blue", lw=1.0, ls="--"),
@@ -96,8 +104,6 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
     dashed), one colour and line style per input value with a key, later values drawn
     thinner over earlier ones; bodies and joints named at the first value, each name
     moved off the names before it (:func:`declutter`)."""
-    from analytic.input_display import convention_of, input_text
-    from analytic.mechanism import Prismatic
     mech = linkage.mech
     kin = linkage.kinematics(values, on_singular="flag")
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
@@ -157,7 +163,6 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
     # equal scales by widening the data limits, not by shrinking the axes: a tall,
     # narrow linkage keeps a readable width and its tick labels room
     ax.set_aspect("equal", adjustable="datalim")
-    from matplotlib.ticker import MaxNLocator
     ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -171,7 +176,6 @@ def draw_linkage(linkage, values, title: str = "") -> bytes:
 
 
 def _size(linkage) -> float:
-    from analytic.positions import size_of
     return size_of(linkage.topo)
 
 
@@ -264,7 +268,6 @@ def pareto_plot(rows, title: str, analytic_time: float | None = None) -> bytes:
 def _linear_if_narrow(ax, values, axis: str) -> None:
     """A log axis over less than a decade labels its minor ticks in colliding
     ``1.05x10^-2`` form: such an axis is drawn linear, with a few plain ticks."""
-    from matplotlib.ticker import MaxNLocator
     v = np.asarray(values, float)
     v = v[np.isfinite(v) & (v > 0)]
     if v.size and np.log10(v.max() / v.min()) < 1.0:
@@ -428,7 +431,6 @@ def draw_curve_axes(ax, fig_data) -> None:
     # notes under the title, never over the data
     ax.set_title(d.title, fontsize=TITLE_PT)
     if notes:
-        import textwrap
         ax.set_title("\n".join(textwrap.wrap("; ".join(notes), 95)), fontsize=NOTE_PT,
                      loc="left", color="0.3")
         ax.set_title(d.title + "\n\n", fontsize=TITLE_PT)
@@ -450,7 +452,6 @@ def error_panels(fig_data) -> bytes:
     normalised error of each judged family against the input (log axis), the tolerance
     line labelled, the worst quantity named, the transmission angle (or condition
     number) in grey on a second axis."""
-    from matplotlib.ticker import LogLocator, NullLocator
     d = fig_data
     n = len(d.panels)
     height = 2.1 * n + 1.1
@@ -477,9 +478,7 @@ def worst_at(d, p: dict) -> str:
     of :mod:`analytic.input_display` (what the verdict table and JUnit print), in the
     units of the panel's axis (``--units rad``: radians); a panel against time adds
     the time."""
-    import re
 
-    from analytic.input_display import format_input
     at = p["worst"][2]
     unit = re.search(r"\(([^()]*)\)\s*$", d.xlabel)
     if p.get("by_time"):

@@ -54,12 +54,36 @@ import json
 import math
 import os
 import platform
+import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+import numpy as np
+
+from analytic import load_case
+from analytic.cases import case_names, case_path, free_case_names, hard_case_names
 from analytic.errors import LinkageError, OutputError
+from analytic.input_display import format_input
+from analytic.mechanism import Prismatic
+from analytic.tolerances import ENGINE_RELATIVE
+from reports.comparison import runs as verdict_runs
 from reports.comparison.quantities import judged
+from reports.comparison.runs import request_of
+from reports.regression import model_identity as mid
+from reports.regression.baseline_free import (
+    FREE_MODE,
+    free_request_problem,
+    free_settings_class,
+    horizon_slack,
+    is_free,
+    run_and_compare_free,
+)
+from sim_models.engine_run import RunRequest
+from sim_models.engine_settings import SettingsError
+from sim_models.registry import engine_names, get_engine, split_overrides
+from sim_models.tree import SimModelError
 
 SCHEMA = "linkage-xval baseline"
 SCHEMA_VERSION = 1
@@ -112,7 +136,6 @@ class ModelSource:
     def path(self, base_dir: Path) -> Path:
         """The description file this source names now."""
         if self.kind == "builtin":
-            from analytic.cases import case_path
             return Path(case_path(self.name))
         return base_dir / self.name
 
@@ -211,7 +234,6 @@ def _sig(x: float, digits: int) -> float | None:
 def versions(engine: str) -> dict:
     """The versions a run depends on: the engine's library, this project, Python, numpy
     and the platform (read from package metadata; no engine library is imported)."""
-    from importlib.metadata import PackageNotFoundError, version
 
     def ver(dist: str) -> str:
         try:
@@ -219,7 +241,6 @@ def versions(engine: str) -> dict:
         except PackageNotFoundError:
             return "unknown"
 
-    import numpy as np
     return {"engine": f"{engine} {ver(engine)}", "linkage-xval": ver("linkage-xval"),
             "python": platform.python_version(), "numpy": np.__version__,
             "platform": platform.platform()}
@@ -369,7 +390,6 @@ def _parse_run(r, where: str) -> RunRecord:
 def _request_checked(request: dict, where: str) -> bool:
     """Check a recorded request (prescribed ``run`` or ``free``) against the command
     line's ranges; returns whether it is a free-motion run."""
-    from reports.regression.baseline_free import FREE_MODE, free_request_problem
     mode = _get(request, "mode", str, f"{where}: request")
     if mode == FREE_MODE:
         bad = free_request_problem(request)
@@ -409,7 +429,6 @@ def _horizon(q: dict, where: str, free: bool) -> float | None:
 def _known_engine(engine: str, where: str) -> None:
     """A registered engine name (an engine whose library is missing is a failed run at
     check time, not a bad file)."""
-    from sim_models.registry import engine_names
     if engine not in engine_names():
         raise BaselineError(f"{where}: 'engine' {engine!r} is not a known engine; engines: "
                             f"{', '.join(engine_names())}")
@@ -420,7 +439,6 @@ def _settings_in_range(engine: str, settings: dict, where: str, free: bool = Fal
     every field present (a missing one would silently run at today's default), typed as
     the class declares, and within its range (the settings class checks it, as for
     ``--set``: one definition)."""
-    from sim_models.engine_settings import SettingsError
     try:
         cls, name = _settings_class(engine, free)
     except LinkageError as e:
@@ -460,10 +478,7 @@ def _settings_in_range(engine: str, settings: dict, where: str, free: bool = Fal
 def _settings_class(engine: str, free: bool):
     """``(settings class, engine name)`` of a prescribed or free run of ``engine``
     (``(None, engine)`` when its library is missing)."""
-    from sim_models.registry import get_engine
-    from sim_models.tree import SimModelError
     if free:
-        from reports.regression.baseline_free import free_settings_class
         return free_settings_class(engine), engine
     try:
         eng = get_engine(engine)
@@ -497,8 +512,6 @@ def _request_in_range(request: dict, where: str) -> None:
     """The request within the command line's ranges (:class:`sim_models.engine_run.
     RunRequest` checks them: one definition): e.g. revolutions 1 to 1000, samples 2 to
     3600, a finite loop-gap threshold."""
-    from sim_models.engine_run import RunRequest
-    from sim_models.engine_settings import SettingsError
     keys = ("revolutions", "samples", "max_violation", "max_speed_error", "chords", "mode")
     try:
         RunRequest(**{k: request[k] for k in keys})
@@ -532,11 +545,9 @@ def run_and_compare(mech, engine: str, settings, request: dict):
     ``(EngineRun, [Comparison])`` (``[engine]`` rows left out).  A free-motion request
     (:mod:`reports.regression.baseline_free`) releases the linkage instead: ``(FreeEngineRun,
     [FreeComparison])``."""
-    from reports.regression.baseline_free import is_free, run_and_compare_free
     if is_free(request):
         return run_and_compare_free(mech, engine, settings, request)
-    from reports.comparison.runs import request_of, run_verdict
-    v = run_verdict(mech, engine, settings, request_of(request))
+    v = verdict_runs.run_verdict(mech, engine, settings, request_of(request))
     return v.run, v.judged()
 
 
@@ -545,7 +556,6 @@ def request_dict(revolutions: int | None = None, samples: int | None = None,
                  chords: str | None = None) -> dict:
     """A run request as a baseline records it; a value not given (None) is the default of
     :class:`sim_models.engine_run.RunRequest`, the one holder of the run defaults."""
-    from sim_models.engine_run import RunRequest
 
     def given(value, name: str):
         return getattr(RunRequest, name) if value is None else value
@@ -584,13 +594,10 @@ def settings_from_json(rec: RunRecord, where: str, overrides: dict | None = None
     with ``overrides`` ({field: value} of this engine, ``--set``) over the recorded
     fields; raises :class:`BaselineError` when the engine no longer accepts a recorded
     field (a bad override is the :class:`SettingsError` of ``--set``: status 2)."""
-    from reports.regression.baseline_free import is_free
     from sim_models.engine_base import SettingsError
     if is_free(rec.request):
-        from reports.regression.baseline_free import free_settings_class
         cls, name = free_settings_class(rec.engine), rec.engine
     else:
-        from sim_models.registry import get_engine
         eng = get_engine(rec.engine)
         cls, name = eng.settings_class, eng.name
     try:
@@ -612,7 +619,6 @@ def overrides_for(pairs, engines, classes=None) -> dict:
     :class:`SettingsError`: status 2)."""
     if not pairs:
         return {}
-    from sim_models.registry import split_overrides
     return {e: v for e, v in split_overrides(list(pairs), list(dict.fromkeys(engines)),
                                              classes).items() if v}
 
@@ -621,8 +627,6 @@ def override_classes(baseline: Baseline) -> dict:
     """Per engine of ``baseline``, the settings class ``--set`` is checked against: the
     free-motion one when every run of that engine is a free run, else the prescribed one
     (a key of the other class only is then applied where the class has it)."""
-    from reports.regression.baseline_free import free_settings_class
-    from sim_models.registry import get_engine
     out = {}
     for e in dict.fromkeys(r.engine for r in baseline.runs):
         free = all(r.free for r in baseline.runs if r.engine == e)
@@ -637,8 +641,6 @@ def override_classes(baseline: Baseline) -> dict:
 def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
     paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
-    from analytic import load_case
-    from reports.regression import model_identity as mid
     if model in builtin_names():
         mech = load_case(model)
         return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech
@@ -651,7 +653,6 @@ def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
 def builtin_names() -> list[str]:
     """The names a baseline records as built-in: the cases, the hard cases and the
     free-motion cases."""
-    from analytic.cases import case_names, free_case_names, hard_case_names
     return [*case_names(), *hard_case_names(), *free_case_names()]
 
 
@@ -667,14 +668,11 @@ def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike
     ``request`` (:func:`reports.regression.baseline_free.free_request`) records released runs,
     each quantity with its own tolerance (:mod:`reports.comparison.free_compare`; ``tolerance``
     must be None) and trusted horizon."""
-    from analytic.tolerances import ENGINE_RELATIVE
-    from sim_models.registry import get_engine
     tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
     req = request or request_dict()
     runner = runner or run_and_compare
     base_dir = Path(out).resolve().parent
     runs = []
-    from reports.regression.baseline_free import free_settings_class, is_free
     free = is_free(req)
     for model in models:
         src, mech = source_of(model, base_dir)
@@ -759,7 +757,6 @@ def record_command(baseline: Baseline, cwd: str | os.PathLike | None = None) -> 
 def _record_words(runs, baseline: Baseline, cwd, free) -> str:
     """One ``xval baseline record`` command for ``runs`` (all prescribed, or all free
     with ``free`` = (duration, samples))."""
-    from analytic.cases import case_names
     models, engines, sets = [], [], []
     for r in runs:
         m = r.model.name if r.model.kind == "builtin" else \
@@ -780,7 +777,6 @@ def _record_words(runs, baseline: Baseline, cwd, free) -> str:
     words += [f"--revolutions {req['revolutions']}"] \
         if req["revolutions"] != default["revolutions"] else []
     words += [f"--samples {req['samples']}"] if req["samples"] != default["samples"] else []
-    from analytic.tolerances import ENGINE_RELATIVE
     tols = {q.tolerance for r in runs for q in r.quantities}
     if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:
         words.append(f"--tolerance {t:g}")
@@ -803,7 +799,6 @@ def _overrides(rec: RunRecord) -> list[str]:
 
 
 def _revolute(mech) -> bool:
-    from analytic.mechanism import Prismatic
     return not isinstance(mech.driver_joint, Prismatic)
 
 
@@ -848,7 +843,6 @@ class QuantityCheck:
 
     def message(self) -> str:
         """One line naming the quantity, what happened, by how much and where."""
-        from analytic.input_display import format_input
         at = f" at {format_input(self.at, self.at_unit)}" if math.isfinite(self.at) else ""
         of = self.scale_word
         if self.status == "missing":
@@ -909,7 +903,6 @@ def judge_free(q, c, factor: float, fail_loose: bool, slack: float):
     record ``q``: the prescribed judge on its error (the tolerance only when the record
     was within it), then its trusted horizon (no earlier than recorded minus
     ``slack`` s)."""
-    from dataclasses import replace
 
     error, h = float(c.normalised), float(c.horizon)
     within = math.isinf(q.horizon)
@@ -990,7 +983,6 @@ def check(baseline: Baseline, factor: float = DEFAULT_FACTOR, runner: Runner | N
 def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
               fail_loose: bool = False, overrides: dict | None = None) -> RunCheck:
     """One record: rebuild its mechanism and settings (with ``overrides``), run, judge."""
-    import time
     out = RunCheck(rec)
     mech = _mechanism_now(rec, baseline, out)
     settings = _settings_now(rec, baseline, out, overrides)
@@ -1011,7 +1003,6 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}
-    from reports.regression.baseline_free import horizon_slack
     for q in rec.quantities:
         c = now.get(q.quantity)
         if c is None:
@@ -1035,12 +1026,10 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
 
 def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
     """The recorded model as it is now (None, with a problem, when it is gone)."""
-    from analytic import load_case
     src = rec.model
     if src.kind == "builtin" and src.name not in builtin_names():
         out.problems.append(f"the built-in case {src.name!r} no longer exists")
         return None
-    from reports.regression import model_identity as mid
     p = src.path(baseline.base_dir)
     if not p.is_file():
         out.problems.append(f"the model {src.describe()} is gone (looked for {p})")
@@ -1064,8 +1053,6 @@ def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
 
 def _settings_now(rec: RunRecord, baseline: Baseline, out: RunCheck,
                   overrides: dict | None = None):
-    from sim_models.registry import get_engine
-    from sim_models.tree import SimModelError
     try:
         get_engine(rec.engine)
     except (SimModelError, ImportError) as e:  # not registered, or its library missing

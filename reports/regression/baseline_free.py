@@ -35,8 +35,12 @@ intervals.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+from reports.comparison.free_cases import MIN_DURATION, release_and_judge
+from sim_models.free_cases import released
+from sim_models.free_engine import free_session_class
 
 #: A baseline request's mode for a free-motion run.
 FREE_MODE = "free"
@@ -66,7 +70,6 @@ def free_request(duration: float, samples: int | None = None) -> dict:
 def free_request_problem(request: dict) -> tuple[str, object, str] | None:
     """``(key, value, problem)`` when a free request is outside the command line's
     ranges (``xval simulate --duration`` and ``--samples``), else None."""
-    from reports.comparison.free_cases import MIN_DURATION
     for key in ("duration", "samples"):
         if key not in request:
             return key, None, "missing"
@@ -87,16 +90,13 @@ def free_request_problem(request: dict) -> tuple[str, object, str] | None:
 
 def free_settings_class(engine: str):
     """The free-motion settings class of ``engine`` (UnknownEngineError if none)."""
-    from sim_models.free_engine import free_session_class
     return free_session_class(engine).settings_class
 
 
 def free_mechanism(mech, request: dict):
     """``mech`` as a free run releases it: its own ``[motion]`` over the recorded
     duration, or, without one, released as the report does."""
-    from dataclasses import replace
 
-    from sim_models.free_cases import released
     d = float(request["duration"])
     if mech.motion is None:
         return released(mech, d)
@@ -107,7 +107,6 @@ def run_and_compare_free(mech, engine: str, settings, request: dict):
     """Release ``mech`` in ``engine`` as ``request`` asks and judge it against the exact
     trajectory: ``(FreeEngineRun, [FreeComparison])`` (every judged quantity, the energy
     drift, and the loop drift where the mechanism has a loop)."""
-    from reports.comparison.free_cases import release_and_judge
     over = settings.as_dict() if settings is not None else None
     run, v = release_and_judge(free_mechanism(mech, request), engine,
                                float(request["duration"]), int(request["samples"]) - 1, over)

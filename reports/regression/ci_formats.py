@@ -32,14 +32,21 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import os
 import platform
 import socket
+import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from analytic.errors import OutputError
+from analytic.input_display import format_input  # the one input convention of every output
+from analytic.mechanism import Prismatic
+from reports.comparison.compare import limit_word
+from reports.regression.baseline import versions
 
 
 @dataclass(frozen=True)
@@ -83,15 +90,12 @@ class CiCase:
 
 # ============================================================================ builders
 def _at(value: float, unit: str) -> str:
-    from analytic.input_display import format_input  # the one input convention of every output
     return format_input(value, unit)
 
 
 def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiCase]:
     """``xval compare``'s verdicts (:class:`reports.comparison.runs.Verdict`; ``file``: the
     model file, empty for a built-in case)."""
-    from reports.comparison.compare import limit_word
-    from reports.regression.baseline import versions
     unit = "deg" if revolute else "m"
     out = []
     for v in results:
@@ -141,7 +145,6 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
 def from_baseline(checks, base_dir: Path | None = None) -> list[CiCase]:
     """``xval baseline check``'s :class:`reports.regression.baseline.RunCheck` list (``base_dir``:
     the baseline file's folder, where recorded model paths start)."""
-    import os
     out = []
     for chk in checks:
         rec = chk.record
@@ -200,7 +203,6 @@ def _counts(cases: Sequence[CiCase]) -> dict:
 
 
 def _tool_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("linkage-xval")
     except PackageNotFoundError:
@@ -305,7 +307,6 @@ def _md(text: str) -> str:
 def write_text(path: str, text: str, what: str) -> None:
     """Write ``text`` to ``path`` (``-``: standard output); :class:`OutputError` if not."""
     if path == "-":
-        import sys
         sys.stdout.write(text)
         return
     try:
@@ -333,7 +334,6 @@ def write_compare_outputs(mech, results, given: str, junit: str | None = None,
     Verdict` per engine) on ``mech``, given as ``given`` (a built-in name or a file)."""
     if not (junit or summary):
         return
-    from analytic.mechanism import Prismatic
     file = Path(given).as_posix() if given.endswith(".toml") else ""  # not a built-in
     cases = from_compare(mech.name, results, not isinstance(mech.driver_joint, Prismatic),
                          file)

@@ -23,14 +23,42 @@ one run (:func:`session_run`).  The project's own engine tests share this cache.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import math
 import os
 import time
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
+
+from analytic import load_case
+from analytic.cases import case_names, free_case_names
+from analytic.errors import LinkageError
+from analytic.input_display import format_input  # the one input convention
+from analytic.tolerances import ENGINE_RELATIVE
+from reports.comparison import runs as verdict_runs
+from reports.comparison.free_cases import free_case
+from reports.comparison.runs import request_of
+from reports.regression import baseline as bl
+from reports.regression.baseline import (
+    DEFAULT_FACTOR,
+    Baseline,
+    _fmt_value,
+    _severity,
+    judged,
+    load,
+    overrides_for,
+    record_command,
+    request_dict,
+    settings_line,
+)
+from reports.regression.baseline_free import is_free, run_and_compare_free
+from reports.regression.messages import report_lines
+from reports.studies.free_studies import free_verdict
+from sim_models.registry import get_engine
 
 #: (mechanism digest, engine, settings, request) -> {"run", "tree", "comparisons"} or
 #: {"error": exception}: the session's runs.  Treat the cached runs as read-only.
@@ -49,7 +77,6 @@ def _mech_digest(mech) -> str:
     """A digest of a mechanism's content (its dataclass repr is exact: floats repr
     round-trip), so a file loaded twice, by any path, or a built-in case loaded twice, is
     one key.  The file name (``source``, kept for error messages) is left out."""
-    import copy
     bare = copy.copy(mech)  # no __post_init__: a shallow copy, not a new validation
     if getattr(bare, "source", None) is not None:
         object.__setattr__(bare, "source", None)
@@ -58,7 +85,6 @@ def _mech_digest(mech) -> str:
 
 def _settings_of(engine: str, settings):
     """A settings object from None (recommended), a dict of overrides, or an object."""
-    from sim_models.registry import get_engine
     eng = get_engine(engine)
     if settings is None:
         return eng.settings()
@@ -70,7 +96,6 @@ def _settings_of(engine: str, settings):
 def _request(revolutions=None, samples=None, max_violation=None, max_speed_error=None,
              chords=None) -> dict:
     """:func:`reports.regression.baseline.request_dict`: None takes ``RunRequest``'s default."""
-    from reports.regression.baseline import request_dict
     return request_dict(revolutions, samples, max_violation, max_speed_error, chords)
 
 
@@ -89,7 +114,6 @@ def _entry(mech, engine: str, settings, request: dict) -> dict:
 
 def _free_entry(mech, engine: str, settings, request: dict):
     """A free run and its judged quantities, cached for the session."""
-    from reports.regression.baseline_free import run_and_compare_free
     key = ("free", _mech_digest(mech), engine, type(settings).__qualname__,
            repr(settings), tuple(sorted(request.items())))
     hit = _CACHE.get(key)
@@ -106,12 +130,10 @@ def _free_entry(mech, engine: str, settings, request: dict):
 
 
 def _make_run(mech, engine, settings, request) -> dict:
-    from analytic.errors import LinkageError
-    from reports.comparison.runs import request_of, run_verdict
     t0 = time.perf_counter()
     _STATS["runs"] += 1
     try:
-        v = run_verdict(mech, engine, settings, request_of(request))
+        v = verdict_runs.run_verdict(mech, engine, settings, request_of(request))
     except LinkageError as e:  # a refusal or nothing to compare: cached like a result
         return {"error": e}
     finally:
@@ -134,8 +156,6 @@ def cached_runner(mech, engine: str, settings, request: dict):
     """:data:`reports.regression.baseline.Runner` on the session cache (baseline checks); a
     free-motion request (:mod:`reports.regression.baseline_free`) is released and judged by the
     same function ``xval baseline`` uses, cached alike."""
-    from reports.regression.baseline import judged
-    from reports.regression.baseline_free import is_free
     if is_free(request):
         return _free_entry(mech, engine, settings, request)
     e = _entry(mech, engine, settings, request)
@@ -146,7 +166,6 @@ def cached_runner(mech, engine: str, settings, request: dict):
 def _at_text(run_, at: float) -> str:
     if not math.isfinite(at):
         return "at an unreached sample"
-    from analytic.input_display import format_input  # the one input convention
     return f"at input {format_input(at, 'm' if run_.extra.get('prismatic_driver') else 'deg')}"
 
 
@@ -197,7 +216,6 @@ class Xval:
     # -- models -----------------------------------------------------------------
     def resolve(self, model) -> Path | str:
         """A built-in case name as is; a path made absolute against the rootdir."""
-        from analytic.cases import case_names
         if not isinstance(model, (str, os.PathLike)):
             return model
         s = os.fspath(model)
@@ -208,7 +226,6 @@ class Xval:
 
     def mechanism(self, model):
         """A Mechanism from a case name, a TOML path or a Mechanism."""
-        from analytic import load_case
         m = self.resolve(model)
         return m if not isinstance(m, (str, Path)) else load_case(str(m))
 
@@ -223,10 +240,7 @@ class Xval:
                 samples: int | None = None, quantities=None):
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
         ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
-        from dataclasses import replace
 
-        from analytic.tolerances import ENGINE_RELATIVE
-        from reports.regression.baseline import judged
         tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
         mech = self.mechanism(model)
         s = _settings_of(engine, settings)
@@ -250,7 +264,6 @@ class Xval:
         peak over the cycle (default 1e-3); returns the comparisons.  The failure message
         names each failing quantity, its error, where in the cycle, and the settings."""
         __tracebackhide__ = True
-        from reports.regression.baseline import settings_line
         run_, comps = self.compare(model, engine, tolerance, settings,
                                    revolutions=revolutions, samples=samples,
                                    quantities=quantities)
@@ -271,9 +284,6 @@ class Xval:
         :class:`FreeVerdict`.  The failure names each failing quantity, its trusted
         horizon, the nearest reference event and the engine's step."""
         __tracebackhide__ = True
-        from analytic.cases import free_case_names
-        from reports.comparison.free_cases import free_case
-        from reports.studies.free_studies import free_verdict
         name = os.fspath(model) if isinstance(model, (str, os.PathLike)) else None
         mech = model if name is None else free_case(
             name if name in free_case_names() else os.fspath(self.resolve(name)))
@@ -296,7 +306,6 @@ class Xval:
                        factor: float | None = None, settings=None, key=None):
         """``(Baseline, [RunCheck])`` of the recorded runs (those of ``case`` / ``engine``,
         or the one run ``key``); ``settings``: overrides of the recorded settings."""
-        from reports.regression import baseline as bl
         base = bl.load(self.path(baseline))
         model = self.resolve(case) if case is not None else None
 
@@ -325,7 +334,6 @@ class Xval:
         again instead (and a missing file is created when ``case`` and ``engine`` name
         the run), and the summary says so."""
         __tracebackhide__ = True
-        from reports.regression import baseline as bl
         path = self.path(baseline)
         if not path.exists():
             return self._missing(path, case, engine, settings)
@@ -371,7 +379,6 @@ class Xval:
                 why: str) -> None:
         """Record one run through the session cache and merge it into ``path``."""
         __tracebackhide__ = True
-        from reports.regression import baseline as bl
         s = _settings_of(engine, settings)
         new = bl.record([model], [engine], path, {engine: s}, request, tolerance,
                         runner=cached_runner)
@@ -389,7 +396,6 @@ class Xval:
     def _rewrite(self, base, changed, settings) -> None:
         """``--xval-update``: record the changed runs again, as they were recorded (model,
         engine, settings with ``settings`` over them, request, tolerance)."""
-        from reports.regression import baseline as bl
         for c in changed:
             rec = c.record
             model = rec.model.name if rec.model.kind == "builtin" else \
@@ -408,7 +414,6 @@ def _overrides(settings, engines, classes=None) -> dict:
     per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
     if not settings:
         return {}
-    from reports.regression.baseline import _fmt_value, overrides_for
     return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines,
                          classes)
 
@@ -417,8 +422,6 @@ def failure_text(base, checks, factor: float, root: Path) -> str:
     """An ``assert_baseline`` failure: first line the worst failing quantity (its growth,
     the factor and where) or the run's problem, then the check's report of the failed
     runs, then how to record them again."""
-    from reports.regression.baseline import Baseline, record_command
-    from reports.regression.messages import report_lines
     failed = [c for c in checks if not c.passed]
     worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
     first = worst.problems[0] if worst.problems else worst.failures()[0].message()
@@ -431,14 +434,12 @@ def failure_text(base, checks, factor: float, root: Path) -> str:
 
 
 def _sev(c) -> tuple:
-    from reports.regression.baseline import _severity
     f = c.failures()
     return _severity(f[0]) if f else (0, 0.0)
 
 
 def make_xval(config) -> Xval:
     """The ``xval`` fixture's object for a pytest config (its rootdir and options)."""
-    from reports.regression.baseline import DEFAULT_FACTOR
     return Xval(config.rootpath, config.getoption("--xval-factor") or DEFAULT_FACTOR,
                 update=config.getoption("--xval-update"),
                 fail_loose=config.getoption("--xval-fail-loose"))
@@ -447,7 +448,6 @@ def make_xval(config) -> Xval:
 def run_params(path, root: Path) -> list:
     """The ``xval_baseline`` fixture's parameters: one per recorded run (id
     ``case/engine``), or one carrying why the file cannot be used."""
-    from reports.regression import baseline as bl
     p = Path(path) if Path(path).is_absolute() else Path(root) / path
     if not p.exists():
         return [pytest.param(("error", f"xval: error: no baseline file {path} (ini option "
@@ -492,7 +492,6 @@ def baseline_params(path, root: Path | None = None) -> list:
     baseline file (relative to ``root``, pytest's rootdir;
     :func:`xval_pytest_plugin.baseline_params` passes it):
     ``@pytest.mark.parametrize("case, engine", baseline_params(P))``."""
-    from reports.regression.baseline import load
     p = Path(path)
     if root is not None and not p.is_absolute():
         p = Path(root) / p

@@ -28,19 +28,34 @@ import time
 import traceback
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import pandas as pd
 
+from analytic import case_names, load_case
+from analytic.tolerances import ENGINE_RELATIVE
+from reports.comparison import runs as verdict_runs
+from reports.figures.case_figures import render_case
+from reports.figures.study_plots import pareto_frontier_plot
+from reports.report import free_section as report_free
 from reports.report.document import Document, file_stem, md_escape  # noqa: F401 - re-exported
+from reports.report.layout import write_page
 from reports.report.tables import (  # noqa: F401 - re-exported
     SEED_ROWS,
+    input_unit,
     instantaneous_floors,
     seed_comparison,
     summary_table,
     verdict_table,
 )
+from reports.studies import speed_accuracy as S
+from reports.studies import speed_accuracy as studies
+from reports.studies.hard_cases import hard_cases
+from reports.studies.scene import scene_economy, scene_figure
 from reports.studies.scheduler import PriorityExecutor
+from sim_models import compile_linkage, make_settings
+from sim_models.registry import available_engines
 
 #: Where a report goes without --out: under the current folder (in the checkout, the
 #: git-ignored reports/out/; never inside an installed package's folder).
@@ -70,7 +85,6 @@ class ReportConfig:
 def engines_of(cfg: ReportConfig) -> tuple[str, ...]:
     if cfg.engines:
         return tuple(cfg.engines)
-    from sim_models.registry import available_engines
     return tuple(available_engines())
 
 
@@ -81,13 +95,10 @@ def engine_task(case: str, engine: str, overrides: dict, revolutions: int, sampl
     ``case``: a built-in name or a TOML file."""
     t0 = time.perf_counter()
     try:
-        from analytic import load_case
-        from reports.comparison.runs import run_comparison
-        from sim_models import compile_linkage, make_settings
         # the description is compiled once (Linkage + reference solution) and passed down
         tree = compile_linkage(load_case(case))
         settings = make_settings(engine, overrides)
-        r, comps = run_comparison(tree, engine, settings, mode, revolutions, samples)
+        r, comps = verdict_runs.run_comparison(tree, engine, settings, mode, revolutions, samples)
         return {"case": case, "engine": engine, "mode": mode, "overrides": overrides,
                 "run": r, "comparisons": comps, "error": None,
                 "seconds": time.perf_counter() - t0}
@@ -122,7 +133,6 @@ def make_executor(cfg: ReportConfig) -> Executor:
         try:
             client = Client(cfg.dask)
         except OSError as e:  # no scheduler there: a user error, one line
-            from analytic import LinkageError
             raise LinkageError(f"--dask: cannot reach a scheduler at {cfg.dask!r}: {e}") from None
         ex = client.get_executor()
         ex.client_to_close = client
@@ -152,8 +162,6 @@ def _figure_task(label: str, source: str, runs: dict, comparisons: dict,
     """Every figure of one case (PNG bytes by name), drawn in a pool worker; never
     raises (a failure is ``{"error": ...}``)."""
     try:
-        from analytic import load_case
-        from reports.figures.case_figures import render_case
         return render_case(label, runs, comparisons, load_case(source), tolerance)
     except Exception as e:  # noqa: BLE001 - a figure must not take the report down
         return {"error": f"{type(e).__name__}: {e}"}
@@ -162,10 +170,7 @@ def _figure_task(label: str, source: str, runs: dict, comparisons: dict,
 def _pareto_task(grid: pd.DataFrame, label: str, source: str, samples: int) -> dict:
     """The speed-against-error plot of a grid and the analytic solver's time per
     revolution at the engines' sample count."""
-    from reports.figures.study_plots import pareto_frontier_plot
-    from reports.studies import speed_accuracy as studies
     t_an = studies.analytic_seconds_per_rev(source, points=samples)
-    from reports.report.tables import input_unit
     mech = studies.load(source)
     unit = "rad/s" if input_unit(mech) == "deg" else "m/s"
     png = pareto_frontier_plot(grid, f"{label} (input {mech.driver.velocity:g} {unit}): "
@@ -174,7 +179,6 @@ def _pareto_task(grid: pd.DataFrame, label: str, source: str, samples: int) -> d
 
 
 def _scene_task(quick: bool) -> dict:
-    from reports.studies.scene import scene_economy, scene_figure
     table = scene_economy(quick)
     return {"table": table, "png": scene_figure(table)}
 
@@ -187,7 +191,6 @@ DISTRIBUTIONS = {"pinocchio": "pin"}
 
 
 def metadata(cfg: ReportConfig, engines) -> dict:
-    from importlib.metadata import PackageNotFoundError, version
     cpu = platform.processor() or platform.machine()
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -261,7 +264,6 @@ INSTANT_VARIANTS = {
 def resolve_cases(cfg: ReportConfig) -> list[tuple[str, str]]:
     """``(label, source)`` of each requested case: the label is the description's
     ``name`` (made unique), the source what :func:`analytic.load_case` reads."""
-    from analytic import case_names, load_case
     out, seen = [], set()
     for src in (cfg.cases or case_names()):
         name = load_case(src).name
@@ -289,7 +291,6 @@ def _tasks(cfg: ReportConfig, cases, engines) -> list[tuple]:
 
 def build_report(cfg: ReportConfig, progress=None) -> Path:
     """Run everything and write the report; returns the output directory."""
-    from analytic.tolerances import ENGINE_RELATIVE
     ph = Phases(progress)
     out = Path(cfg.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -314,7 +315,6 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
             pending[f] = ("run", t[0], t[1])
             per_case[t[0]] += 1
         if cfg.studies and not cfg.cases:  # free motion: its own cases (report_free)
-            from reports.report import free_section as report_free
             pending.update(report_free.submit(ex, cfg.quick, ph))
         if cfg.studies:
             grid_futs, studies["grid_sizes"] = _submit_grids(cfg, ex, cases, ph)
@@ -339,7 +339,6 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
         if hasattr(pool, "client_to_close"):
             pool.client_to_close.close()
     ph.add("page", 1)
-    from reports.report.layout import write_page
     write_page(out, cfg, cases, engines, results, figures, studies, meta, ph)
     ph.step("page")
     pd.DataFrame([{"phase": k, "seconds": v} for k, v in ph.seconds().items()]).to_csv(
@@ -351,9 +350,7 @@ def _collect(f, kind, label, src, cfg, ex, ph, results, figures, studies, grid_r
              per_case, pending, tol):
     """One finished task: store it and submit what it unblocks (a case's figures once
     its runs are in; a grid's Pareto plot once its rows are in)."""
-    from reports.studies import speed_accuracy as S
     if kind in ("free", "freegrid"):
-        from reports.report import free_section as report_free
         report_free.collect(kind, f, label, studies, ph)
         return
     if kind == "run":
@@ -409,7 +406,6 @@ def _engine_rank(cfg: ReportConfig, engine: str) -> int:
 def _submit_grids(cfg: ReportConfig, ex, cases, ph) -> tuple[dict, dict]:
     """The speed-against-error grid of the requested cases (of :data:`GRID_CASES` when
     none were given), each setting a pool task: ``(pending futures, rows per case)``."""
-    from reports.studies import speed_accuracy as S
     if cfg.cases:
         chosen = cases[:3]
     else:
@@ -450,7 +446,6 @@ def _start_hard_cases(cfg: ReportConfig, ex, ph):
 
     def go():
         try:
-            from reports.studies.hard_cases import hard_cases
             # its own runs ahead of the speed grid's runs of the same function; its
             # long runs (function long_run_task) keep their own first place
             box["hard"] = hard_cases(cfg.quick, _HardLane(ex))

@@ -9,6 +9,7 @@ pybullet crank.alpha 8.5e-4 of 1e-3`` for however many engines ran.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import pandas as pd
 
@@ -112,7 +113,6 @@ def verdict_table(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
 
 def failure_notes(summary: pd.DataFrame, width: int = WIDTH) -> list[str]:
     """Each failed row's note in full, wrapped to ``width``."""
-    import textwrap
     out = []
     for d in summary.to_dict("records"):
         if d.get("verdict") != "pass" and _text(d.get("note")):
@@ -148,7 +148,6 @@ def free_counts_line(free: pd.DataFrame) -> str:
 def free_failure_lines(free: pd.DataFrame, width: int = WIDTH) -> list[str]:
     """Each failed or known-limit free verdict in full: case / engine, verdict, worst
     quantity and error, trusted horizon, and its note or why the run stopped."""
-    import textwrap
     out = []
     for d in free.to_dict("records"):
         if d.get("verdict") == "pass":

@@ -10,7 +10,16 @@ import math
 
 import pandas as pd
 
+from reports.comparison.free_compare import (
+    ENERGY_DRIFT,
+    FREE_DYNAMIC,
+    FREE_KINEMATIC,
+    LOOP_DRIFT,
+)
+from reports.comparison.free_limits import verdict_of
+from reports.figures.free_report_plots import work_precision_figure
 from reports.studies import free_studies as FS
+from sim_models.free_engine import free_engine_names
 
 #: Queue places of the free tasks (reports.studies.scheduler: lower runs first).  A case task is
 #: one serial job of several seconds: started first, it runs beside the verdict runs
@@ -22,7 +31,6 @@ GRID_PRIORITY = 5.0
 def submit(ex, quick: bool, ph) -> dict:
     """Queue the free-motion tasks: ``{future: (kind, label, source)}`` for the report's
     pending map (kinds ``free`` and ``freegrid``)."""
-    from sim_models.free_engine import free_engine_names
     pending = {}
     n = FS.SAMPLES[quick]
     for case, dur in FS.VERDICT_CASES[quick]:
@@ -65,7 +73,6 @@ def _horizon(h: float, dur: float) -> str:
 def verdict_frame(free: dict) -> pd.DataFrame:
     """The verdict table: case, engine, verdict, worst quantity and error, trusted
     horizon, energy and loop drift, CPU per simulated second, IFToMM class."""
-    from reports.comparison.free_limits import verdict_of
     rows = [r for res in free["cases"].values() for r in res["rows"]]
     judged = [verdict_of(r) for r in rows]
     out = [{"case": r.case, "engine": r.engine, "duration s": r.duration,
@@ -99,12 +106,6 @@ def _error_engine(line: str) -> str:
 
 def section(doc, free: dict, quick: bool) -> None:
     """Write the "Free motion" section."""
-    from reports.comparison.free_compare import (
-        ENERGY_DRIFT,
-        FREE_DYNAMIC,
-        FREE_KINEMATIC,
-        LOOP_DRIFT,
-    )
     doc.h(1, "Free motion")
     doc.p("Each engine released from the exact state at t = 0 (every body's pose and rate "
           "from the exact trajectory, no drive) at its recommended free-motion settings, "
@@ -157,7 +158,6 @@ def section(doc, free: dict, quick: bool) -> None:
 
 
 def _grid(doc, g: pd.DataFrame) -> None:
-    from reports.figures.free_report_plots import work_precision_figure
     doc.h(2, "Free motion: speed against error")
     doc.p("Each engine's grid of integrators, steps and loop-constraint settings on each "
           "case. Cost: the verdicts' stepping loop (FreeSession.advance) from the released "

@@ -11,8 +11,11 @@ import time
 
 import pandas as pd
 
+from analytic import Linkage, load_case
+from reports.figures.case_figures import motion_text
 from reports.report.console import counts_line
 from reports.report.document import Document
+from reports.report.free_section import section as free_section
 from reports.report.tables import (
     accepted,
     input_unit,
@@ -99,7 +102,6 @@ def study_view(df: pd.DataFrame, drop=("settings", "samples", "worst_at")) -> pd
 
 
 def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) -> None:
-    from analytic import load_case
     doc = Document(out)
     order = {label: i for i, (label, _) in enumerate(cases)}
     eorder = {e: i for i, e in enumerate(engines)}
@@ -128,7 +130,6 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
               "the exact one.", intro=True)
         doc.table(seeds, "seed_comparison", digits=7, wide=("why the notes differ",))
     if studies.get("free"):
-        from reports.report.free_section import section as free_section
         free_section(doc, studies["free"], cfg.quick)
     if studies.get("grids"):
         _speed_section(doc, studies["grids"], cfg)
@@ -217,8 +218,6 @@ def _cases_section(doc, cases, mechs, figures, times=None):
         doc.h(2, label)
         m = mechs[label]
         # in the figures' units (deg), with the rate reached over the plotted samples
-        from analytic import Linkage
-        from reports.figures.case_figures import motion_text
         doc.p(motion_text(Linkage(m), (times or {}).get(label, [])) + ".")
         figs = figures.get(label, {})
         if "error" in figs and isinstance(figs["error"], str):

@@ -12,9 +12,12 @@ import math
 import numpy as np
 import pandas as pd
 
-from analytic.input_display import format_input
+from analytic import Linkage, load_case
+from analytic.input_display import convention_of, display_input, format_input
+from analytic.mechanism import Revolute
+from analytic.sweep import to_frame
 from reports.comparison import quantities
-from reports.comparison.compare import FAIL, PASS, limit_word
+from reports.comparison.compare import FAIL, PASS, comparison_frame, limit_word
 from reports.comparison.quantities import base_quantity
 
 # The notes' own figures (REFERENCE.md) for the seed comparison: (label, notes,
@@ -57,7 +60,6 @@ def _failed_run_row(case, engine, reason, at=np.nan, settings=""):
 
 def verdict_table(results: list[dict]) -> pd.DataFrame:
     """Case x engine x quantity rows; a failed or missing engine is one failed row."""
-    from reports.comparison.compare import comparison_frame
     frames = []
     for res in results:
         r = res["run"]
@@ -78,15 +80,12 @@ def verdict_table(results: list[dict]) -> pd.DataFrame:
 def failed_at(run_) -> float:
     """Where a failed run stopped, in the one display convention of an input (deg, a
     full turn wrapped to [0, 360), or m: :mod:`analytic.input_display`); NaN if unknown."""
-    from analytic import Linkage
-    from analytic.input_display import convention_of, display_input
     if run_.fail_value is None or not math.isfinite(run_.fail_value):
         return np.nan
     return display_input(run_.fail_value, convention_of(Linkage(run_.mechanism)))
 
 
 def input_unit(mech) -> str:
-    from analytic.mechanism import Revolute
     return "deg" if isinstance(mech.driver_joint, Revolute) else "m"
 
 
@@ -193,8 +192,6 @@ def seed_comparison(results: list[dict], engines) -> pd.DataFrame:
     """The notes' numbers, SolidWorks', the exact ones and each engine's, side by side,
     at the seed angle (the first sample of every run is the reference input), for the
     seed cases among the results."""
-    from analytic import Linkage, load_case
-    from analytic.sweep import to_frame
     present = {r["case"] for r in results}
     rows = []
     for case, spec in SEED_ROWS.items():

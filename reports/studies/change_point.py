@@ -16,6 +16,9 @@ from dataclasses import replace
 import numpy as np
 
 from analytic import Linkage, Mechanism
+from analytic.mechanism import Assembly
+from reports.studies.runs import load, make_settings, trace, trace_diagnostics
+from sim_models import compile_linkage
 from sim_models.tree import wrap as _wrap  # (-pi, pi], the engine trees' own
 
 #: Loop gap (relative to the mechanism's size) that ends a change-point run: looser than
@@ -56,7 +59,6 @@ def other_assembly(mech: Mechanism) -> Mechanism:
     """The description with its assembly hint moved to the other assembly mode: the
     coupler-rocker pin reflected across the line from the crank pin to the rocker's
     ground pivot (the two intersections of the dyad's circles)."""
-    from analytic.mechanism import Assembly
     n = four_bar_joints(mech)
     kin = Linkage(mech).kinematics()
     A = kin.point(n["crank"], _joint_point(mech, n["crank_coupler"], n["crank"]))[0][0]
@@ -165,8 +167,6 @@ def change_point_task(case_name: str, engine: str, settings_dict: dict, revoluti
                       per_rev: int = 72) -> dict:
     """Run a change-point four-bar through its singular positions and label the branch
     the engine follows after each (see :func:`classify_branch`).  Never raises."""
-    from reports.studies.runs import load, make_settings, trace, trace_diagnostics
-    from sim_models import compile_linkage
     label = "diverged"
     try:
         tree = compile_linkage(load(case_name))
@@ -209,7 +209,6 @@ def change_point_task(case_name: str, engine: str, settings_dict: dict, revoluti
 def analytic_branch(case_name: str, revolutions: int = 1, per_rev: int = 72) -> dict:
     """The branch the analytic solver's own solution (``Linkage(mech).kinematics``, the
     reference solution of every verdict run) follows through the singular positions."""
-    from reports.studies.runs import load
     mech = load(case_name)
     lk = Linkage(mech)
     x = mech.driver.value + 2 * np.pi * np.arange(revolutions * per_rev + 1) / per_rev

@@ -20,7 +20,15 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
+from analytic.free_motion import simulate
+from reports.comparison.free_cases import free_case, release_and_judge
 from reports.comparison.free_compare import FreeVerdict, compare_free, reference_samples
+from reports.figures.free_report_plots import case_figures
+from reports.figures.study_plots import _frontier
+from reports.regression.baseline import versions
+from sim_models.free_base import free_start, time_free_steps
+from sim_models.free_engine import free_engine_names, free_settings, open_free_session, run_free
+from sim_models.free_run import FreeRequest
 
 #: The report's free-motion verdict cases, (case, duration s): quick keeps the report's
 #: 30 s budget (A01 and the seed four-bar, short); full runs the IFToMM problems whose
@@ -138,9 +146,6 @@ def free_row(run, v: FreeVerdict) -> FreeRow:
 
 
 def _reference(case: str, duration: float, samples: int):
-    from analytic.free_motion import simulate
-    from reports.comparison.free_cases import free_case
-    from sim_models.free_run import FreeRequest
     mech = free_case(case, duration)
     traj = simulate(mech)
     req = FreeRequest(duration=duration, samples=samples)
@@ -152,7 +157,6 @@ def case_task(case: str, duration: float, samples: int, engines=None,
     """Every engine's free run of one case at its recommended settings, judged, with the
     case's figures: ``{"rows": [FreeRow], "verdicts": [FreeVerdict], "png": {name:
     bytes}, "errors": [str]}``; never raises (a failed engine is a line in ``errors``)."""
-    from sim_models.free_engine import free_engine_names, run_free
     out: dict = {"rows": [], "verdicts": [], "png": {}, "errors": [], "case": case}
     try:
         mech, traj, req, ref = _reference(case, duration, samples)
@@ -171,7 +175,6 @@ def case_task(case: str, duration: float, samples: int, engines=None,
         out["verdicts"].append(v)
         out["rows"].append(free_row(run, v))
     if figures and runs:
-        from reports.figures.free_report_plots import case_figures
         try:
             out["png"] = case_figures(traj, ref, runs, out["verdicts"])
         except Exception as e:  # noqa: BLE001 - a figure must not take the report down
@@ -184,7 +187,6 @@ def grid_task(case: str, duration: float, engine: str, samples: int = 200,
     """One engine's work-precision grid on one case (:data:`GRID`; the recommended
     setting first): a :class:`FreeRow` per setting (a refused setting is a row with
     ``ok = False`` and the reason)."""
-    from sim_models.free_engine import free_settings, run_free
     mech, traj, req, ref = _reference(case, duration, samples)
     rows = []
     for over in [{}, *(GRID[engine] if grid is None else grid)]:
@@ -215,8 +217,6 @@ TIMING_REPEATS = 3
 def _best_cpu(mech, engine: str, run, traj) -> float:
     """Stepping CPU seconds per simulated second, best of :data:`TIMING_REPEATS` bare
     loops of up to :data:`TIMING_STEPS` steps (NaN when it cannot be timed)."""
-    from sim_models.free_base import free_start, time_free_steps
-    from sim_models.free_engine import open_free_session
     if not run.ok or run.steps <= 0:
         return math.nan
     session = open_free_session(mech, engine, run.settings)
@@ -244,7 +244,6 @@ def frame(rows) -> pd.DataFrame:
 def pareto(grid: pd.DataFrame) -> pd.DataFrame:
     """The settings no other setting of the same engine and case beats on both CPU per
     simulated second and error at the end (runs that reached the end only)."""
-    from reports.figures.study_plots import _frontier
     keep = []
     ok = grid[grid["ok"].astype(bool) & np.isfinite(grid["err_end"].astype(float))]
     for _, g in ok.groupby(["case", "engine"], sort=True):
@@ -286,7 +285,6 @@ def iftomm_rows(rows: pd.DataFrame) -> pd.DataFrame:
     version, integrator, step, error (A01, A02: the reference point's largest position
     error over the run, m; A03: the largest angle error at 0.03 s against the
     published values, rad), CPU time of the stepping loop, s, and machine."""
-    from reports.regression.baseline import versions
     sel = rows[rows["case"].str.startswith("iftomm-")]
     out = []
     for _, r in sel.iterrows():
@@ -307,5 +305,4 @@ def free_verdict(mech, engine: str, duration: float | None = None, samples: int 
     one, released by :func:`reports.comparison.free_cases.free_case`'s rule) judged against the
     exact trajectory: ``(run, FreeVerdict)``.  ``settings``: overrides of the engine's
     recommended free settings (typed values or ``key=value`` strings)."""
-    from reports.comparison.free_cases import release_and_judge
     return release_and_judge(mech, engine, duration, samples, settings)

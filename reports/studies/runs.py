@@ -19,6 +19,10 @@ import pandas as pd
 from analytic import Mechanism, load_case
 from analytic.cases import HARD_CASES_DIR, hard_case_names
 from analytic.sweep import input_values
+from reports.comparison.runs import request_of
+from sim_models.engine_base import loop_gap, periodic_plan, travel_time
+from sim_models.engines import run
+from sim_models.registry import make_settings as registry_settings
 
 
 def load(case: str) -> Mechanism:
@@ -30,13 +34,11 @@ def load(case: str) -> Mechanism:
 def make_settings(engine: str, settings: dict):
     """The engine's settings object from a plain dict of its fields (the registry's
     settings classes; lists become tuples)."""
-    from sim_models.registry import make_settings as registry_settings
     return registry_settings(engine, settings)
 
 
 def revolution_time(mech) -> float:
     """Duration of the driver's first revolution (s)."""
-    from sim_models.engine_base import travel_time
     return travel_time(mech.driver, 2 * math.pi)
 
 
@@ -65,9 +67,6 @@ def trace(tree, engine: str, settings, revolutions: int, per_rev: int,
     """Run ``engine`` for ``revolutions`` turns from the reference state, sampled
     ``per_rev`` times per turn (the verdict runs' session and run loop); samples up to a
     divergence.  A divergence limit left None is the run request's default."""
-    from reports.comparison.runs import request_of
-    from sim_models.engine_base import periodic_plan
-    from sim_models.engines import run
     plan = periodic_plan(tree, revolutions, per_rev)
     req = request_of({"max_violation": max_violation, "max_speed_error": max_speed_error})
     r = run(tree, engine, settings, plan=plan, max_violation=req.max_violation,
@@ -94,7 +93,6 @@ def trace_diagnostics(tree, tr: Trace, analytic: bool = True) -> pd.DataFrame:
     ``analytic``, ``alpha_error`` and ``effort_error`` against the analytic solution at
     the engine's driver angle (normalised by the analytic peaks over a revolution).
     """
-    from sim_models.engine_base import loop_gap
     st = tree
     mech, lk = st.mech, st.linkage
     th, om, al, org, v, a = st.propagate(tr.q, tr.qd, tr.qdd)

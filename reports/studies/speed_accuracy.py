@@ -85,6 +85,12 @@ import pandas as pd
 
 from analytic import Linkage
 from analytic.sweep import input_values
+from reports.comparison.compare import compare_run
+from reports.comparison.quantities import judged
+from reports.comparison.reference import reference_of
+from reports.comparison.reference import sample_errors as per_quantity
+from reports.comparison.runs import request_of
+from reports.figures.study_plots import pareto_frontier_plot
 from reports.studies.change_point import (  # noqa: F401 - re-exported: the change-point study
     CHANGE_POINT_MAX_VIOLATION,
     _wrap,
@@ -104,6 +110,11 @@ from reports.studies.runs import (  # noqa: F401 - re-exported: the studies' eng
     trace,
     trace_diagnostics,
 )
+from sim_models import compile_linkage
+from sim_models.engines import run
+from sim_models.engines import time_engine as session_time
+from sim_models.mjcf import HARD_SOLIMP, direct_solref
+from sim_models.registry import available_engines
 
 #: Tolerances of the cheapest-setting table (max normalised error).
 TOLERANCES = (1e-2, 1e-3, 1e-4)
@@ -129,7 +140,6 @@ GRID_COLUMNS = ["case", "engine", "label", "family", "integrator", "settings", "
 # ============================================================================ cases
 def mujoco_family(family: str, dt: float, integrator: str) -> dict:
     """MuJoCo settings dict of a constraint family (see the module docstring)."""
-    from sim_models.mjcf import HARD_SOLIMP, direct_solref
     d = {"timestep": dt, "integrator": integrator}
     if family == "stock":
         d.update(solref=STOCK_SOLREF, solimp=STOCK_SOLIMP, invweight_scale=1.0)
@@ -183,7 +193,6 @@ def grid_plan(case: str, quick: bool) -> list[dict]:
 def _pinocchio_plan(T: float, quick: bool) -> list[dict]:
     """Pinocchio's family (RK4 steps per revolution x Baumgarte, its own evidence for
     the recommended 180 / 0.05), when its optional library is installed."""
-    from sim_models.registry import available_engines
     if "pinocchio" not in available_engines():
         return []
     spr_all = (90, 180, 360) if quick else (45, 90, 180, 360, 720)
@@ -209,8 +218,6 @@ def _is_force(quantity: str) -> bool:
 def run_errors(run_, reference=None) -> dict:
     """Normalised errors of an engine run through :func:`reports.comparison.compare.compare_run`
     (``reference``: the compiled linkage's Linkage; default the run's own mechanism)."""
-    from reports.comparison.compare import compare_run
-    from reports.comparison.quantities import judged
     if not run_.ok:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
@@ -235,9 +242,6 @@ def sample_errors(run_, lk: Linkage | None = None) -> dict[str, np.ndarray]:
     divides by (:func:`reports.comparison.reference.sample_errors`, the one per-sample error), so a
     curve's largest value is the row's ``accel_error`` / ``force_error``; NaN where the
     verdict judges no sample."""
-    from reports.comparison.compare import compare_run
-    from reports.comparison.reference import reference_of
-    from reports.comparison.reference import sample_errors as per_quantity
     errs = per_quantity(run_, reference_of(run_, lk), compare_run(run_, lk))
     out = {}
     for key, family in (("alpha", _is_accel), ("force", _is_force)):
@@ -251,7 +255,6 @@ def sample_errors(run_, lk: Linkage | None = None) -> dict[str, np.ndarray]:
 def time_engine(tree, engine: str, settings, dt: float, steps: int, repeats: int = 3) -> float:
     """Steps per second of the engine session's own stepping loop (no readout) on the
     compiled linkage: :func:`sim_models.engines.time_engine`, best of ``repeats``."""
-    from sim_models.engines import time_engine as session_time
     return session_time(tree, engine, settings, dt, steps, repeats)
 
 
@@ -297,9 +300,6 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
     meta = dict(meta or {})
     meta.update(case=case_name, engine=engine, label=label, settings_dict=settings_dict)
     try:
-        from reports.comparison.runs import request_of
-        from sim_models import compile_linkage
-        from sim_models.engines import run
         tree = compile_linkage(load(case_name))  # one compiled linkage for run and errors
         s = make_settings(engine, settings_dict)
         req = request_of({"revolutions": revolutions, "samples": samples})
@@ -446,7 +446,6 @@ def cheapest_settings(grid: pd.DataFrame, tolerances=TOLERANCES) -> pd.DataFrame
 
 
 def pareto_figure(grid: pd.DataFrame, case: str, analytic_time: float | None) -> bytes:
-    from reports.figures.study_plots import pareto_frontier_plot
     w = load(case).driver.velocity
     return pareto_frontier_plot(grid, f"{case} (omega2 = {w:g} rad/s): speed against error",
                                 analytic_time)
