@@ -23,8 +23,9 @@ from scipy.special import ellipk
 from analytic import load_case
 from analytic.cases import case_path
 from analytic.free_motion import simulate
-from reports.cli.animate import body_outlines, free_frames, world
 from reports.figures import free_plots
+from reports.figures.animation import body_outlines, world
+from reports.figures.poses import free_frames
 
 from .cli_run import run
 
@@ -205,7 +206,7 @@ def test_animate_free_frames_are_the_trajectory(tmp_path, traj):
         assert np.allclose(p1, [math.cos(th[i]), math.sin(th[i])], rtol=0, atol=INDEPENDENT)
     assert np.allclose(body_outlines(fr.mech, fr.analytic, 0)["link"], [[0, 0], [1, 0]],
                        atol=1e-15)  # the release pose
-    from reports.cli.animate import info_text
+    from reports.figures.animation import info_text
     assert info_text(fr, 35, None).endswith(f"t = {DURATION:g} s of {DURATION:g} s   "
                                             "frame 36/36")
 

@@ -16,9 +16,9 @@ import pytest
 from PIL import Image
 
 from analytic import Linkage, load_case
-from reports.cli import animate
 from reports.cli import plot as plot_cmd
 from reports.cli.xval import main
+from reports.figures import animation, poses
 
 from .cli_run import run
 
@@ -129,18 +129,18 @@ def test_animate_gif_frames_and_first_pose(tmp_path):
     assert gif.n_frames >= 36
     # the frames' data: frame 0 is the assembled reference pose (crank at 30 deg)
     mech = load_case("seed-slider-crank")
-    fr = animate.analytic_frames(Linkage(mech))
+    fr = poses.analytic_frames(Linkage(mech))
     expect = slider_crank_pose(math.radians(30.0))
-    got = animate.joint_positions(mech, fr.analytic, 0)
+    got = animation.joint_positions(mech, fr.analytic, 0)
     for j, p in expect.items():
         np.testing.assert_allclose(got[j], p, atol=POSE_TOL)
     # every frame is on the closed form at its own input
     for i in range(0, fr.n, 7):
         for j, p in slider_crank_pose(fr.values[i]).items():
-            np.testing.assert_allclose(animate.joint_positions(mech, fr.analytic, i)[j], p,
+            np.testing.assert_allclose(animation.joint_positions(mech, fr.analytic, i)[j], p,
                                        atol=POSE_TOL)
     # the pixels: the joint C's ring (black edge) where C is in frame 0 of the file
-    an = animate.build_animation(fr, f"{mech.name}: analytic")
+    an = animation.build_animation(fr, f"{mech.name}: analytic")
     an.fig.canvas.draw()
     px = an.ax.transData.transform(expect["C"])
     H = an.fig.canvas.get_width_height()[1]
@@ -175,19 +175,19 @@ def test_animate_follows_the_prescribed_motion():
     (not the nominal 2 m/s), and the motion stops short of the limit position, as the
     engines' runs do."""
     lk = Linkage(load_case("hibbeler-16-30"))
-    fr = animate.analytic_frames(lk, 72)
+    fr = poses.analytic_frames(lk, 72)
     t = fr.times
     assert t[0] == 0.0 and np.all(np.diff(t) > 0) and fr.n == 72
     np.testing.assert_allclose(fr.values, 2.0 * t + 0.5 * t * t, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(fr.rates, 2.0 + t, rtol=1e-12)
     lo, hi = lk.feasible_ranges()[0]
     assert fr.values.max() < hi
-    text = animate.info_text(fr, 60, fr.convention)
+    text = animation.info_text(fr, 60, fr.convention)
     assert f"{2.0 + t[60]:.4g} m/s" in text and f"t = {t[60]:.4f} s" in text, text
     assert f"{2.0 * t[60] + 0.5 * t[60] ** 2:.6g} m" in text, text
     # a crank that accelerates: hibbeler-16-121 from 90 deg at 3 rad/s, 2 rad/s^2
     lk = Linkage(load_case("hibbeler-16-121"))
-    fr = animate.analytic_frames(lk, 36)
+    fr = poses.analytic_frames(lk, 36)
     w0, a = 3.0, 2.0
     T = (-w0 + math.sqrt(w0 * w0 + 2 * a * 2 * math.pi)) / a  # one turn, by hand
     np.testing.assert_allclose(fr.times[-1], T * 35 / 36, rtol=1e-12)
@@ -203,14 +203,14 @@ def test_animate_engine_pose_at_every_frame(engine, tmp_path):
     from sim_models import compile_linkage
     mech = load_case("hibbeler-16-30")
     tree = compile_linkage(mech)
-    fr = animate.analytic_frames(tree.linkage, 36, tree=tree)
-    r = animate.engine_run(mech, tree, engine, 36, times=fr.times)
+    fr = poses.analytic_frames(tree.linkage, 36, tree=tree)
+    r = poses.engine_run(mech, tree, engine, 36, times=fr.times)
     assert r.ok, r.reason
-    p = animate.engine_poses(r, tree, fr.values, False, times=fr.times)
+    p = poses.engine_poses(r, tree, fr.values, False, times=fr.times)
     assert np.all(np.isfinite(p.theta)) and np.all(np.isfinite(p.origin))
     for i in (0, 17, 35):
-        a = animate.joint_positions(mech, fr.analytic, i)
-        e = animate.joint_positions(mech, p, i)
+        a = animation.joint_positions(mech, fr.analytic, i)
+        e = animation.joint_positions(mech, p, i)
         for j in a:
             assert np.linalg.norm(a[j] - e[j]) < ENGINE_POSE_TOL, (i, j)
     code, text = run("animate", "hibbeler-16-30", "--engine", engine, "--frames", "36",
@@ -223,27 +223,27 @@ def test_engine_pose_displaced_is_drawn_displaced():
     from sim_models import compile_linkage
     mech = load_case("seed-four-bar")
     tree = compile_linkage(mech)
-    fr = animate.analytic_frames(tree.linkage, 36)
-    r = animate.engine_run(mech, tree, "mujoco", 36)
+    fr = poses.analytic_frames(tree.linkage, 36)
+    r = poses.engine_run(mech, tree, "mujoco", 36)
     assert r.ok
-    honest = animate.engine_poses(r, tree, fr.values, True)
+    honest = poses.engine_poses(r, tree, fr.values, True)
     assert np.all(np.isfinite(honest.theta))
     # the rocker's tree coordinate turned by delta at every sample, on purpose
     delta = 0.05
     k = next(i for i, tj in enumerate(tree.joints) if tj.name == "O4")
     q = r.q.copy()
     q[:, k] += tree.joints[k].sigma * delta
-    moved = animate.engine_poses(dataclasses.replace(r, q=q), tree, fr.values, True)
+    moved = poses.engine_poses(dataclasses.replace(r, q=q), tree, fr.values, True)
     O4 = np.array([0.4, 0.0])
     fr.engines[:] = [honest, moved]
-    an = animate.build_animation(fr)
+    an = animation.build_animation(fr)
     for i in (0, 11, 23):
         an.draw(i)
         lines = [a for a in an.dynamic if getattr(a, "get_linestyle", lambda: "")() == "--"]
         # body lines of each engine, in body order: crank, coupler, rocker
         h_rocker = np.column_stack(lines[2].get_data())
         m_rocker = np.column_stack(lines[5].get_data())
-        a_B = animate.joint_positions(mech, fr.analytic, i)["B"]
+        a_B = animation.joint_positions(mech, fr.analytic, i)["B"]
         # honest engine: on the analytic rocker
         assert np.min(np.linalg.norm(h_rocker - a_B, axis=1)) < ENGINE_POSE_TOL
         # displaced engine: the analytic B turned by delta about O4, by hand
