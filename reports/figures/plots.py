@@ -228,44 +228,7 @@ def error_plot(x, errors: dict[str, np.ndarray], twin: tuple[str, np.ndarray] | 
     return _png(fig)
 
 
-def pareto_plot(rows, title: str, analytic_time: float | None = None) -> bytes:
-    """Speed against error: ``rows`` of dicts with ``engine``, ``label``,
-    ``seconds_per_rev`` and ``error`` (max normalised); the analytic solver's time per
-    revolution as a vertical line."""
-    fig, ax = plt.subplots(figsize=(7.2, 4.6))
-    labels = []
-    for engine in sorted({r["engine"] for r in rows}):
-        rr = [r for r in rows if r["engine"] == engine and np.isfinite(r["error"])]
-        if not rr:
-            continue
-        st = ENGINE_STYLE.get(engine, {})
-        ax.loglog([r["seconds_per_rev"] for r in rr], [max(r["error"], 1e-9) for r in rr],
-                  "o", color=st.get("color"), label=engine, ms=4)
-        for r in rr:
-            labels.append(ax.annotate(r["label"], (r["seconds_per_rev"], max(r["error"], 1e-9)),
-                                      xytext=(4, 3), textcoords="offset points",
-                                      fontsize=LABEL_PT, alpha=0.85))
-    for tol in (1e-2, 1e-3, 1e-4):
-        ax.axhline(tol, color="grey", lw=0.6, ls=":")
-    if analytic_time:
-        ax.axvline(analytic_time, color="black", lw=0.8)
-        ax.annotate("analytic", (analytic_time, ax.get_ylim()[1]), fontsize=LABEL_PT,
-                    rotation=90, va="top")
-    ax.set_xlabel("wall-clock seconds per simulated revolution")
-    ax.set_ylabel("max normalised error (accelerations, forces)")
-    _linear_if_narrow(ax, [r["seconds_per_rev"] for r in rows], "x")
-    ax.set_title(title, fontsize=TITLE_PT)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=LEGEND_PT)
-    fig.tight_layout()
-    hidden = declutter(ax, labels)
-    if hidden:
-        ax.text(0.01, 0.01, f"{hidden} labels left out where they would overlap (see the "
-                "table)", transform=ax.transAxes, fontsize=NOTE_PT, color="0.35")
-    return _png(fig)
-
-
-def _linear_if_narrow(ax, values, axis: str) -> None:
+def linear_if_narrow(ax, values, axis: str) -> None:
     """A log axis over less than a decade labels its minor ticks in colliding
     ``1.05x10^-2`` form: such an axis is drawn linear, with a few plain ticks."""
     v = np.asarray(values, float)

@@ -9,7 +9,7 @@ from dataclasses import asdict, replace
 import numpy as np
 import pandas as pd
 
-from reports.figures.plots import pareto_plot
+from reports.figures.study_plots import pareto_plot
 from reports.studies.runs import load, make_settings
 from reports.studies.speed_accuracy import run_errors, time_engine
 from sim_models import compile_linkage
