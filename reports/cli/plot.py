@@ -4,8 +4,9 @@ One implementation with the report: the curves are
 :func:`reports.figures.case_figures.curve_figures` (the analytic line of
 :func:`reports.comparison.reference.analytic_line`), the engines' errors
 :func:`reports.figures.case_figures.error_figure` (the verdict's reference and peaks), drawn by
-:func:`reports.figures.plots.draw_curve_axes` / :func:`reports.figures.plots.draw_error_axes` onto one
-figure, in the display units of :mod:`reports.figures.display_units`.
+:func:`reports.figures.plots.draw_curve_axes` /
+:func:`reports.figures.plots.draw_error_axes` onto one figure, in the display units of
+:mod:`reports.figures.display_units`.
 
 Without ``--engine`` the analytic lines follow :func:`cycle_plan`: the sweep's inputs
 over the full turn (or the feasible range) at the description's constant rate; a driver

@@ -49,8 +49,8 @@ class Verdict:
     @cached_property
     def near_event(self) -> str | None:
         """For a failed verdict, the limit/singular position or change point the worst
-        error sits near (:func:`reports.comparison.compare.near_event`, a 720-point sweep, made once);
-        None for a pass or when none is near."""
+        error sits near (:func:`reports.comparison.compare.near_event`, a 720-point sweep,
+        made once); None for a pass or when none is near."""
         return None if self.ok else near_event(list(self.comparisons), self.tree.linkage)
 
     def judged(self) -> list[Comparison]:

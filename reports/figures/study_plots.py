@@ -46,7 +46,8 @@ def _frontier(t: np.ndarray, e: np.ndarray) -> np.ndarray:
 
 def pareto_frontier_plot(grid, title: str, analytic_time: float | None = None,
                          floor: float = 1e-9, analytic_points: int | None = None) -> bytes:
-    """Speed against error of a settings grid (:func:`reports.studies.speed_accuracy.speed_error_grid`).
+    """Speed against error of a settings grid
+    (:func:`reports.studies.speed_accuracy.speed_error_grid`).
 
     One colour per engine and settings family, MuJoCo integrators by marker; each
     engine's Pareto frontier as a step line with its points labelled; failed runs

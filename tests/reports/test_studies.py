@@ -1,4 +1,4 @@
-"""The speed/accuracy studies (reports.studies.speed_accuracy): quick grids, the cheapest-setting logic,
+"""The speed/accuracy studies (reports.studies): quick grids, the cheapest-setting logic,
 change-point branch detection, the long-run loop and the scene economy.  Fast (~20 s)."""
 
 from __future__ import annotations
