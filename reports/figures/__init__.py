@@ -3,6 +3,9 @@ own.
 
 Modules:
 
+* :mod:`reports.figures.animation`: The linkage moving through a cycle, drawn frame by frame
+  and written as GIF, MP4 or HTML (the frames: :mod:`reports.figures.poses`; the command
+  ``xval animate``: :mod:`reports.cli.animate`).
 * :mod:`reports.figures.case_figures`: The figures of one case: drawn from the runs' own
   analytic reference.
 * :mod:`reports.figures.display_units`: Display units of ``xval solve``, ``sweep`` and
@@ -15,6 +18,12 @@ Modules:
   work-precision plot.
 * :mod:`reports.figures.plots`: Figures of the validation report (matplotlib, Agg backend,
   PNG bytes out).
+* :mod:`reports.figures.poses`: What an animation shows, frame by frame: the bodies' poses
+  from the analytic solution, from a free trajectory, or from an engine's run (its body
+  angles and frame origins at its samples, through
+  :meth:`sim_models.tree.SimTree.propagate`), with the input, the clock and the joint forces
+  (:class:`Frames`). Drawn by :mod:`reports.figures.animation`; ``xval animate`` is
+  :mod:`reports.cli.animate`.
 * :mod:`reports.figures.study_plots`: Figures of the speed/accuracy studies
   (:mod:`reports.studies.speed_accuracy`); PNG bytes out.
 """
