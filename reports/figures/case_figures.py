@@ -110,18 +110,33 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     if line is None:
         return []
     lu, lkin, lfrc = line
-    mech = linkage.mech
     r0 = basis[0]
     _, xl = axis_of(r0, linkage)
     refs = {e: reference(r, linkage) for e, r in runs.items()}
     idx = {e: _index_in(lu, refs[e].u) for e in runs}
-    moving = [b for b in range(len(mech.bodies)) if b != linkage.topo.ground]
     events, feasible, covered = _range_marks(r0, linkage, lu)
 
     def fig(name, title, ylabel, curves):
         return CurveFigure(name, f"{label}: {title}", xl, ylabel, curves, events, feasible,
                            covered)
 
+    out = [fig(*spec) for spec in _motion_figures(linkage, lu, lkin, runs, refs, idx)]
+    if lfrc is not None:
+        out += [fig(*spec) for spec in _force_figures(linkage, lu, lfrc, runs, refs)]
+    out += [fig(*spec) for spec in _extra_figures(linkage, lu, lkin, runs, refs, extra, tree)]
+    if line_fn is analytic_line:  # a drawn line must not join samples of other turns
+        brk = tuple(int(i) for i in line_breaks(basis, linkage))
+        for f in out:
+            f.breaks = brk
+    return out
+
+
+def _motion_figures(linkage, lu, lkin, runs, refs, idx) -> list[tuple]:
+    """(name, title, ylabel, curves) of the body angles, omegas and alphas and, with
+    sliders, the slider accelerations: the analytic line ``lkin`` at ``lu`` and each
+    engine's samples at its reference's inputs."""
+    mech = linkage.mech
+    moving = [b for b in range(len(mech.bodies)) if b != linkage.topo.ground]
     out = []
     # body angle: one convention for both (the analytic line unwrapped along the input;
     # the engine at the line plus the wrapped difference at its own sample)
@@ -134,7 +149,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
             mk[e] = (refs[e].u, at + wrap_deg(np.degrees(r.theta[:, b]) - at),
                      refs[e].judged)
         curves.append(Curve(mech.bodies[b].name, lu, y, mk))
-    out.append(fig("angle", "body angles", "angle (deg)", curves))
+    out.append(("angle", "body angles", "angle (deg)", curves))
     for what, unit in (("omega", "rad/s"), ("alpha", "rad/s^2")):
         curves = []
         for b in moving:
@@ -143,7 +158,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
                   for e, r in runs.items()}
             curves.append(Curve(name, lu, getattr(lkin, what)[:, b], mk,
                                 f"{name}.alpha" if what == "alpha" else None))
-        out.append(fig(what, f"body {what}", f"{what} ({unit})", curves))
+        out.append((what, f"body {what}", f"{what} ({unit})", curves))
     if linkage.topo.prismatic:
         curves = []
         for j in linkage.topo.prismatic:
@@ -151,9 +166,14 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
             mk = {e: (refs[e].u, r.slider_acc[:, r.prismatic_names.index(jn)], refs[e].judged)
                   for e, r in runs.items()}
             curves.append(Curve(jn, lu, lkin.slider(jn)[2], mk, f"{jn}.a"))
-        out.append(fig("slider", "slider accelerations", "s'' (m/s^2)", curves))
-    if lfrc is not None:
-        out += [fig(*spec) for spec in _force_figures(linkage, lu, lfrc, runs, refs)]
+        out.append(("slider", "slider accelerations", "s'' (m/s^2)", curves))
+    return out
+
+
+def _extra_figures(linkage, lu, lkin, runs, refs, extra, tree) -> list[tuple]:
+    """The figures drawn on request only (``extra``): slider positions (not judged;
+    the engines' own from ``tree``) and transmission angles."""
+    out = []
     if "slider_s" in extra and linkage.topo.prismatic:  # not judged: drawn only
         pos = {e: engine_slider_positions(r, tree) for e, r in runs.items()}
         curves = []
@@ -161,15 +181,11 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
             jn = linkage.topo.joint_names[j]
             mk = {e: (refs[e].u, pos[e][jn], refs[e].judged) for e in runs if jn in pos[e]}
             curves.append(Curve(jn, lu, lkin.slider(jn)[0], mk))
-        out.append(fig("slider_s", "slider positions", "s (m)", curves))
+        out.append(("slider_s", "slider positions", "s (m)", curves))
     if "transmission" in extra and lkin.transmission:
         curves = [Curve(f"at {k}", lu, np.asarray(v, float), {})
                   for k, v in lkin.transmission.items()]
-        out.append(fig("transmission", "transmission angles", "angle (deg)", curves))
-    if line_fn is analytic_line:  # a drawn line must not join samples of other turns
-        brk = tuple(int(i) for i in line_breaks(basis, linkage))
-        for f in out:
-            f.breaks = brk
+        out.append(("transmission", "transmission angles", "angle (deg)", curves))
     return out
 
 
