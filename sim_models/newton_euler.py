@@ -46,6 +46,19 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
     normal, moment : dict prismatic tree-joint name -> (N,)
     effort : (N,) drive torque / force on body_b (slider)
     """
+    f, mo = _body_wrenches(st, theta, omega, alpha, origin, a_origin)
+    _add_chord_forces(st, f, mo, theta, origin, chord_force)
+    sub_f, sub_m = _subtree_sums(st, f, mo)
+    force, normal, moment, effort = _tree_joint_reactions(st, theta, origin, sub_f, sub_m)
+    for i, ch in enumerate(st.chords):
+        force[ch.name] = chord_force[:, i]
+    return force, normal, moment, effort
+
+
+def _body_wrenches(st: SimTree, theta, omega, alpha, origin, a_origin):
+    """Per body, the wrench the rest of the linkage must exert on it (d'Alembert):
+    force ``m aG - m g`` less the applied loads (N, B, 2) and moment about the world
+    origin (N, B)."""
     mech = st.mech
     N, B = theta.shape
     g = np.asarray(mech.gravity, float)
@@ -70,7 +83,12 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
             f[:, b] -= F
             h = h - ld.torque - _cross(rP - rG, F)
         mo[:, b] = h + _cross(rG, f[:, b])
-    # loop-closing forces as external wrenches on body_b (+F) and body_a (-F)
+    return f, mo
+
+
+def _add_chord_forces(st: SimTree, f, mo, theta, origin, chord_force) -> None:
+    """The loop-closing forces as external wrenches on body_b (+F) and body_a (-F),
+    taken off ``f`` and ``mo`` in place."""
     for i, ch in enumerate(st.chords):
         F = chord_force[:, i]
         Pb = origin[:, ch.body_b] + _rot(theta[:, ch.body_b], ch.point_b)
@@ -79,14 +97,15 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
         if ch.body_a != st.ground:
             f[:, ch.body_a] += F
             mo[:, ch.body_a] += _cross(Pb, F)
-    # subtree sums: the wrench by the parent on the subtree of each tree joint
-    force, normal, moment = {}, {}, {}
-    effort = np.full(N, math.nan)
-    children = {b: [] for b in range(B)}
+
+
+def _subtree_sums(st: SimTree, f, mo):
+    """Per tree joint's child, the wrench by the parent on its whole subtree:
+    child body -> (N, 2) force, (N,) moment about the world origin."""
+    children = {b: [] for b in range(f.shape[1])}
     for tj in st.joints:
         children[tj.parent].append(tj.child)
-    sub_f = {}
-    sub_m = {}
+    sub_f, sub_m = {}, {}
     for tj in reversed(st.joints):
         c = tj.child
         sf, sm = f[:, c].copy(), mo[:, c].copy()
@@ -94,6 +113,15 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
             sf += sub_f[k]
             sm += sub_m[k]
         sub_f[c], sub_m[c] = sf, sm
+    return sub_f, sub_m
+
+
+def _tree_joint_reactions(st: SimTree, theta, origin, sub_f, sub_m):
+    """Each tree joint's force (by body_a on body_b), a prismatic joint's normal force
+    and moment, and the drive effort, from the subtree wrenches."""
+    mech = st.mech
+    force, normal, moment = {}, {}, {}
+    effort = np.full(theta.shape[0], math.nan)
     for t, tj in enumerate(st.joints):
         c = tj.child
         jt = mech.joints[tj.joint]
@@ -117,6 +145,4 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
                 effort = np.einsum("nc,nc->n", F, u)
         elif t == st.driver_tree:
             effort = tj.sigma * M_on_child
-    for i, ch in enumerate(st.chords):
-        force[ch.name] = chord_force[:, i]
     return force, normal, moment, effort
