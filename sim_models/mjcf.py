@@ -247,6 +247,20 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
 
     s = mujoco.MjSpec()
     s.modelname = mech.name
+    _set_options(s, mujoco, mech, settings, key)
+    radius = 0.01 * st.size
+    specs = {st.ground: s.worldbody}
+    _add_visuals(mujoco, mech, st, s.worldbody, st.ground, radius)
+    for tj in st.joints:
+        specs[tj.child] = _add_tree_body(mujoco, mech, st, settings, specs, tj, radius)
+        _add_visuals(mujoco, mech, st, specs[tj.child], tj.child, radius)
+    _add_chords(mujoco, st, settings, s, specs)
+    return s
+
+
+def _set_options(s, mujoco, mech: Mechanism, settings: MujocoSettings, key: str) -> None:
+    """The compiler flags and the solver options: step, integrator, iterations,
+    tolerance, gravity; contacts and auto-reset off."""
     s.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     s.compiler.autolimits = False
     opt = s.option
@@ -261,63 +275,70 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     if settings.diagexact:
         opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_DIAGEXACT)
 
-    radius = 0.01 * st.size
+
+def _add_visuals(mujoco, mech: Mechanism, st: SimTree, body_spec, b: int,
+                 radius: float) -> None:
+    """Body ``b``'s drawing: a sphere per point (one-point bodies and the ground) or a
+    capsule between consecutive points; never in contact."""
+    pts = list(mech.bodies[b].points.values())
+    rgba = [0.2, 0.2, 0.2, 1.0] if b == st.ground else [0.2, 0.4, 0.8, 1.0]
+    if len(pts) == 1 or b == st.ground:
+        for p in pts:
+            body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                               size=[1.5 * radius, 0, 0], pos=[p[0], p[1], 0.0],
+                               contype=0, conaffinity=0, rgba=rgba)
+    else:
+        for p, q in zip(pts[:-1], pts[1:], strict=True):
+            if math.hypot(q[0] - p[0], q[1] - p[1]) < 1e-12:
+                continue
+            body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[radius, 0, 0],
+                               fromto=[p[0], p[1], 0.0, q[0], q[1], 0.0],
+                               contype=0, conaffinity=0, rgba=rgba)
+
+
+def _add_tree_body(mujoco, mech: Mechanism, st: SimTree, settings: MujocoSettings, specs,
+                   tj, radius: float):
+    """The child body of tree joint ``tj`` under its parent's spec: pose, inertia, the
+    hinge or slide joint (a slide's guide line drawn on the guide), the driver's
+    armature.  Returns the body's spec."""
+    c = tj.child
+    parent = specs[tj.parent]
+    # round-off of an exact zero made 0, so the written MJCF is the same on any CPU
+    body = parent.add_body(name=st.body_names[c], pos=[snap(tj.rel_pos[0], st.size),
+                                                       snap(tj.rel_pos[1], st.size), 0.0],
+                           quat=_quat_z(snap(tj.rel_angle)))
+    body.explicitinertial = True
+    body.mass = float(st.mass[c])
+    body.ipos = [snap(st.com[c][0], st.size), snap(st.com[c][1], st.size), 0.0]
+    inertia = float(st.inertia[c])
+    body.inertia = [0.6 * inertia, 0.6 * inertia, inertia]
+    if tj.kind == "hinge":
+        jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_HINGE,
+                             axis=[0.0, 0.0, 1.0],
+                             pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
+    else:
+        jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_SLIDE,
+                             axis=[tj.axis_child[0], tj.axis_child[1], 0.0],
+                             pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
+        # show the guide line on the guide
+        guide = tj.parent if tj.sigma > 0 else tj.child
+        gspec = specs[tj.parent] if tj.sigma > 0 else body
+        jt = mech.joints[tj.joint]
+        o = np.asarray(mech.bodies[guide].points[jt.origin], float)
+        u = np.array([math.cos(jt.direction), math.sin(jt.direction)])
+        a, b_ = o - 0.5 * st.size * u, o + 0.5 * st.size * u
+        gspec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.3 * radius, 0, 0],
+                       fromto=[a[0], a[1], 0.0, b_[0], b_[1], 0.0], contype=0,
+                       conaffinity=0, rgba=[0.6, 0.6, 0.6, 1.0])
+    jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+    if tj.joint == st.tree_joint_indices[st.driver_tree]:
+        jnt.armature = float(settings.armature)
+    return body
+
+
+def _add_chords(mujoco, st: SimTree, settings: MujocoSettings, s, specs) -> None:
+    """Each loop-closing joint as a site on both bodies and a CONNECT equality."""
     names = st.body_names
-
-    def visuals(body_spec, b: int):
-        pts = list(mech.bodies[b].points.values())
-        rgba = [0.2, 0.2, 0.2, 1.0] if b == st.ground else [0.2, 0.4, 0.8, 1.0]
-        if len(pts) == 1 or b == st.ground:
-            for p in pts:
-                body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE,
-                                   size=[1.5 * radius, 0, 0], pos=[p[0], p[1], 0.0],
-                                   contype=0, conaffinity=0, rgba=rgba)
-        else:
-            for p, q in zip(pts[:-1], pts[1:], strict=True):
-                if math.hypot(q[0] - p[0], q[1] - p[1]) < 1e-12:
-                    continue
-                body_spec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[radius, 0, 0],
-                                   fromto=[p[0], p[1], 0.0, q[0], q[1], 0.0],
-                                   contype=0, conaffinity=0, rgba=rgba)
-
-    specs = {st.ground: s.worldbody}
-    visuals(s.worldbody, st.ground)
-    for tj in st.joints:
-        c = tj.child
-        parent = specs[tj.parent]
-        # round-off of an exact zero made 0, so the written MJCF is the same on any CPU
-        body = parent.add_body(name=names[c], pos=[snap(tj.rel_pos[0], st.size),
-                                                   snap(tj.rel_pos[1], st.size), 0.0],
-                               quat=_quat_z(snap(tj.rel_angle)))
-        body.explicitinertial = True
-        body.mass = float(st.mass[c])
-        body.ipos = [snap(st.com[c][0], st.size), snap(st.com[c][1], st.size), 0.0]
-        inertia = float(st.inertia[c])
-        body.inertia = [0.6 * inertia, 0.6 * inertia, inertia]
-        if tj.kind == "hinge":
-            jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_HINGE,
-                                 axis=[0.0, 0.0, 1.0],
-                                 pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
-        else:
-            jnt = body.add_joint(name=tj.name, type=mujoco.mjtJoint.mjJNT_SLIDE,
-                                 axis=[tj.axis_child[0], tj.axis_child[1], 0.0],
-                                 pos=[tj.anchor_child[0], tj.anchor_child[1], 0.0])
-            # show the guide line on the guide
-            guide = tj.parent if tj.sigma > 0 else tj.child
-            gspec = specs[tj.parent] if tj.sigma > 0 else body
-            jt = mech.joints[tj.joint]
-            o = np.asarray(mech.bodies[guide].points[jt.origin], float)
-            u = np.array([math.cos(jt.direction), math.sin(jt.direction)])
-            a, b_ = o - 0.5 * st.size * u, o + 0.5 * st.size * u
-            gspec.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.3 * radius, 0, 0],
-                           fromto=[a[0], a[1], 0.0, b_[0], b_[1], 0.0], contype=0,
-                           conaffinity=0, rgba=[0.6, 0.6, 0.6, 1.0])
-        jnt.limited = mujoco.mjtLimited.mjLIMITED_FALSE
-        if tj.joint == st.tree_joint_indices[st.driver_tree]:
-            jnt.armature = float(settings.armature)
-        specs[c] = body
-        visuals(body, c)
-
     for ch in st.chords:
         na, nb = names[ch.body_a], names[ch.body_b]
         specs[ch.body_b].add_site(name=site_name(ch.name, nb),
@@ -328,7 +349,6 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
                        objtype=mujoco.mjtObj.mjOBJ_SITE,
                        name1=site_name(ch.name, nb), name2=site_name(ch.name, na),
                        solref=list(settings.solref), solimp=list(settings.solimp))
-    return s
 
 
 def compile_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
