@@ -136,16 +136,30 @@ class SimTree:
         self.mech = mech
         self.linkage = linkage or Linkage(mech)
         self.chords_mode = chords
-        names = [b.name for b in mech.bodies]
-        self.body_names = names
-        idx = {n: i for i, n in enumerate(names)}
-        g0 = idx[mech.ground]
-        self.ground = g0
-        B = len(names)
-        joints = mech.joints
-        dj = [j.name for j in joints].index(mech.driver.joint)
+        self.body_names = [b.name for b in mech.bodies]
+        self.ground = self.body_names.index(mech.ground)
+        dj = [j.name for j in mech.joints].index(mech.driver.joint)
+        self._spanning_tree(dj, chords)
+        # reference poses
+        kin = self.linkage.kinematics()
+        self.kin_ref = kin
+        self.theta_ref, self.origin_ref = kin.theta[0].copy(), kin.origin[0].copy()
+        self.joints: list[TreeJoint] = [self._tree_joint(c) for c in self.order[1:]]
+        self.chords: list[Chord] = [self._chord(k) for k in self.chord_indices]
+        self.driver_tree = self.tree_joint_indices.index(dj)
+        self.driver_sigma = self.joints[self.driver_tree].sigma
+        self.prismatic = [k for k, j in enumerate(mech.joints) if isinstance(j, Prismatic)]
+        self.has_mass = mech.has_mass
+        self.size = self._size()
+        self.mass, self.com, self.inertia = self._mass_properties()
+        self.path = self._hinge_paths()
 
-        # --- spanning tree: driver, prismatic joints, revolute joints ------------
+    def _spanning_tree(self, dj: int, chords: str) -> None:
+        """``order``, ``parent``, ``tree_joint_indices``, ``chord_indices``: the tree
+        takes the driver, then the prismatic joints, then the revolute ones (``chords
+        == "moving"``: those at the ground first, so the loops close between moving
+        bodies); a loop closed at a prismatic joint is refused."""
+        mech, joints = self.mech, self.mech.joints
         rest = [k for k in range(len(joints)) if k != dj]
         rev = [k for k in rest if isinstance(joints[k], Revolute)]
         if chords == "moving":
@@ -154,8 +168,8 @@ class SimTree:
         elif chords != "analytic":
             raise ValueError(f"chords must be 'moving' or 'analytic', got {chords!r}")
         cand = [dj] + [k for k in rest if isinstance(joints[k], Prismatic)] + rev
-        _, chords, parent, order = spanning_tree(mech, cand)
-        for k in chords:
+        _, chord_joints, parent, order = spanning_tree(mech, cand)
+        for k in chord_joints:
             if isinstance(joints[k], Prismatic):
                 raise UnsupportedClosureError(
                     f"mechanism {mech.name!r}: prismatic joint {joints[k].name!r} would close a "
@@ -163,68 +177,57 @@ class SimTree:
         self.order = order
         self.parent = parent
         self.tree_joint_indices = [parent[c][1] for c in order[1:]]
-        self.chord_indices = chords
+        self.chord_indices = chord_joints
 
-        # --- reference poses -----------------------------------------------------
-        kin = self.linkage.kinematics()
-        self.kin_ref = kin
-        th = kin.theta[0].copy()
-        org = kin.origin[0].copy()
-        self.theta_ref, self.origin_ref = th, org
+    def _tree_joint(self, c: int) -> TreeJoint:
+        """The tree joint whose child is body ``c``, at the reference pose."""
+        names, th, org = self.body_names, self.theta_ref, self.origin_ref
         topo = self.linkage.topo
-        pts = topo.body_points
+        p, k = self.parent[c]
+        jt = self.mech.joints[k]
+        a_c = np.array(topo.attach(k, c), float)
+        a_p = np.array(topo.attach(k, p), float)
+        rel_pos = _rot(th[p]).T @ (org[c] - org[p])
+        rel_angle = float(wrap(th[c] - th[p]))
+        if isinstance(jt, Revolute):
+            sigma = 1.0 if names[c] == jt.body_b else -1.0
+            return TreeJoint(k, jt.name, "hinge", p, c, sigma, a_p, a_c, np.zeros(2), rel_pos,
+                             rel_angle, rel_angle)
+        gb = names.index(jt.guide)
+        sigma = 1.0 if c == names.index(jt.slider) else -1.0
+        u_world = _rot(th[gb]) @ np.array([math.cos(jt.direction), math.sin(jt.direction)])
+        axis_c = _rot(th[c]).T @ u_world
+        s_ref = float(self.kin_ref.slider(jt.name)[0][0])
+        return TreeJoint(k, jt.name, "slide", p, c, sigma, a_p, a_c, axis_c, rel_pos,
+                         rel_angle, s_ref)
 
-        self.joints: list[TreeJoint] = []
-        for c in order[1:]:
-            p, k = parent[c]
-            jt = joints[k]
-            a_c = np.array(topo.attach(k, c), float)
-            a_p = np.array(topo.attach(k, p), float)
-            rel_pos = _rot(th[p]).T @ (org[c] - org[p])
-            rel_angle = float(wrap(th[c] - th[p]))
-            if isinstance(jt, Revolute):
-                sigma = 1.0 if names[c] == jt.body_b else -1.0
-                self.joints.append(TreeJoint(k, jt.name, "hinge", p, c, sigma, a_p, a_c,
-                                             np.zeros(2), rel_pos, rel_angle, rel_angle))
-            else:
-                gb = idx[jt.guide]
-                sigma = 1.0 if c == idx[jt.slider] else -1.0
-                u_world = _rot(th[gb]) @ np.array([math.cos(jt.direction),
-                                                   math.sin(jt.direction)])
-                axis_c = _rot(th[c]).T @ u_world
-                s_ref = float(kin.slider(jt.name)[0][0])
-                self.joints.append(TreeJoint(k, jt.name, "slide", p, c, sigma, a_p, a_c,
-                                             axis_c, rel_pos, rel_angle, s_ref))
-        self.chords: list[Chord] = []
-        for k in chords:
-            jt = joints[k]
-            a, b = idx[jt.body_a], idx[jt.body_b]
-            self.chords.append(Chord(k, jt.name, a, b, pts[a][jt.point_a].copy(),
-                                     pts[b][jt.point_b].copy()))
-        self.driver_tree = self.tree_joint_indices.index(dj)
-        self.driver_sigma = self.joints[self.driver_tree].sigma
-        self.prismatic = [k for k, j in enumerate(joints) if isinstance(j, Prismatic)]
+    def _chord(self, k: int) -> Chord:
+        """Loop-closing joint ``k``: its bodies and its point on each."""
+        jt = self.mech.joints[k]
+        pts = self.linkage.topo.body_points
+        a, b = self.body_names.index(jt.body_a), self.body_names.index(jt.body_b)
+        return Chord(k, jt.name, a, b, pts[a][jt.point_a].copy(), pts[b][jt.point_b].copy())
 
-        # --- mass properties -----------------------------------------------------
-        self.has_mass = mech.has_mass
-        self.size = self._size()
-        mass = np.zeros(B)
-        com = np.zeros((B, 2))
-        inertia = np.zeros(B)
+    def _mass_properties(self):
+        """(B,) mass, (B, 2) centre of mass, (B,) inertia as given to the engines: the
+        description's (a zero mass or inertia floored at :data:`MASS_FLOOR` of the
+        largest), or without masses in the description uniform bars as placeholders."""
+        mech, B = self.mech, len(self.body_names)
+        mass, com, inertia = np.zeros(B), np.zeros((B, 2)), np.zeros(B)
         if self.has_mass:
             mmax = max(b.mass for b in mech.moving_bodies)
             imax = max(b.inertia for b in mech.moving_bodies)
             if mmax <= 0:
                 mmax, imax = 1.0, 1e-3 * self.size ** 2
             for i, b in enumerate(mech.bodies):
-                if i == g0:
+                if i == self.ground:
                     continue
                 mass[i] = b.mass if b.mass > 0 else MASS_FLOOR * mmax
                 inertia[i] = b.inertia if b.inertia > 0 else MASS_FLOOR * imax
                 com[i] = b.com
         else:
             for i, b in enumerate(mech.bodies):
-                if i == g0:
+                if i == self.ground:
                     continue
                 P = np.array(list(b.points.values()), float)
                 c = P.mean(axis=0)
@@ -232,18 +235,22 @@ class SimTree:
                 if L <= 0:
                     L = 0.1 * self.size
                 mass[i], com[i], inertia[i] = 1.0, c, L * L / 12
-        self.mass, self.com, self.inertia = mass, com, inertia
-        # ancestor hinge matrix: absolute theta_b = theta_ref_b + sum of hinge q on its path
-        nt = len(self.joints)
-        self.path = np.zeros((B, nt))
-        pos_in_tree = {c: i for i, c in enumerate(order[1:])}
+        return mass, com, inertia
+
+    def _hinge_paths(self) -> np.ndarray:
+        """(B, tree joints) ancestor hinge matrix: absolute theta_b = theta_ref_b + the
+        sum of the hinge coordinates on its path to the ground."""
+        B = len(self.body_names)
+        path = np.zeros((B, len(self.joints)))
+        pos_in_tree = {c: i for i, c in enumerate(self.order[1:])}
         for b in range(B):
             x = b
-            while x != g0:
+            while x != self.ground:
                 i = pos_in_tree[x]
                 if self.joints[i].kind == "hinge":
-                    self.path[b, i] = 1.0
-                x = parent[x][0]
+                    path[b, i] = 1.0
+                x = self.parent[x][0]
+        return path
 
     def _size(self) -> float:
         s = 0.0
