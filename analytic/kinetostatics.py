@@ -86,6 +86,10 @@ class Forces:
 def solve_forces(linkage, kin) -> Forces:
     """Solve the kinetostatic problem for every configuration of ``kin``.
 
+    Phases: each body's effective wrench (d'Alembert), the unit columns of the chord
+    unknowns, the subtree sums, one equation per tree joint, the chord reactions then
+    the drive effort, and every joint's reaction from them.
+
     Raises
     ------
     MissingMassError
@@ -97,9 +101,31 @@ def solve_forces(linkage, kin) -> Forces:
         raise MissingMassError(
             f"forces need the mass and inertia of every moving body; missing for {missing} "
             "(give mass = 0 and inertia = 0 for a massless link)", mech.source)
+    f, mo, ke_rate, load_pow = _effective_wrenches(mech, topo, kin)
+    Fc, Mc, eps = _chord_columns(mech, topo, kin)
+    Sf, Smo = _subtree_sums(topo, f, mo)
+    A, rhs, td, sd = _tree_rows(mech, topo, kin, Fc, Mc, eps, Sf, Smo)
+    # at a singular sample the chord rows are singular too (they are the loop
+    # Jacobian's transpose): solved for their limits below, not divided by zero here
+    sing = singular_samples(kin)
+    x = _solve_unknowns(A, rhs, td, sd, sing)
+    joint_force, normal, moment = _reactions(mech, topo, kin, Fc, Mc, eps, Sf, Smo, x)
+    effort = x[:, -1]
+    power = effort * kin.velocity
+    resid = power - (ke_rate - load_pow)
+    ordered = {jt.name: joint_force[jt.name] for jt in mech.joints}
+    frc = Forces(ordered, normal, moment, effort, power, ke_rate, load_pow, resid)
+    if sing.size:  # the limits along the branch, or NaN where unbounded (and said so)
+        force_limits(linkage, kin, frc, sing)
+    return frc
+
+
+def _effective_wrenches(mech, topo, kin):
+    """Per body the effective force ``m (aG - g)`` less its loads (N, B) complex, its
+    moment about the world origin (N, B), and the kinetic-energy rate and load power
+    (N,).  Planar vectors are complex (x + iy); cross(a, b) = Im(conj(a) b)."""
     N, B = kin.theta.shape
     g = complex(*mech.gravity)
-    # Planar vectors are complex (x + iy); cross(a, b) = Im(conj(a) b).
     f = np.zeros((N, B), complex)  # effective force = sum of joint reactions on the body
     mo = np.zeros((N, B))          # their moment about the world origin
     ke_rate = np.zeros(N)
@@ -123,14 +149,19 @@ def solve_forces(linkage, kin) -> Forces:
             h = h - ld.torque - cross(rP - rG, F)
             load_pow += vP.real * F.real + vP.imag * F.imag + ld.torque * kin.omega[:, b]
         mo[:, b] = h + cross(rG, f[:, b])
+    return f, mo, ke_rate, load_pow
 
-    joints = mech.joints
-    names = topo.body_names
-    chords = topo.chords
-    # unknown columns: 2 per chord, then the drive effort
+
+def _chord_columns(mech, topo, kin):
+    """The unknowns, 2 per chord then the drive effort: the force ``Fc`` (N, n_x)
+    complex of a unit unknown on the chord's body_b and its moment ``Mc`` (N, n_x) about
+    the world origin; ``eps`` (tree joints, n_x): +1/-1 where a chord unknown acts on a
+    tree joint's subtree from outside / inside, else 0."""
+    joints, names, chords = mech.joints, topo.body_names, topo.chords
+    N = kin.theta.shape[0]
     n_x = 2 * len(chords) + 1
-    Fc = np.zeros((N, n_x), complex)  # force of a unit unknown on the chord's body_b
-    Mc = np.zeros((N, n_x))           # its moment about the world origin
+    Fc = np.zeros((N, n_x), complex)
+    Mc = np.zeros((N, n_x))
     for i, j in enumerate(chords):
         jt = joints[j]
         P = kin.joint_point[j]
@@ -149,10 +180,14 @@ def solve_forces(linkage, kin) -> Forces:
             a, b = names.index(joints[j].body_a), names.index(joints[j].body_b)
             e = (1.0 if S[b] and not S[a] else -1.0 if S[a] and not S[b] else 0.0)
             eps[t, 2 * i:2 * i + 2] = e
+    return Fc, Mc, eps
 
-    nt = len(topo.tree)
-    # net effective force of each subtree and its moment about the origin; explicit
-    # sums over the few members beat strided small matrix products
+
+def _subtree_sums(topo, f, mo):
+    """Net effective force (N, tree joints) complex of each tree joint's subtree and its
+    moment about the origin; explicit sums over the few members beat strided small
+    matrix products."""
+    N, nt = f.shape[0], len(topo.tree)
     Sf = np.empty((N, nt), complex)
     Smo = np.empty((N, nt))
     for t in range(nt):
@@ -162,6 +197,16 @@ def solve_forces(linkage, kin) -> Forces:
         for b in members[1:]:
             Sf[:, t] += f[:, b]
             Smo[:, t] += mo[:, b]
+    return Sf, Smo
+
+
+def _tree_rows(mech, topo, kin, Fc, Mc, eps, Sf, Smo):
+    """One equation per tree joint in the unknowns: a revolute joint's moment about its
+    point, a prismatic joint's force along its line.  Returns ``A`` (N, nt, n_x),
+    ``rhs`` (N, nt), the driven joint's row ``td`` and the sign ``sd`` of its effort."""
+    joints, names = mech.joints, topo.body_names
+    N, n_x = Fc.shape
+    nt = len(topo.tree)
     A = np.zeros((N, nt, n_x))
     rhs = np.zeros((N, nt))
     for t, j in enumerate(topo.tree):
@@ -180,13 +225,16 @@ def solve_forces(linkage, kin) -> Forces:
             rhs[:, t] = u.real * Sf[:, t].real + u.imag * Sf[:, t].imag
         if j == topo.driver_joint:
             td, sd = t, (1.0 if names[c] == jt.body_b else -1.0)
-    # The effort appears only in the driven joint's row: solve the other rows for the
-    # chord reactions, then that row for the effort.
+    return A, rhs, td, sd
+
+
+def _solve_unknowns(A, rhs, td, sd, sing):
+    """The effort appears only in the driven joint's row: the other rows give the chord
+    reactions (identity rows at the singular samples ``sing``, solved for their limits
+    later), then that row gives the effort.  Returns ``x`` (N, n_x)."""
+    N, nt, n_x = A.shape
     rows = [t for t in range(nt) if t != td]
     x = np.empty((N, n_x))
-    # at a singular sample the chord rows are singular too (they are the loop
-    # Jacobian's transpose): solved for their limits below, not divided by zero here
-    sing = singular_samples(kin)
     if n_x > 1:
         As = A[:, rows, :-1]
         if sing.size:
@@ -194,7 +242,14 @@ def solve_forces(linkage, kin) -> Forces:
             As[sing] = np.eye(n_x - 1)
         x[:, :-1] = solve_small(As, rhs[:, rows])
     x[:, -1] = (rhs[:, td] - np.einsum("nx,nx->n", A[:, td, :-1], x[:, :-1])) / sd
+    return x
 
+
+def _reactions(mech, topo, kin, Fc, Mc, eps, Sf, Smo, x):
+    """Every joint's force (N, 2) by body_a on body_b; a prismatic joint's normal force
+    and moment: the chords' from their unknowns, the tree joints' from the subtree sums
+    less the chord forces acting across them."""
+    joints, names, chords = mech.joints, topo.body_names, topo.chords
     joint_force, normal, moment = {}, {}, {}
     for i, j in enumerate(chords):
         jt = joints[j]
@@ -221,11 +276,4 @@ def solve_forces(linkage, kin) -> Forces:
             PS = kin.joint_point[j]
             mom = Smo[:, t] - cross(PS, Sf[:, t]) - ((Mc - cross(PS[:, None], Fc)) * x) @ eps[t]
             moment[jt.name] = mom if names[c] == jt.body_b else -mom
-    effort = x[:, -1]
-    power = effort * kin.velocity
-    resid = power - (ke_rate - load_pow)
-    ordered = {jt.name: joint_force[jt.name] for jt in joints}
-    frc = Forces(ordered, normal, moment, effort, power, ke_rate, load_pow, resid)
-    if sing.size:  # the limits along the branch, or NaN where unbounded (and said so)
-        force_limits(linkage, kin, frc, sing)
-    return frc
+    return joint_force, normal, moment
