@@ -172,7 +172,8 @@ def spanning_tree(mech: Mechanism, priority: list[int]):
 
 
 def build_topology(mech: Mechanism) -> Topology:
-    """Derive groups, unknowns, spanning tree, loops and the dyad plan."""
+    """Derive groups, unknowns, spanning tree, loops and the dyad plan (in that order,
+    one phase each; the driver's row last, after the loop terms)."""
     names = [b.name for b in mech.bodies]
     idx = {n: i for i, n in enumerate(names)}
     g0 = idx[mech.ground]
@@ -180,8 +181,41 @@ def build_topology(mech: Mechanism) -> Topology:
     joints = mech.joints
     jidx = {j.name: k for k, j in enumerate(joints)}
     body_points = [{k: np.asarray(v, float) for k, v in b.points.items()} for b in mech.bodies]
+    group_of, offset, n_groups = _rotation_groups(mech, idx)
+    prismatic = [k for k, j in enumerate(joints) if isinstance(j, Prismatic)]
+    slider_index = {k: i for i, k in enumerate(prismatic)}
+    nq = n_groups + len(prismatic)
+    # spanning tree (driver joint first)
+    dj = jidx[mech.driver.joint]
+    tree, chords, parent, order = spanning_tree(
+        mech, [dj] + [k for k in range(len(joints)) if k != dj])
+    tree = [parent[b][1] for b in order[1:]]  # tree joints in tree order
+    tree_child = order[1:]
+    subtree = _subtrees(tree_child, parent, B, g0)
+    loops = _loops(mech, idx, jidx, chords, parent, g0)
+    topo = Topology(
+        mech=mech, body_names=names, ground=g0, joint_names=[j.name for j in joints],
+        group_of=group_of, offset=offset, n_groups=n_groups, prismatic=prismatic,
+        slider_index=slider_index, tree=tree, chords=chords, parent=parent, order=order,
+        subtree=subtree, tree_child=tree_child, loops=loops, terms=None,  # type: ignore
+        driver_joint=dj, driver_row=np.zeros(nq), driver_const=0.0, driven_var=None,
+        plan=None, body_points=body_points)
+    topo.terms = _loop_terms(topo)
+    topo.driver_row, topo.driver_const = _driver_row(topo, idx, nq)
+    nz = np.flatnonzero(topo.driver_row)
+    if len(nz) == 1:
+        topo.driven_var = int(nz[0])
+    topo.plan = _dyad_plan(topo)
+    return topo
 
-    # --- rotation groups (union-find with angle offsets) ------------------
+
+def _rotation_groups(mech: Mechanism, idx: dict[str, int]):
+    """Bodies that cannot rotate relative to each other (joined by prismatic joints) form
+    a rotation group (union-find with angle offsets): ``group_of`` (B,) the group's
+    unknown (-1: the ground's group), ``offset`` (B,) rad with theta_b = theta_group +
+    offset_b, and the number of groups."""
+    B = len(mech.bodies)
+    g0 = idx[mech.ground]
     leader = list(range(B))
     off = [0.0] * B  # theta_b = theta_leader + off_b
 
@@ -192,7 +226,7 @@ def build_topology(mech: Mechanism) -> Topology:
         leader[b], off[b] = r, off[b] + o
         return r, off[b]
 
-    for j in joints:
+    for j in mech.joints:
         if isinstance(j, Prismatic):
             ga, oa = find(idx[j.guide])
             gb, ob = find(idx[j.slider])
@@ -217,18 +251,12 @@ def build_topology(mech: Mechanism) -> Topology:
             group_of[b] = -1
         else:
             group_of[b] = roots.setdefault(r, len(roots))
-    n_groups = len(roots)
-    prismatic = [k for k, j in enumerate(joints) if isinstance(j, Prismatic)]
-    slider_index = {k: i for i, k in enumerate(prismatic)}
-    nq = n_groups + len(prismatic)
+    return group_of, offset, len(roots)
 
-    # --- spanning tree (driver joint first) ------------------------------
-    dj = jidx[mech.driver.joint]
-    tree, chords, parent, order = spanning_tree(
-        mech, [dj] + [k for k in range(len(joints)) if k != dj])
-    tree = [parent[b][1] for b in order[1:]]  # tree joints in tree order
-    tree_child = order[1:]
-    subtree = np.zeros((len(tree), B), bool)
+
+def _subtrees(tree_child, parent, B: int, g0: int) -> np.ndarray:
+    """(tree joints, B) bool: the bodies on the child's side of each tree joint."""
+    subtree = np.zeros((len(tree_child), B), bool)
     for t, c in enumerate(tree_child):
         for b in range(B):
             x = b
@@ -237,15 +265,14 @@ def build_topology(mech: Mechanism) -> Topology:
                     subtree[t, b] = True
                     break
                 x = parent[x][0]
+    return subtree
 
-    def path_to_root(b):
-        out = [b]
-        while b != g0:
-            b = parent[b][0]
-            out.append(b)
-        return out
 
-    # --- loops ------------------------------------------------------------
+def _loops(mech: Mechanism, idx, jidx, chords, parent, g0: int):
+    """The loops as closed walks ``[(body, joint in, joint out), ...]``: the
+    description's own (checked against the joint graph's count), else one per chord
+    through the tree."""
+    joints = mech.joints
     loops: list[list[tuple[int, int, int]]] = []
     if mech.loops is not None:
         for lp in mech.loops:
@@ -254,36 +281,39 @@ def build_topology(mech: Mechanism) -> Topology:
             raise DescriptionError(
                 f"{len(loops)} loops given but the joint graph has {len(chords)} independent "
                 "loops (joints - bodies + 1)", mech.source)
-    else:
-        for k in chords:
-            a, b = idx[joints[k].body_a], idx[joints[k].body_b]
-            pa, pb = path_to_root(a), path_to_root(b)
-            common = next(x for x in pa if x in pb)
-            # chain of bodies: b -> ... -> common -> ... -> a, then chord a -> b.
-            chain = pb[:pb.index(common) + 1] + list(reversed(pa[:pa.index(common)]))
-            jchain = []
-            for u, v in itertools.pairwise(chain):
-                jchain.append(parent[u][1] if parent.get(u, (None,))[0] == v else parent[v][1])
-            # closed walk: body chain[i] entered by jin, left by jout
-            seq = []
-            n = len(chain)
-            for i, body in enumerate(chain):
-                jin = k if i == 0 else jchain[i - 1]
-                jout = k if i == n - 1 else jchain[i]
-                seq.append((body, jin, jout))
-            loops.append(seq)
+        return loops
 
-    topo = Topology(
-        mech=mech, body_names=names, ground=g0, joint_names=[j.name for j in joints],
-        group_of=group_of, offset=offset, n_groups=n_groups, prismatic=prismatic,
-        slider_index=slider_index, tree=tree, chords=chords, parent=parent, order=order,
-        subtree=subtree, tree_child=tree_child, loops=loops, terms=None,  # type: ignore
-        driver_joint=dj, driver_row=np.zeros(nq), driver_const=0.0, driven_var=None,
-        plan=None, body_points=body_points)
-    topo.terms = _loop_terms(topo)
+    def path_to_root(b):
+        out = [b]
+        while b != g0:
+            b = parent[b][0]
+            out.append(b)
+        return out
 
-    # --- driver row ----------------------------------------------------------
-    dj_ = joints[dj]
+    for k in chords:
+        a, b = idx[joints[k].body_a], idx[joints[k].body_b]
+        pa, pb = path_to_root(a), path_to_root(b)
+        common = next(x for x in pa if x in pb)
+        # chain of bodies: b -> ... -> common -> ... -> a, then chord a -> b.
+        chain = pb[:pb.index(common) + 1] + list(reversed(pa[:pa.index(common)]))
+        jchain = []
+        for u, v in itertools.pairwise(chain):
+            jchain.append(parent[u][1] if parent.get(u, (None,))[0] == v else parent[v][1])
+        # closed walk: body chain[i] entered by jin, left by jout
+        seq = []
+        n = len(chain)
+        for i, body in enumerate(chain):
+            jin = k if i == 0 else jchain[i - 1]
+            jout = k if i == n - 1 else jchain[i]
+            seq.append((body, jin, jout))
+        loops.append(seq)
+    return loops
+
+
+def _driver_row(topo: Topology, idx, nq: int):
+    """The driver's equation over the unknowns q: ``row . q = value + const``."""
+    dj_ = topo.mech.joints[topo.driver_joint]
+    group_of, offset = topo.group_of, topo.offset
     row = np.zeros(nq)
     const = 0.0
     if isinstance(dj_, Revolute):
@@ -291,7 +321,7 @@ def build_topology(mech: Mechanism) -> Topology:
         if group_of[a] == group_of[b]:
             raise DescriptionError(
                 f"driver joint {dj_.name!r} joins bodies that cannot rotate relative to each "
-                "other", mech.source)
+                "other", topo.mech.source)
         # theta_b - theta_a = value  ->  q_gb - q_ga = value + off_a - off_b
         if group_of[b] >= 0:
             row[group_of[b]] += 1.0
@@ -299,13 +329,8 @@ def build_topology(mech: Mechanism) -> Topology:
             row[group_of[a]] -= 1.0
         const = offset[a] - offset[b]
     else:
-        row[n_groups + slider_index[dj]] = 1.0
-    topo.driver_row, topo.driver_const = row, const
-    nz = np.flatnonzero(row)
-    if len(nz) == 1:
-        topo.driven_var = int(nz[0])
-    topo.plan = _dyad_plan(topo)
-    return topo
+        row[topo.n_groups + topo.slider_index[topo.driver_joint]] = 1.0
+    return row, const
 
 
 def _user_loop(mech, lp, idx, jidx):
