@@ -361,3 +361,14 @@ def test_library_modules_do_not_import_the_command_line():
     bad = [f"{_where(files[i.source])}:{i.line}: {i.source} imports {i.target}"
            for i in imports if i.source not in cli and i.target in cli]
     assert not bad, "library modules importing the command line:\n" + "\n".join(bad)
+
+
+def test_the_command_line_is_reports_cli():
+    """Every command's module lives in ``reports/cli/`` and every module there is the
+    command line: outside it (and the pytest entry point) nothing may import argparse or
+    a ``reports.cli`` module (:func:`test_only_the_command_line_reads_arguments`,
+    :func:`test_library_modules_do_not_import_the_command_line`)."""
+    cli = command_line_modules()
+    outside = sorted(m for m in cli if not (m == "reports.cli" or m.startswith("reports.cli."))
+                     and m not in TOP_MODULES)
+    assert not outside, f"command-line modules outside reports/cli/: {outside}"
