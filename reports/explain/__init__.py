@@ -21,11 +21,19 @@ Modules:
   loop by loop.
 * :mod:`reports.explain.notes`: Where the course notes' printed figures come from, for the
   notes' own examples.
+* :mod:`reports.explain.numbers`: The numbers of the worked solutions: significant digits
+  (:func:`digits`, :func:`num`), the printed values (:func:`fmt`, never a false 0), and the
+  check that every 'calc:' line gives the value printed beside it (:func:`reproduces`,
+  :func:`build_checked`).
 * :mod:`reports.explain.position`: Position analysis of one loop by hand: the two unknowns
   from the loop equation.
+* :mod:`reports.explain.printing`: How the worked solutions' expressions print: the notes'
+  LaTeX, plain text and MathML printers of the printing nodes (:mod:`reports.explain.sym`),
+  and their evaluation (:func:`value`, :func:`to_plain`).
 * :mod:`reports.explain.render`: Write a worked solution as Markdown, HTML or LaTeX.
 * :mod:`reports.explain.sym`: SymPy vocabulary of the worked solutions: the notes' symbols
-  and how they print.
+  and the printing nodes (printed by :mod:`reports.explain.printing`; the numbers in them
+  and the check of the printed values: :mod:`reports.explain.numbers`).
 * :mod:`reports.explain.terms`: Terms of the velocity and acceleration equations, and the
   notes' elimination.
 """

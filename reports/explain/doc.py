@@ -18,7 +18,7 @@ import sympy as sp
 from analytic import Linkage
 from analytic.mechanism import Revolute
 from analytic.toml_io import LENGTH_UNITS
-from reports.explain import sym as S
+from reports.explain import numbers as N
 from reports.explain.blocks import Document, Heading, Para, Table
 from reports.explain.forces import force_sections
 from reports.explain.kin import coupled_section, loop_sections, make_ctx, scales
@@ -55,12 +55,12 @@ def explain(mech, value: float | None = None) -> Document:
     doc.add(*_problem(ctx, rev))
     for n, loop in enumerate(polys.loops, start=1):
         if loop.unknowns:
-            doc.add(*S.build_checked(loop_sections, ctx, loop, n))
+            doc.add(*N.build_checked(loop_sections, ctx, loop, n))
         else:
             doc.add(*coupled_section(ctx, loop, n))
     doc.add(*_results(ctx))
     if mech.has_mass:
-        doc.add(*S.build_checked(force_sections, ctx))
+        doc.add(*N.build_checked(force_sections, ctx))
     doc.add(*notes_sections(ctx))
     return doc
 
@@ -106,8 +106,8 @@ def _results(ctx) -> list:
             continue
         th = math.degrees(ctx.q[g] + topo.offset[b]) % 360.0
         rows.append([f"{topo.body_names[b]} (link {ctx.polys.numbers[b]})",
-                     S.fmt(th, scale=360.0), S.fmt(ctx.qd[g], scale=sc["w"]),
-                     S.fmt(ctx.qdd[g], scale=sc["al"])])
+                     N.fmt(th, scale=360.0), N.fmt(ctx.qd[g], scale=sc["w"]),
+                     N.fmt(ctx.qdd[g], scale=sc["al"])])
     out = [Heading(2, "Results"),
            Table("links", "Links: the angle of each body's own x axis (deg), ω (rad/s), "
                  "α (rad/s²), from the hand method"
@@ -119,11 +119,11 @@ def _results(ctx) -> list:
         i = topo.n_groups + topo.slider_index[j]
         s, v, a = ctx.q[i], ctx.qd[i], ctx.qdd[i]
         srows.append([topo.joint_names[j],
-                      f"{S.fmt(s / L, scale=sc['r'] / L)} {unit} = {S.fmt(s, scale=sc['r'])} m",
-                      f"{S.fmt(v / L, scale=sc['v'] / L)} {unit}/s = "
-                      f"{S.fmt(v, scale=sc['v'])} m/s",
-                      f"{S.fmt(a / L, scale=sc['a'] / L)} {unit}/s² = "
-                      f"{S.fmt(a, scale=sc['a'])} m/s²"])
+                      f"{N.fmt(s / L, scale=sc['r'] / L)} {unit} = {N.fmt(s, scale=sc['r'])} m",
+                      f"{N.fmt(v / L, scale=sc['v'] / L)} {unit}/s = "
+                      f"{N.fmt(v, scale=sc['v'])} m/s",
+                      f"{N.fmt(a / L, scale=sc['a'] / L)} {unit}/s² = "
+                      f"{N.fmt(a, scale=sc['a'])} m/s²"])
     if srows:
         out.append(Table("sliders", "Sliders: displacement s along the line from its origin "
                          "point, its velocity and acceleration, in the file's unit and in SI",

@@ -23,6 +23,8 @@ import sympy as sp
 
 from analytic.mechanism import Revolute
 from analytic.positions import size_of
+from reports.explain import numbers as N
+from reports.explain import printing as P
 from reports.explain import sym as S
 from reports.explain.blocks import Heading, Math, Para, Table
 
@@ -39,7 +41,7 @@ def _snap(z: complex, rel: float = 1e-12) -> complex:
 
 def _dot_expr(a: complex, b: complex):
     """``a_x b_x + a_y b_y`` as printed, without the zero products (None if all are)."""
-    parts = [S.prod(S.num(p), S.num(q)) for p, q in ((a.real, b.real), (a.imag, b.imag))
+    parts = [S.prod(N.num(p), N.num(q)) for p, q in ((a.real, b.real), (a.imag, b.imag))
              if p != 0 and q != 0]
     if not parts:
         return None
@@ -126,14 +128,14 @@ def _eq_expr(rows_k, const, unk, const_label, cscale: float, lscale: float):
     constant), never by an absolute threshold that a small mechanism falls under."""
     terms = []
     for i, c in sorted(rows_k.items()):
-        if abs(c) <= S.ROUNDOFF * lscale:
+        if abs(c) <= N.ROUNDOFF * lscale:
             continue
         if abs(abs(c) - 1.0) < 1e-15:
             terms.append((1 if c > 0 else -1, unk[i][0]))
         else:
-            terms.append((1 if c > 0 else -1, S.prod(S.num(abs(c), 6), unk[i][0])))
-    if abs(const) > S.ROUNDOFF * cscale:
-        terms.append((1 if const > 0 else -1, S.num(abs(const), 6)))
+            terms.append((1 if c > 0 else -1, S.prod(N.num(abs(c), 6), unk[i][0])))
+    if abs(const) > N.ROUNDOFF * cscale:
+        terms.append((1 if const > 0 else -1, N.num(abs(const), 6)))
     return S.signed_sum(terms)
 
 
@@ -144,21 +146,21 @@ def _body_blocks(ctx, b, rows, consts, info, unk):
     m, inertia, aG, alpha = info["m"], info["I"], info["aG"], info["alpha"]
     out = [Heading(3, f"Link {k} ({name})")]
     a_mag = abs(aG)
-    out.append(Para([f"m{k} = {S.fmt(m)} kg, I{k} = {S.fmt(inertia)} kg m² about G{k}; "
-                     f"a_G{k} = ({S.fmt(aG.real)}, {S.fmt(aG.imag)}) m/s², "
-                     f"|a_G{k}| = {S.fmt(a_mag)} m/s²; α{k} = {S.fmt(alpha)} rad/s². "
-                     f"Inertia force −m{k} a_G{k} = ({S.fmt(-m * aG.real)}, "
-                     f"{S.fmt(-m * aG.imag)}) N, inertia moment −I{k} α{k} = "
-                     f"{S.fmt(-inertia * alpha)} N m."]))
+    out.append(Para([f"m{k} = {N.fmt(m)} kg, I{k} = {N.fmt(inertia)} kg m² about G{k}; "
+                     f"a_G{k} = ({N.fmt(aG.real)}, {N.fmt(aG.imag)}) m/s², "
+                     f"|a_G{k}| = {N.fmt(a_mag)} m/s²; α{k} = {N.fmt(alpha)} rad/s². "
+                     f"Inertia force −m{k} a_G{k} = ({N.fmt(-m * aG.real)}, "
+                     f"{N.fmt(-m * aG.imag)}) N, inertia moment −I{k} α{k} = "
+                     f"{N.fmt(-inertia * alpha)} N m."]))
     if m > 0 and a_mag > 0 and alpha == 0:
         out.append(Para([f"α{k} = 0, so e{k} = 0: the inertia force acts through G{k}."]))
     elif m > 0 and a_mag > 0:
         e_sym = S.Frac(S.prod(S.name("I", str(k)), S.name("alpha", str(k))),
                        S.prod(S.name("m", str(k)), S.name("a", f"G{k}")))
-        e_num = S.Frac(S.prod(S.num(inertia), S.num(alpha)), S.prod(S.num(m), S.num(a_mag)))
+        e_num = S.Frac(S.prod(N.num(inertia), N.num(alpha)), S.prod(N.num(m), N.num(a_mag)))
         e_val = inertia * alpha / (m * a_mag)
-        out.append(Math([S.name("e", str(k)), e_sym, e_num], S.fmt_of(e_val, e_num), "m",
-                        S.text(e_num),
+        out.append(Math([S.name("e", str(k)), e_sym, e_num], N.fmt_of(e_val, e_num), "m",
+                        P.text(e_num),
                         note="the resultant inertia force m a_G acts on a line offset by e "
                              "from G, so that its moment about G is the inertia moment "
                              "(the notes' inertia circle)"))
@@ -219,10 +221,10 @@ def _body_power(ctx, b, info) -> tuple[list, float]:
     terms, total = [], 0.0
     d = _dot_expr(aG, vG)
     if m > 0 and d is not None:
-        terms.append((1, S.prod(S.num(m), d)))
+        terms.append((1, S.prod(N.num(m), d)))
         total += m * (aG.real * vG.real + aG.imag * vG.imag)
     if inertia > 0 and w != 0 and info["alpha"] != 0:
-        terms.append((1, S.prod(S.num(inertia), S.num(info["alpha"]), S.num(w))))
+        terms.append((1, S.prod(N.num(inertia), N.num(info["alpha"]), N.num(w))))
         total += inertia * info["alpha"] * w
     d = _dot_expr(info["g"], vG)
     if d is not None:
@@ -235,7 +237,7 @@ def _body_power(ctx, b, info) -> tuple[list, float]:
             terms.append((-1, d))
             total -= F.real * vP.real + F.imag * vP.imag
         if ld.torque and w:
-            terms.append((-1, S.prod(S.num(ld.torque), S.num(w))))
+            terms.append((-1, S.prod(N.num(ld.torque), N.num(w))))
             total -= ld.torque * w
     return terms, total
 
@@ -252,17 +254,17 @@ def _force_table(ctx, unk, x):
             fx, fy = x[idx[0]], x[idx[1]]
             mx, my = frc.joint_force[jt.name][0]
             f = math.hypot(fx, fy)
-            rows.append([jt.name, f"F{a}{b}: {jt.body_a} on {jt.body_b}", S.fmt(fx, scale=f),
-                         S.fmt(fy, scale=f),
-                         S.fmt(math.hypot(fx, fy)), S.fmt(math.hypot(mx, my)),
+            rows.append([jt.name, f"F{a}{b}: {jt.body_a} on {jt.body_b}", N.fmt(fx, scale=f),
+                         N.fmt(fy, scale=f),
+                         N.fmt(math.hypot(fx, fy)), N.fmt(math.hypot(mx, my)),
                          f"{abs(math.hypot(fx, fy) - math.hypot(mx, my)):.2g}"])
         else:
             nn, mm = x[idx[0]], x[idx[1]]
             sn = float(frc.normal[jt.name][0])
             rows.append([jt.name, f"N{a}{b}, M{a}{b}: {jt.guide} on {jt.slider}",
-                         f"N = {S.fmt(nn)}", f"M = {S.fmt(mm, scale=abs(nn) * size)} N m",
-                         S.fmt(abs(nn)),
-                         S.fmt(abs(sn)), f"{abs(abs(nn) - abs(sn)):.2g}"])
+                         f"N = {N.fmt(nn)}", f"M = {N.fmt(mm, scale=abs(nn) * size)} N m",
+                         N.fmt(abs(nn)),
+                         N.fmt(abs(sn)), f"{abs(abs(nn) - abs(sn)):.2g}"])
     return [Table("forces", "Joint forces (N), by the first link on the second, world axes; "
                   "the solver's tree-reduced method beside",
                   ["joint", "force", "F_x", "F_y", "|F| (hand)", "|F| (matrix method)",
@@ -277,30 +279,30 @@ def _drive(ctx, unk, x, eqs):
     frc = ctx.lk.forces(kin)
     sym, unit = (sp.Symbol("T"), "N m") if rev else (S.name("F", "d"), "N")
     rate = sp.Symbol("omega") if rev else sp.Symbol("v")
-    p_num = S.prod(S.num(eff), S.num(vel))
+    p_num = S.prod(N.num(eff), N.num(vel))
     power = eff * vel
     ctx.extra["effort"], ctx.extra["power"] = eff, power
     out = [Heading(3, "Motor torque and power" if rev else "Drive force and power"),
-           Math([sym], S.fmt(eff), unit,
-                note=f"the matrix method gives {S.fmt(float(frc.effort[0]))} {unit}"),
-           Math([sp.Symbol("P"), S.prod(sym, rate), p_num], S.fmt_of(power, p_num), "W",
-                S.text(p_num))]
+           Math([sym], N.fmt(eff), unit,
+                note=f"the matrix method gives {N.fmt(float(frc.effort[0]))} {unit}"),
+           Math([sp.Symbol("P"), S.prod(sym, rate), p_num], N.fmt_of(power, p_num), "W",
+                P.text(p_num))]
     # one line per link: a single sum over every link scrolled off any page
     per_body = [(b, *_body_power(ctx, b, info)) for b, _, _, info in eqs]
     # a link's round-off power (the crank at constant speed) is its printed 0 in the sum too
-    per_body = [(b, t, 0.0 if S.fmt_of(v, S.signed_sum(t)) == "0" else v)
+    per_body = [(b, t, 0.0 if N.fmt_of(v, S.signed_sum(t)) == "0" else v)
                 for b, t, v in per_body if t]
     total = sum(v for _, _, v in per_body)
     names = [S.name("P", str(ctx.polys.numbers[b])) for b, _, _ in per_body]
-    nums = S.signed_sum([(1 if v >= 0 else -1, S.num(abs(v))) for _, _, v in per_body])
+    nums = S.signed_sum([(1 if v >= 0 else -1, N.num(abs(v))) for _, _, v in per_body])
     out += [Para(["Check by the power balance: the input power equals the rate of change of "
                   "kinetic energy, Σ (m a_G·v_G + I α ω), less the power of the loads and of "
                   "gravity, Σ F·v_P; one term per moving link, each worked below:"]),
             Math([sp.Symbol("P"), S.signed_sum([(1, n) for n in names]), nums],
-                 S.fmt_of(total, nums), "W", S.text(nums),
+                 N.fmt_of(total, nums), "W", P.text(nums),
                  note=f"T ω − (this) = {power - total:.3g} W")]
     for (b, terms, v), nm in zip(per_body, names, strict=True):
         bal = S.signed_sum(terms)
-        out.append(Math([nm, bal], S.fmt_of(v, bal), "W", S.text(bal),
+        out.append(Math([nm, bal], N.fmt_of(v, bal), "W", P.text(bal),
                         note=f"link {ctx.polys.numbers[b]} ({ctx.lk.topo.body_names[b]})"))
     return out

@@ -18,6 +18,8 @@ import numpy as np
 import sympy as sp
 
 from analytic.positions import size_of
+from reports.explain import numbers as N
+from reports.explain import printing as P
 from reports.explain import sym as S
 from reports.explain.blocks import Heading, Math, Para, Table
 from reports.explain.draw import polygon_figure
@@ -125,7 +127,7 @@ def _cols(loop):
 def scales(ctx) -> dict[str, float]:
     """The magnitudes the tables' values are computed from (SI): the mechanism's size,
     and the velocity and acceleration scales that its largest rates give.  A value
-    below :data:`reports.explain.sym.ROUNDOFF` of its kind's scale is round-off of a
+    below :data:`reports.explain.numbers.ROUNDOFF` of its kind's scale is round-off of a
     zero (a slider passing its origin, a rate at a dwell); anything larger is printed
     at its own scale, however small the mechanism."""
     kin, ng = ctx.kin, ctx.ng
@@ -143,12 +145,12 @@ def _fmt(ctx, x: float, kind: str, per_unit: bool = True) -> str:
     sc = scales(ctx)[kind]
     if per_unit and kind in ("r", "v", "a"):
         sc /= ctx.L
-    return S.fmt(x, scale=sc)
+    return N.fmt(x, scale=sc)
 
 
 def _deg_cell(a: float) -> str:
-    s = S.fmt(a, scale=360.0)
-    return s + (f" ({S.fmt(a - 360.0, scale=360.0)})" if a > 180.0 else "")
+    s = N.fmt(a, scale=360.0)
+    return s + (f" ({N.fmt(a - 360.0, scale=360.0)})" if a > 180.0 else "")
 
 
 def _rate_cell(loop, v, vals, ctx, which):
@@ -215,7 +217,7 @@ def position_section(ctx: Ctx, loop: Loop, n: int) -> list:
                      [[RR, ctx.unit] + [_fmt(ctx, nn.r[v.label], "r") for v in loop.vectors],
                       [TH, "deg"] + [_deg_cell(nn.theta[v.label]) for v in loop.vectors]]))
     notes = [f"θ{v.label} is the angle of the loop vector r{v.label}; the "
-             f"{_body(ctx, v.body)}'s own x axis is at {S.fmt(_body_angle(ctx, v.body))}°"
+             f"{_body(ctx, v.body)}'s own x axis is at {N.fmt(_body_angle(ctx, v.body))}°"
              for v in loop.vectors if v.kind == "body" and v.group >= 0
              and abs((angle(v, ctx.q) - math.radians(_body_angle(ctx, v.body)) + math.pi)
                      % (2 * math.pi) - math.pi) > 1e-9]
@@ -262,7 +264,7 @@ def velocity_equation(ctx: Ctx, loop: Loop) -> tuple[list, list]:
         if rl is not None and rl != v.label:
             w = next(u for u in loop.vectors if u.label == rl)
             off = math.degrees(v.beta - w.beta) % 360.0
-            out.append(Para([S.th(v.label), " = ", S.th(rl), f" + {S.fmt(off)}°: r{v.label} "
+            out.append(Para([S.th(v.label), " = ", S.th(rl), f" + {N.fmt(off)}°: r{v.label} "
                              f"and r{rl} turn together (one rotation), so ",
                              S.th(v.label, 1), " = ", S.th(rl, 1), "."]))
     out.append(Para(["The velocity equation:"]))
@@ -302,8 +304,8 @@ def _solve_for(ctx, loop, terms, nn, what: str) -> list:
             Math([dotted, sp.Integer(0)],
                  note="under each term its dot product: μ(a)·μ(b) = σ(a)·σ(b) = cos(a − b), "
                       "μ(a)·σ(b) = sin(a − b), σ(a)·μ(b) = sin(b − a)"),
-            Math([el.x_sym, el.closed, el.substituted], S.fmt_of(el.value, el.substituted), unit,
-                 S.text(el.substituted)),
+            Math([el.x_sym, el.closed, el.substituted], N.fmt_of(el.value, el.substituted), unit,
+                 P.text(el.substituted)),
         ]
         store = ctx.qd if what == "velocity" else ctx.qdd
         store[x.q] = el.value * (ctx.L if x.kind == "s" else 1.0)

@@ -23,6 +23,8 @@ import math
 
 import sympy as sp
 
+from reports.explain import numbers as N
+from reports.explain import printing as P
 from reports.explain import sym as S
 from reports.explain.blocks import Math, Para
 from reports.explain.loops import Loop, LoopVector, Var
@@ -54,7 +56,7 @@ def _sum_sym(vs, fn):
 
 
 def _sum_num(vs, fn, r, th):
-    return S.signed_sum([(1, S.prod(S.num(r[v.label]), fn(S.Deg(S.num(th[v.label])))))
+    return S.signed_sum([(1, S.prod(N.num(r[v.label]), fn(S.Deg(N.num(th[v.label])))))
                          for v in vs])
 
 
@@ -93,12 +95,12 @@ def _dvec(loop, unknown, r, th):
     blocks = [
         Math([S.name("D", "x"), S.Neg(_sum_sym(known, S.cos)), S.Neg(_sum_num(known, S.cos,
                                                                             r, th))],
-             S.fmt_of(dx, S.Neg(_sum_num(known, S.cos, r, th))), "",
-             S.text(S.Neg(_sum_num(known, S.cos, r, th)))),
+             N.fmt_of(dx, S.Neg(_sum_num(known, S.cos, r, th))), "",
+             P.text(S.Neg(_sum_num(known, S.cos, r, th)))),
         Math([S.name("D", "y"), S.Neg(_sum_sym(known, S.sin)), S.Neg(_sum_num(known, S.sin,
                                                                             r, th))],
-             S.fmt_of(dy, S.Neg(_sum_num(known, S.sin, r, th))), "",
-             S.text(S.Neg(_sum_num(known, S.sin, r, th)))),
+             N.fmt_of(dy, S.Neg(_sum_num(known, S.sin, r, th))), "",
+             P.text(S.Neg(_sum_num(known, S.sin, r, th)))),
     ]
     return dx, dy, blocks
 
@@ -119,19 +121,19 @@ def _two_angles(loop, va, vb, r, th, want):
     tb = _wrap(math.degrees(math.atan2(dy - ra * math.sin(ta * DEG),
                                        dx - ra * math.cos(ta * DEG))))
     Dx, Dy, Dm, dl = S.name("D", "x"), S.name("D", "y"), sp.Symbol("D"), sp.Symbol("delta")
-    nDx, nDy = S.num(dx), S.num(dy)
+    nDx, nDy = N.num(dx), N.num(dy)
     mag = sp.sqrt(sp.Add(S.sq(nDx), S.sq(nDy), evaluate=False), evaluate=False)
     sgn = 1 if k == 0 else -1
     acos_sym = S.acos(S.Frac(sp.Add(S.sq(S.r(a)), S.sq(Dm), sp.Mul(-1, S.sq(S.r(b)),
                                                                      evaluate=False),
                                     evaluate=False), S.prod(2, S.r(a), Dm)))
-    acos_num = S.acos(S.Frac(sp.Add(S.sq(S.num(ra)), S.sq(S.num(d)),
-                                    sp.Mul(-1, S.sq(S.num(rb)), evaluate=False),
-                                    evaluate=False), S.prod(2, S.num(ra), S.num(d))))
-    ta_num = S.signed_sum([(1, S.num(delta)), (sgn, acos_num)])
-    tb_num = S.atan2(S.signed_sum([(1, S.num(dy)), (-1, S.prod(S.num(ra), S.sin(S.Deg(
-        S.num(ta)))))]), S.signed_sum([(1, S.num(dx)), (-1, S.prod(S.num(ra), S.cos(S.Deg(
-            S.num(ta)))))]))
+    acos_num = S.acos(S.Frac(sp.Add(S.sq(N.num(ra)), S.sq(N.num(d)),
+                                    sp.Mul(-1, S.sq(N.num(rb)), evaluate=False),
+                                    evaluate=False), S.prod(2, N.num(ra), N.num(d))))
+    ta_num = S.signed_sum([(1, N.num(delta)), (sgn, acos_num)])
+    tb_num = S.atan2(S.signed_sum([(1, N.num(dy)), (-1, S.prod(N.num(ra), S.sin(S.Deg(
+        N.num(ta)))))]), S.signed_sum([(1, N.num(dx)), (-1, S.prod(N.num(ra), S.cos(S.Deg(
+            N.num(ta)))))]))
     tb_raw = math.degrees(math.atan2(dy - ra * math.sin(ta * DEG), dx - ra * math.cos(ta * DEG)))
     blocks = [
         Para([f"Two angles are unknown, θ{a} and θ{b}. Move the known vectors to the "
@@ -139,21 +141,21 @@ def _two_angles(loop, va, vb, r, th, want):
               S.prod(S.r(b), S.MU(S.th(b))), " = D, with D = −(sum of the known vectors):"]),
         *blocks,
         Math([Dm, sp.sqrt(sp.Add(S.sq(Dx), S.sq(Dy), evaluate=False), evaluate=False), mag],
-             S.fmt_of(d, mag), "", S.text(mag)),
-        Math([dl, S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt_of(delta, S.atan2(nDy, nDx)), "deg",
-             S.text(S.atan2(nDy, nDx))),
+             N.fmt_of(d, mag), "", P.text(mag)),
+        Math([dl, S.atan2(Dy, Dx), S.atan2(nDy, nDx)], N.fmt_of(delta, S.atan2(nDy, nDx)), "deg",
+             P.text(S.atan2(nDy, nDx))),
         Para([f"r{a}, r{b} and D form a triangle; the law of cosines gives the angle between "
               f"D and r{a}:"]),
-        Math([S.th(a), S.signed_sum([(1, dl), (sgn, acos_sym)]), ta_num], S.fmt_of(
-            delta + sgn * gam, ta_num), "deg", S.text(ta_num),
+        Math([S.th(a), S.signed_sum([(1, dl), (sgn, acos_sym)]), ta_num], N.fmt_of(
+            delta + sgn * gam, ta_num), "deg", P.text(ta_num),
              note=f"the sign {'+' if sgn > 0 else '−'} is the description's assembly; the "
-                  f"other sign gives the other branch, θ{a} = {S.fmt(cands[1 - k])}°"),
+                  f"other sign gives the other branch, θ{a} = {N.fmt(cands[1 - k])}°"),
         Math([S.th(b), S.atan2(sp.Add(Dy, sp.Mul(-1, S.r(a), S.sin(S.th(a)), evaluate=False),
                                       evaluate=False),
                                sp.Add(Dx, sp.Mul(-1, S.r(a), S.cos(S.th(a)), evaluate=False),
                                       evaluate=False)), tb_num],
-             S.fmt_of(tb_raw, tb_num), "deg", S.text(tb_num),
-             note=f"= {S.fmt(tb)}° in [0°, 360°)" if abs(tb - tb_raw) > 1e-9 else ""),
+             N.fmt_of(tb_raw, tb_num), "deg", P.text(tb_num),
+             note=f"= {N.fmt(tb)}° in [0°, 360°)" if abs(tb - tb_raw) > 1e-9 else ""),
     ]
     return blocks, {a: (ra, ta), b: (rb, tb)}
 
@@ -170,24 +172,24 @@ def _angle_and_length(loop, va, vs, r, th, want):
     cands = [_wrap(ts + base), _wrap(ts + 180.0 - base)]
     k = min((0, 1), key=lambda i: _close(cands[i], want[a][1]))
     ta = cands[k]
-    tsym, tnum = S.th(s), S.Deg(S.num(ts))
+    tsym, tnum = S.th(s), S.Deg(N.num(ts))
 
     def sin_terms(vs_, num):
         if num:
-            return S.signed_sum([(1, S.prod(S.num(r[v.label]), S.sin(S.diff_angle(
-                S.Deg(S.num(th[v.label])), tnum)))) for v in vs_])
+            return S.signed_sum([(1, S.prod(N.num(r[v.label]), S.sin(S.diff_angle(
+                S.Deg(N.num(th[v.label])), tnum)))) for v in vs_])
         return S.signed_sum([(1, S.prod(S.r(v.label), S.sin(S.diff_angle(S.th(v.label), tsym))))
                              for v in vs_])
 
     asin_sym = S.asin(S.Frac(S.Neg(sin_terms(known, False)), S.r(a)))
-    asin_num = S.asin(S.Frac(S.Neg(sin_terms(known, True)), S.num(r[a])))
+    asin_num = S.asin(S.Frac(S.Neg(sin_terms(known, True)), N.num(r[a])))
     if k == 0:
         ta_sym = sp.Add(tsym, asin_sym, evaluate=False)
-        ta_num = sp.Add(S.num(ts), asin_num, evaluate=False)
+        ta_num = sp.Add(N.num(ts), asin_num, evaluate=False)
         ta_raw = ts + base
     else:
-        ta_sym = S.signed_sum([(1, tsym), (1, S.num(180)), (-1, asin_sym)])
-        ta_num = S.signed_sum([(1, S.num(ts)), (1, S.num(180)), (-1, asin_num)])
+        ta_sym = S.signed_sum([(1, tsym), (1, N.num(180)), (-1, asin_sym)])
+        ta_num = S.signed_sum([(1, N.num(ts)), (1, N.num(180)), (-1, asin_num)])
         ta_raw = ts + 180.0 - base
     allk = known + [va]
     th2 = dict(th)
@@ -195,23 +197,23 @@ def _angle_and_length(loop, va, vs, r, th, want):
     rs = -sum(r[v.label] * math.cos((th2[v.label] - ts) * DEG) for v in allk)
     cos_sym = S.Neg(S.signed_sum([(1, S.prod(S.r(v.label), S.cos(S.diff_angle(
         S.th(v.label), tsym)))) for v in allk]))
-    cos_num = S.Neg(S.signed_sum([(1, S.prod(S.num(r[v.label]), S.cos(S.diff_angle(
-        S.Deg(S.num(th2[v.label])), tnum)))) for v in allk]))
+    cos_num = S.Neg(S.signed_sum([(1, S.prod(N.num(r[v.label]), S.cos(S.diff_angle(
+        S.Deg(N.num(th2[v.label])), tnum)))) for v in allk]))
     eq = S.signed_sum([(1, S.prod(S.r(v.label), S.MU(S.th(v.label)))) for v in loop.vectors])
     blocks = [
         Para([f"The unknowns are the angle θ{a} and the length r{s}, whose direction θ{s} = "
-              f"{S.fmt(ts)}° is known. Dot the loop equation with σ(θ{s}): the r{s} term "
+              f"{N.fmt(ts)}° is known. Dot the loop equation with σ(θ{s}): the r{s} term "
               f"vanishes (μ(θ{s})·σ(θ{s}) = 0) and μ(θk)·σ(θ{s}) = sin(θk − θ{s}):"]),
         Math([S.Dot(S.SIGMA(tsym), S.Bracket(eq)), sp.Integer(0)]),
         Math([S.signed_sum([(1, S.prod(S.r(v.label), S.sin(S.diff_angle(S.th(v.label), tsym))))
                             for v in allk]), sp.Integer(0)]),
-        Math([S.th(a), ta_sym, ta_num], S.fmt_of(ta_raw, ta_num), "deg", S.text(ta_num),
-             note=(f"= {S.fmt(ta)}° in [0°, 360°)"
-                   + (f", i.e. {S.fmt(ta - 360)}°" if ta > 180 else "")
-                   + f"; the other root, θ{a} = {S.fmt(cands[1 - k])}°, is the other branch")),
+        Math([S.th(a), ta_sym, ta_num], N.fmt_of(ta_raw, ta_num), "deg", P.text(ta_num),
+             note=(f"= {N.fmt(ta)}° in [0°, 360°)"
+                   + (f", i.e. {N.fmt(ta - 360)}°" if ta > 180 else "")
+                   + f"; the other root, θ{a} = {N.fmt(cands[1 - k])}°, is the other branch")),
         Para([f"Dot the loop equation with μ(θ{s}) (μ(θk)·μ(θ{s}) = cos(θk − θ{s})) for "
               f"r{s}:"]),
-        Math([S.r(s), cos_sym, cos_num], S.fmt_of(rs, cos_num), "", S.text(cos_num)),
+        Math([S.r(s), cos_sym, cos_num], N.fmt_of(rs, cos_num), "", P.text(cos_num)),
     ]
     return blocks, {a: (r[a], ta), s: (rs, ts)}
 
@@ -225,7 +227,7 @@ def _polar(loop, vs, r, th, want):
     flip = _close(t0, want[s][1]) > 90.0
     ts, rs = (_wrap(t0 + 180.0), -d) if flip else (t0, d)
     Dx, Dy = S.name("D", "x"), S.name("D", "y")
-    nDx, nDy = S.num(dx), S.num(dy)
+    nDx, nDy = N.num(dx), N.num(dy)
     mag = sp.sqrt(sp.Add(S.sq(nDx), S.sq(nDy), evaluate=False), evaluate=False)
     raw = math.degrees(math.atan2(dy, dx))
     blocks = [
@@ -234,13 +236,13 @@ def _polar(loop, vs, r, th, want):
               "polar form:"]),
         *blocks,
         Math([S.r(s), sp.sqrt(sp.Add(S.sq(Dx), S.sq(Dy), evaluate=False), evaluate=False),
-              mag], S.fmt_of(d, mag), "", S.text(mag),
-             note=f"taken negative, r{s} = {S.fmt(rs)}, with θ{s} turned by 180°: the "
+              mag], N.fmt_of(d, mag), "", P.text(mag),
+             note=f"taken negative, r{s} = {N.fmt(rs)}, with θ{s} turned by 180°: the "
                   "description's assembly" if flip else ""),
-        Math([S.th(s), S.atan2(Dy, Dx), S.atan2(nDy, nDx)], S.fmt_of(raw, S.atan2(nDy, nDx)),
+        Math([S.th(s), S.atan2(Dy, Dx), S.atan2(nDy, nDx)], N.fmt_of(raw, S.atan2(nDy, nDx)),
              "deg",
-             S.text(S.atan2(nDy, nDx)),
-             note=f"θ{s} = {S.fmt(ts)}° in [0°, 360°)" if abs(ts - raw) > 1e-9 else ""),
+             P.text(S.atan2(nDy, nDx)),
+             note=f"θ{s} = {N.fmt(ts)}° in [0°, 360°)" if abs(ts - raw) > 1e-9 else ""),
     ]
     return blocks, {s: (rs, ts)}
 
@@ -253,15 +255,15 @@ def _two_lengths(loop, va, vb, r, th):
         to = th[other]
         num_sym = S.Neg(S.signed_sum([(1, S.prod(S.r(v.label), S.sin(S.diff_angle(
             S.th(v.label), S.th(other))))) for v in known]))
-        num_num = S.Neg(S.signed_sum([(1, S.prod(S.num(r[v.label]), S.sin(S.diff_angle(
-            S.Deg(S.num(th[v.label])), S.Deg(S.num(to)))))) for v in known]))
+        num_num = S.Neg(S.signed_sum([(1, S.prod(N.num(r[v.label]), S.sin(S.diff_angle(
+            S.Deg(N.num(th[v.label])), S.Deg(N.num(to)))))) for v in known]))
         den_sym = S.sin(S.diff_angle(S.th(x), S.th(other)))
-        den_num = S.sin(S.diff_angle(S.Deg(S.num(th[x])), S.Deg(S.num(to))))
+        den_num = S.sin(S.diff_angle(S.Deg(N.num(th[x])), S.Deg(N.num(to))))
         val = (-sum(r[v.label] * math.sin((th[v.label] - to) * DEG) for v in known)
                / math.sin((th[x] - to) * DEG))
         expr = S.Frac(num_num, den_num)
         blocks += [Para([f"Dot with σ(θ{other}) to remove r{other}:"]),
-                   Math([S.r(x), S.Frac(num_sym, den_sym), expr], S.fmt_of(val, expr), "",
-                        S.text(expr))]
+                   Math([S.r(x), S.Frac(num_sym, den_sym), expr], N.fmt_of(val, expr), "",
+                        P.text(expr))]
         out[x] = (val, th[x])
     return blocks, out

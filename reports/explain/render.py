@@ -19,7 +19,7 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from reports.explain import sym as S
+from reports.explain import printing as P
 from reports.explain.blocks import Document, Figure, Heading, Math, Para, Table
 
 
@@ -31,7 +31,7 @@ def _parts(parts, math, text) -> str:
 
 
 def _md_parts(parts) -> str:
-    return _parts(parts, lambda e: f"${S.latex(e)}$", lambda s: s)
+    return _parts(parts, lambda e: f"${P.latex(e)}$", lambda s: s)
 
 
 def _html_parts(parts) -> str:
@@ -39,7 +39,7 @@ def _html_parts(parts) -> str:
 
 
 def _tex_parts(parts) -> str:
-    return _parts(parts, lambda e: f"${S.latex(e)}$", _tex_text)
+    return _parts(parts, lambda e: f"${P.latex(e)}$", _tex_text)
 
 
 def _calc(b: Math) -> str:
@@ -72,7 +72,7 @@ def _value_ml(value: str) -> str:
 
 
 def _chain_tex(b: Math) -> str:
-    parts = [S.latex(p) for p in b.parts]
+    parts = [P.latex(p) for p in b.parts]
     if b.value is not None:
         v = _value_tex(b.value) + (r"^\circ" if b.unit == "deg" else _unit_tex(b.unit))
         parts.append(v)
@@ -85,7 +85,7 @@ def _chain_tex(b: Math) -> str:
 def _cell_md(c) -> str:
     if isinstance(c, str):
         return c.replace("|", "\\|")
-    return f"${S.latex(c)}$"
+    return f"${P.latex(c)}$"
 
 
 def _numbers(doc: Document) -> dict[int, int]:
@@ -149,11 +149,11 @@ def _ml(e, display: bool = False) -> str:
     if isinstance(e, str):
         return _html.escape(e)
     d = ' display="block"' if display else ""
-    return f'<math xmlns="http://www.w3.org/1998/Math/MathML"{d}>{S.mathml(e)}</math>'
+    return f'<math xmlns="http://www.w3.org/1998/Math/MathML"{d}>{P.mathml(e)}</math>'
 
 
 def _chain_items(b: Math) -> list[str]:
-    items = [S.mathml(p) for p in b.parts]
+    items = [P.mathml(p) for p in b.parts]
     if b.value is not None:
         unit = {"deg": "<mo>°</mo>"}.get(b.unit, f"<mspace width='0.3em'/><mtext>"
                                          f"{_html.escape(b.unit.replace('^2', '²'))}</mtext>"
@@ -283,7 +283,7 @@ def _tex_text(s: str) -> str:
 
 
 def _tex_cell(c) -> str:
-    return _tex_text(c) if isinstance(c, str) else f"${S.latex(c)}$"
+    return _tex_text(c) if isinstance(c, str) else f"${P.latex(c)}$"
 
 
 def to_latex(doc: Document) -> str:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from reports.explain import numbers as N
 from reports.explain import sym as S
 from reports.explain.loops import Loop, LoopVector, Var, parallel
 
@@ -110,8 +111,8 @@ def factor_val(kind: str, lab: str, n: Numbers) -> float:
 
 def factor_num(kind: str, lab: str, n: Numbers):
     if kind == "w2":
-        return S.sq(S.num(n.w[lab]))
-    return S.num(factor_val(kind, lab, n))
+        return S.sq(N.num(n.w[lab]))
+    return N.num(factor_val(kind, lab, n))
 
 
 def unit_sym(unit: str, lab: str):
@@ -130,7 +131,7 @@ def equation_sym(terms: list[Term]):
 
 
 def angle_num(lab: str, n: Numbers):
-    return S.Deg(S.num(n.theta[lab]))
+    return S.Deg(N.num(n.theta[lab]))
 
 
 # -- dot products ---------------------------------------------------------------------

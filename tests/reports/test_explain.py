@@ -482,16 +482,16 @@ def test_a_nano_mechanism_prints_its_lengths():
 
 
 def test_the_self_check_refuses_a_zero_that_hides_a_value():
-    from reports.explain import sym as S
+    from reports.explain import numbers as N
     from reports.explain.blocks import Math
-    assert not S.reproduces("6.73337865e-13*15", "0")        # the micro four-bar's power
-    assert S.reproduces("-(0.2*sind(180) + 0*sind(270))", "0")  # a true zero
-    assert S.reproduces("6.73337865e-13*15", "1.01001e-11")
-    assert not S.reproduces("acosd(1.0000000001)", "0")       # no real value at all
-    with pytest.raises(S.CheckError):
-        S.build_checked(lambda: [Math([sp.Symbol("P")], "0", "W", "6.73337865e-13*15")])
-    assert S.fmt(6.73337865e-13) == "6.73338e-13"
-    assert S.fmt(-2.4e-17, scale=0.2) == "0" and S.fmt(-2.4e-17) == "-2.4e-17"
+    assert not N.reproduces("6.73337865e-13*15", "0")        # the micro four-bar's power
+    assert N.reproduces("-(0.2*sind(180) + 0*sind(270))", "0")  # a true zero
+    assert N.reproduces("6.73337865e-13*15", "1.01001e-11")
+    assert not N.reproduces("acosd(1.0000000001)", "0")       # no real value at all
+    with pytest.raises(N.CheckError):
+        N.build_checked(lambda: [Math([sp.Symbol("P")], "0", "W", "6.73337865e-13*15")])
+    assert N.fmt(6.73337865e-13) == "6.73338e-13"
+    assert N.fmt(-2.4e-17, scale=0.2) == "0" and N.fmt(-2.4e-17) == "-2.4e-17"
 
 
 TOGGLE = """name = "toggle"
