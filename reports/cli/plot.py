@@ -119,7 +119,8 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
     if engines:
         for e in engines:
             with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
-                r, c = verdict_runs.run_comparison(tree, e, settings[e], "run", revolutions, samples)
+                r, c = verdict_runs.run_comparison(tree, e, settings[e], "run", revolutions,
+                                                   samples)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")

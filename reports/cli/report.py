@@ -1,6 +1,6 @@
 """``xval report``'s run: the options into a :class:`reports.report.build.ReportConfig`,
-progress by phase, the console verdict and the wall time (registered with the engine
-commands in :mod:`reports.cli.engines`; the report itself is :mod:`reports.report.build`).
+progress by phase, the console verdict and the wall time (the report itself is
+:mod:`reports.report.build`).
 """
 
 from __future__ import annotations
@@ -13,6 +13,9 @@ import pandas as pd
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from analytic.errors import OutputError
+from reports.cli import options as opt
+from reports.cli.compare import note_skipped_engines
 from reports.report import build as report
 from reports.report.console import free_counts_line, free_failure_lines, print_verdict
 from reports.report.tables import accepted
@@ -74,3 +77,30 @@ def exit_status(summary: pd.DataFrame, free: pd.DataFrame | None) -> int:
 
 
 __all__ = ["exit_status", "run"]
+
+
+def cmd_report(args) -> int:
+    try:
+        status = run(args)
+        note_skipped_engines()  # the report ran every installed engine (after the
+        return status           # inputs were checked: bad input stays one line)
+    except OSError as e:  # the output folder was checked at --out; a race or a full disk
+        if e.filename is None:
+            raise
+        raise OutputError(f"cannot write {e.filename!r}: {e.strerror}") from None
+
+
+def register(sub) -> None:
+    """Add ``report`` to ``xval``'s subparsers."""
+    s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
+    s.add_argument("--out", type=opt.output_dir,
+                   help="output directory (default reports/out/<timestamp>)")
+    s.add_argument("--quick", action="store_true",
+                   help="the quick variant (about 25 s on an idle 2-core machine)")
+    s.add_argument("--cases", nargs="+", type=opt.case_or_file,
+                   help="only these cases (built-in names or TOML files)")
+    s.add_argument("--workers", type=opt.workers,
+                   help=f"process-pool size, 1 to {opt.MAX_WORKERS} (default: cores)")
+    s.add_argument("--dask", metavar="SCHEDULER_ADDRESS", type=opt.scheduler_address,
+                   help="run the study tasks on an existing Dask distributed scheduler")
+    s.set_defaults(func=cmd_report)

@@ -31,10 +31,10 @@ COMMANDS = {
     "sweep": ("reports.cli.solve", "full-cycle table"),
     "explain": ("reports.cli.explain",
                 "worked solution of one configuration, in the notes' method"),
-    "models": ("reports.cli.engines", "write the MJCF/URDF files of one case, or of all"),
-    "compare": ("reports.cli.engines", "run engines and compare with the analytic solution"),
-    "baseline": ("reports.cli.engines", "record engine errors, later check them for drift"),
-    "report": ("reports.cli.engines", "the validation report (HTML, Markdown, CSV)"),
+    "models": ("reports.cli.models", "write the MJCF/URDF files of one case, or of all"),
+    "compare": ("reports.cli.compare", "run engines and compare with the analytic solution"),
+    "baseline": ("reports.cli.baseline", "record engine errors, later check them for drift"),
+    "report": ("reports.cli.report", "the validation report (HTML, Markdown, CSV)"),
     "plot": ("reports.cli.plot", "full-cycle curves of one linkage (engines optional), or "
              "its free motion against time"),
     "animate": ("reports.cli.animate", "the linkage moving through a cycle, or its free motion "

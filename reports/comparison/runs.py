@@ -1,7 +1,7 @@
 """Verdict runs: one engine on one compiled linkage, compared with its analytic solution.
 
 :func:`run_verdict` is the one compile -> run -> compare of the project: ``xval compare``
-(:mod:`reports.cli.engines`), the report's engine tasks (:mod:`reports.report.build`, through
+(:mod:`reports.cli.compare`), the report's engine tasks (:mod:`reports.report.build`, through
 :func:`run_comparison`), ``xval plot --engine``, the baselines
 (:func:`reports.regression.baseline.run_and_compare`) and the pytest plugin
 (:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from

@@ -119,7 +119,7 @@ def test_missing_optional_library_is_skipped_and_explained(capsys):
     says how to install it, status 2 (an ImportError as well, for library callers).  The
     pinocchio entry is pointed at a library that does not exist (the command line's
     ``--engine`` choices are built once per process, from the registered names)."""
-    from reports.cli.engines import note_skipped_engines
+    from reports.cli.compare import note_skipped_engines
     from reports.cli.xval import main
     keep = _REGISTRY["pinocchio"]
     register_engine("pinocchio", keep.module, keep.session, keep.description,

@@ -1,7 +1,6 @@
-"""Engine and report commands of ``xval`` (``models``, ``compare``, ``report``).
-
-Kept apart from :mod:`reports.cli.xval` so that ``xval solve`` never imports an engine.
-"""
+"""``xval compare CASE|FILE``: engines run on a linkage and compared with the analytic
+solution (:func:`reports.comparison.runs.run_verdict`), as tables, JSON, JUnit XML or
+a Markdown summary."""
 
 from __future__ import annotations
 
@@ -13,12 +12,9 @@ import textwrap
 import pandas as pd
 
 from analytic import load_case
-from analytic.errors import OutputError
 from analytic.input_display import format_input, input_number
-from reports.cli import baseline as baseline_cli
 from reports.cli import options as opt
 from reports.cli.paths import check_outputs
-from reports.cli.report import run
 from reports.comparison import runs as verdict_runs
 from reports.comparison.compare import FAIL, PASS, json_safe, step_note, verdict_word
 from reports.comparison.progress import engine_progress
@@ -27,22 +23,7 @@ from reports.comparison.runs import engine_list, settings_for
 from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
 from sim_models import compile_linkage
 from sim_models.engine_run import RunRequest
-from sim_models.models import MODELS_DIR, write_models
 from sim_models.registry import engine_names, skipped_engines
-
-
-def cmd_models(args) -> int:
-    if args.case and not args.out:
-        raise opt.UsageError("xval models CASE_OR_FILE needs --out DIR (the default folder, "
-                             "sim_models/models, holds the built-in cases' committed files)")
-    paths = write_models(args.out or MODELS_DIR, [args.case] if args.case else None)
-    print(f"wrote {len(paths)} files to {args.out or MODELS_DIR}")
-    for p in paths:
-        if p.suffix == ".xml":
-            print(f"view it turning: python -m mujoco.viewer --mjcf={p}  (or xval view "
-                  f"{args.case or p.stem}; keyframe 'assembled' is the prescribed start)")
-            break
-    return 0
 
 
 def cmd_compare(args) -> int:
@@ -165,24 +146,8 @@ def note_skipped_engines() -> None:
         print(f"xval: note: {why}; skipped", file=sys.stderr)
 
 
-def cmd_report(args) -> int:
-    try:
-        status = run(args)
-        note_skipped_engines()  # the report ran every installed engine (after the
-        return status           # inputs were checked: bad input stays one line)
-    except OSError as e:  # the output folder was checked at --out; a race or a full disk
-        if e.filename is None:
-            raise
-        raise OutputError(f"cannot write {e.filename!r}: {e.strerror}") from None
-
-
 def register(sub) -> None:
-    s = sub.add_parser("models", help="write the MJCF/URDF files of one case or file, or of "
-                       "every built-in case")
-    s.add_argument("case", nargs="?", type=opt.case_or_file,
-                   help="built-in case name or TOML file (default: every built-in case)")
-    s.add_argument("--out", type=opt.output_dir, help="directory (default sim_models/models)")
-    s.set_defaults(func=cmd_models)
+    """Add ``compare`` to ``xval``'s subparsers."""
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name or TOML file")
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
@@ -204,19 +169,6 @@ def register(sub) -> None:
     s.add_argument("--json", action="store_true")
     opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
-    baseline_cli.register(sub)  # xval baseline record|check
-    s = sub.add_parser("report", help="the validation report (HTML, Markdown, CSV)")
-    s.add_argument("--out", type=opt.output_dir,
-                   help="output directory (default reports/out/<timestamp>)")
-    s.add_argument("--quick", action="store_true",
-                   help="the quick variant (about 25 s on an idle 2-core machine)")
-    s.add_argument("--cases", nargs="+", type=opt.case_or_file,
-                   help="only these cases (built-in names or TOML files)")
-    s.add_argument("--workers", type=opt.workers,
-                   help=f"process-pool size, 1 to {opt.MAX_WORKERS} (default: cores)")
-    s.add_argument("--dask", metavar="SCHEDULER_ADDRESS", type=opt.scheduler_address,
-                   help="run the study tasks on an existing Dask distributed scheduler")
-    s.set_defaults(func=cmd_report)
 
 
 if __name__ == "__main__":  # pragma: no cover
