@@ -77,7 +77,8 @@ class Release:
         v = (f"{math.degrees(self.value):.6g} deg" if self.revolute
              else f"{self.value * 1e3:.6g} mm")
         return (f"{self.case} has no [motion] table: released as the report's free-motion "
-                f"section releases it (reports/comparison/free_cases.py): joint {self.joint} at its "
+                "section releases it (reports/comparison/free_cases.py): "
+                f"joint {self.joint} at its "
                 f"driver's reference value {v}, at rest, under {self.gravity:g} m/s^2 in -y, "
                 f"{self.duration:g} s")
 
