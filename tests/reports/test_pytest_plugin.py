@@ -200,6 +200,20 @@ def test_assertions_share_one_cached_run(xval):
         xval.compare("seed-four-bar", "mujoco", samples=24, quantities=["B.torque"])
 
 
+def test_the_run_cache_is_an_object(tmp_path):
+    """An ``Xval`` given its own :class:`RunCache` runs, counts and serves from that one;
+    the session's (:data:`SESSION`) is left as it was."""
+    from reports.regression.pytest_plugin import Xval
+    from reports.regression.run_cache import RunCache
+    cache, before = RunCache(), dict(SESSION.stats)
+    x = Xval(tmp_path, bl.DEFAULT_FACTOR, runs=cache)
+    r1 = x.run("seed-four-bar", "mujoco", samples=24)
+    r2 = x.run("seed-four-bar", "mujoco", samples=24)
+    assert r1 is r2
+    assert (cache.stats["runs"], cache.stats["hits"], len(cache.entries)) == (1, 1, 1)
+    assert SESSION.stats == before
+
+
 def test_failure_names_quantity_error_where_and_settings(xval):
     with pytest.raises(AssertionError) as e:
         xval.assert_agrees("seed-four-bar", engine="mujoco", tolerance=1e-12, samples=24,
