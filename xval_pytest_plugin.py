@@ -154,7 +154,8 @@ def pytest_collection_modifyitems(config, items) -> None:
 @pytest.fixture(scope="session")
 def xval(pytestconfig):
     """Engine-against-analytic assertions with a session-wide run cache
-    (:class:`reports.regression.pytest_plugin.Xval`)."""
+    (:class:`reports.regression.pytest_plugin.Xval`,
+    :mod:`reports.regression.run_cache`)."""
     return impl().make_xval(pytestconfig)
 
 
@@ -168,12 +169,19 @@ def xval_baseline(xval, pytestconfig, request):
 
 
 # ============================================================================ summary
+def _session_runs():
+    """The session's run cache (:data:`reports.regression.run_cache.SESSION`), None when
+    nothing of the tool was used (then there is nothing to report, and nothing imported)."""
+    mod = sys.modules.get("reports.regression.run_cache")
+    return mod.SESSION if mod is not None else None
+
+
 def pytest_sessionfinish(session) -> None:
     """An xdist worker hands its run count to the controller (``workeroutput``)."""
     out = getattr(session.config, "workeroutput", None)
-    mod = sys.modules.get("reports.regression.pytest_plugin")
-    if out is not None and mod is not None:
-        out["xval_stats"] = dict(mod._STATS)
+    runs = _session_runs()
+    if out is not None and runs is not None:
+        out["xval_stats"] = dict(runs.stats)
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -185,8 +193,8 @@ def pytest_testnodedown(node, error) -> None:
 
 
 def pytest_terminal_summary(terminalreporter) -> None:
-    mod = sys.modules.get("reports.regression.pytest_plugin")
-    stats = [dict(mod._STATS)] if mod is not None else []
+    runs_ = _session_runs()
+    stats = [dict(runs_.stats)] if runs_ is not None else []
     stats += _WORKER_STATS
     runs = sum(s["runs"] for s in stats)
     if runs:
@@ -195,5 +203,5 @@ def pytest_terminal_summary(terminalreporter) -> None:
         terminalreporter.write_line(
             f"xval: {runs} engine runs ({sum(s['seconds'] for s in stats):.1f} s){per}, "
             f"{sum(s['hits'] for s in stats)} served from the session cache")
-    for line in (mod.update_lines() if mod is not None else []):
+    for line in (list(runs_.updates) if runs_ is not None else []):
         terminalreporter.write_line(line)

@@ -169,13 +169,14 @@ def run_viewer(mech: Mechanism, settings: MujocoSettings | None = None,
     import time
 
     from .engine_base import plan_samples
+    from .engine_run import RunRequest
     from .engines import open_session
     from .tree import SimTree
     if launch is None:
         import mujoco.viewer
         launch = mujoco.viewer.launch_passive
     st = SimTree(mech)
-    plan = plan_samples(st, 2, 36)
+    plan = plan_samples(st, RunRequest.revolutions, RunRequest.samples)
     t_end = None if plan.full else plan.t_end  # a limited input: one run, then again
     sess = open_session(st, "mujoco", settings)
     h = float(sess.settings.timestep)

@@ -44,11 +44,12 @@ TOP_MODULES = ("xval_pytest_plugin",)
 #: parser or namespace, and imports none of the modules above.
 COMMAND_LINE_CORE = frozenset({"reports.cli.xval", "reports.cli.options", "reports.cli.paths",
                                "xval_pytest_plugin"})
-#: Modules that read ``sys.argv`` without being the command line: the README-figure
-#: maintainer script (``python -m reports.report.readme_figures``; issue 19 moves it out of the
-#: package) and the background kernel compiler's worker process, whose arguments are
-#: written by :func:`analytic.kernels.background.start`, not typed by a user.
-ARGV_READERS = frozenset({"reports.report.readme_figures", "analytic.kernels.background"})
+#: Modules that read ``sys.argv`` without being the command line: the background kernel
+#: compiler's worker process, whose arguments are written by
+#: :func:`analytic.kernels.background.start`, not typed by a user.  (The maintainer
+#: scripts in ``scripts/``, ``readme_figures.py`` among them, are not in the installed
+#: packages, so not in this check.)
+ARGV_READERS = frozenset({"analytic.kernels.background"})
 
 
 @dataclass(frozen=True)
@@ -372,3 +373,18 @@ def test_the_command_line_is_reports_cli():
     outside = sorted(m for m in cli if not (m == "reports.cli" or m.startswith("reports.cli."))
                      and m not in TOP_MODULES)
     assert not outside, f"command-line modules outside reports/cli/: {outside}"
+
+
+def test_maintainer_scripts_are_not_installed():
+    """``scripts/`` (``readme_figures.py``: it edits the checkout's README) is not an
+    installed package: not matched by ``pyproject.toml``'s package search, not a
+    ``py-modules`` entry, and no ``__init__.py`` that would make it one."""
+    import fnmatch
+    import tomllib
+    cfg = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    st = cfg["tool"]["setuptools"]
+    include = st["packages"]["find"]["include"]
+    assert (ROOT / "scripts" / "readme_figures.py").is_file()
+    assert not any(fnmatch.fnmatch("scripts", pat) for pat in include), include
+    assert not any(m.startswith("scripts") for m in st.get("py-modules", []))
+    assert not (ROOT / "scripts" / "__init__.py").exists()

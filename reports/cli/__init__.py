@@ -9,7 +9,8 @@ Modules:
   :mod:`reports.figures.poses`); the options, the output checks and the engine runs asked
   for.
 * :mod:`reports.cli.baseline`: ``xval baseline record`` and ``xval baseline check`` (see
-  :mod:`reports.regression.baseline`).
+  :mod:`reports.regression.baseline`, :mod:`reports.regression.baseline_record` and
+  :mod:`reports.regression.baseline_check`).
 * :mod:`reports.cli.cases`: ``xval cases``: the built-in cases, the hard ones and the
   free-motion ones, each with the first line of its description. Reads the case files' heads
   only (no solver, no numpy).

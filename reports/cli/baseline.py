@@ -1,4 +1,5 @@
-"""``xval baseline record`` and ``xval baseline check`` (see :mod:`reports.regression.baseline`).
+"""``xval baseline record`` and ``xval baseline check`` (see :mod:`reports.regression.baseline`,
+:mod:`reports.regression.baseline_record` and :mod:`reports.regression.baseline_check`).
 
 Exit status of ``check``: 0 every recorded run re-ran within its tolerance and within
 ``--factor`` of its baseline; 1 a drift, a quantity over its tolerance, a quantity,
@@ -21,6 +22,10 @@ from reports.cli import options as opt
 from reports.cli.paths import check_outputs
 from reports.comparison.free_cases import MIN_DURATION, RELEASE_DURATION, command_case
 from reports.regression import baseline as bl
+from reports.regression import baseline_check as bc
+from reports.regression import baseline_record as br
+from reports.regression import baseline_settings as bset
+from reports.regression import baseline_store as bs
 from reports.regression import ci_formats
 from reports.regression.baseline_free import DEFAULT_SAMPLES, free_mechanism, free_request
 from reports.regression.messages import report_lines
@@ -51,10 +56,10 @@ def cmd_record(args) -> int:
             free_mechanism(mech, req)
     else:
         settings = settings_from_options(engines, args.set or ())
-        req = bl.request_dict(args.revolutions, args.samples)
-    base = bl.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
+        req = br.request_dict(args.revolutions, args.samples)
+    base = br.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance)
-    problems = bl.record_problems(base)
+    problems = br.record_problems(base)
     for r in base.runs:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
                 default=None)
@@ -74,12 +79,12 @@ def cmd_record(args) -> int:
     counts = None
     if not args.replace and os.path.exists(args.out):  # merge: nothing recorded is lost
         try:
-            old = bl.load(args.out)
+            old = bs.load(args.out)
         except bl.BaselineError as e:  # never overwrite what cannot be read back
             raise bl.BaselineError(f"{e}; not overwritten (--replace writes a new "
                                    "file)") from None
-        base, counts = bl.merge(old, base)
-    path = bl.save(base)
+        base, counts = br.merge(old, base)
+    path = bs.save(base)
     print(f"wrote {len(base.runs)} runs to {path} (schema_version {bl.SCHEMA_VERSION})"
           + (f": {counts['updated']} updated, {counts['kept']} kept, {counts['added']} "
              "added (--replace writes only the runs recorded now)" if counts else
@@ -130,7 +135,7 @@ def _checked_samples(text, typ):
 def cmd_check(args) -> int:
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the baseline", args.baseline)])
-    base = bl.load(args.baseline)
+    base = bs.load(args.baseline)
     overrides = _check_overrides(args.set, base)
     keep = None
     if args.case or args.engine:
@@ -139,7 +144,7 @@ def cmd_check(args) -> int:
         def keep(rec):
             return (not cases or rec.case in cases or rec.model.name in cases) and \
                 (not engines or rec.engine in engines)
-    checks = bl.check(base, args.factor, select=keep, fail_loose=args.fail_loose,
+    checks = bc.check(base, args.factor, select=keep, fail_loose=args.fail_loose,
                       overrides=overrides)
     if keep is not None and not checks:
         raise bl.BaselineError(f"{args.baseline}: no recorded run matches --case/--engine")
@@ -152,7 +157,7 @@ def cmd_check(args) -> int:
         sets = "".join(f" --set {e}.{k}={v}" for e, kv in overrides.items()
                        for k, v in kv.items())  # record what was checked
         print("if the change is intended, record the baseline again: "
-              f"{bl.record_command(base)}{sets}")
+              f"{br.record_command(base)}{sets}")
     ci_formats.write_outputs(f"xval baseline check {args.baseline}",
                              ci_formats.from_baseline(checks, base.base_dir), args.junit,
                              args.summary, intro=lines[:2],
@@ -163,8 +168,8 @@ def cmd_check(args) -> int:
 def _check_overrides(pairs, base: bl.Baseline) -> dict:
     """``--set`` of ``baseline check``: per-engine overrides of the recorded settings
     (parsed as ``xval compare --set`` is; :class:`SettingsError` is status 2)."""
-    classes = bl.override_classes(base)
-    return bl.overrides_for(pairs, [r.engine for r in base.runs if r.engine in classes],
+    classes = bset.override_classes(base)
+    return bset.overrides_for(pairs, [r.engine for r in base.runs if r.engine in classes],
                             classes)
 
 

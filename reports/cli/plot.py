@@ -91,7 +91,7 @@ def cycle_plan(linkage, tree=None, points: int = CYCLE_POINTS) -> PlanSamples:
         t = (vals - d.value) / d.velocity
         n = len(vals)
         return PlanSamples(t, vals, np.full(n, d.velocity), np.zeros(n))
-    p = plan_samples(tree or compile_linkage(linkage.mech), 2, 72)
+    p = plan_samples(tree or compile_linkage(linkage.mech), RunRequest.revolutions, 72)
     return PlanSamples(p.times, p.values, p.velocity, p.acceleration, p.by_time)
 
 
@@ -341,11 +341,12 @@ def register(sub) -> None:
                         "motion <case>-free-plot.png)")
     s.add_argument("--show", action="store_true", help="open a window (needs a display)")
     s.add_argument("--revolutions", type=_integer,
-                   help="engine revolutions (the last is plotted; default 2; not in free "
-                        "motion)")
+                   help=f"engine revolutions (the last is plotted; default "
+                        f"{RunRequest.revolutions}; not in free motion)")
     s.add_argument("--samples", type=_integer,
-                   help="engine samples per revolution (default 36); free motion: samples "
-                        "of the trajectory, 2 to 1000000 (default the description's)")
+                   help=f"engine samples per revolution (default {RunRequest.samples}); free "
+                        "motion: samples of the trajectory, 2 to 1000000 (default the "
+                        "description's)")
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")

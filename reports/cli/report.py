@@ -27,7 +27,7 @@ def run(args) -> int:
     stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
     out = Path(args.out) if args.out else report.DEFAULT_OUT / stamp
     cfg = report.ReportConfig(out=out, quick=args.quick, cases=tuple(args.cases or ()),
-                              samples=36 if args.quick else 72, workers=args.workers,
+                              samples=report.SAMPLES[args.quick], workers=args.workers,
                               dask=args.dask)
     console = Console(width=100)
     with Progress(TextColumn("{task.description:<17}"), BarColumn(bar_width=30),

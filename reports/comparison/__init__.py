@@ -11,6 +11,9 @@ Modules:
   against the exact trajectory.
 * :mod:`reports.comparison.free_limits`: Known engine limits of the report's free-motion
   verdicts, and the verdict each row gets from them: ``pass``, ``FAIL``, or ``known limit``.
+* :mod:`reports.comparison.iftomm`: The IFToMM benchmark's accuracy rule on a free run
+  (Gonzalez et al. 2006): the reference point's position error over the run, m, against
+  the benchmark's two precision levels.
 * :mod:`reports.comparison.progress`: A progress line for engine runs that take a while
   (``xval plot --engine``, ``xval compare``, ``xval animate --engine``): on standard error,
   only when it is a terminal, and only once a run has lasted :data:`SHOW_AFTER_S` (a short

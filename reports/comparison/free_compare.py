@@ -16,12 +16,13 @@ time (phase error) for any integrator; a verdict on free motion says what it jud
   ``max KE + range of PE`` of the reference) and the loop-closure drift (the largest gap
   at the cut joints over the mechanism's size), over time;
 * for the IFToMM benchmark problems, the accuracy rule: the reference point's position
-  error over the run against 1e-1 m and 1e-3 m (:func:`iftomm_accuracy`).
+  error over the run against 1e-1 m and 1e-3 m
+  (:func:`reports.comparison.iftomm.iftomm_accuracy`).
 
 A failed verdict names the reference event (coordinate switch, singular position,
 limit position) nearest to where the trust was lost, and the engine's step in time and
 in the coordinate.  Results are frozen dataclasses (:class:`FreeComparison`,
-:class:`IftommAccuracy`, :class:`FreeVerdict`).
+:class:`reports.comparison.iftomm.IftommAccuracy`, :class:`FreeVerdict`).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import numpy as np
 
 from analytic.mechanism import Revolute, mechanism_size
 from reports.comparison.compare import ZERO_PEAK, json_safe
+from reports.comparison.iftomm import IftommAccuracy, iftomm_accuracy
 
 # --- tolerances (each relative to the scale named in FreeComparison.normalisation) ---
 
@@ -57,9 +59,6 @@ ENERGY_DRIFT = 1e-2
 #: size moves a joint by a tenth of the kinematic tolerance; the engines' run ends at
 #: sim_models.free_run.FreeRequest.max_gap (1e-2), ten times more.
 LOOP_DRIFT = 1e-3
-#: The IFToMM benchmark's two precision levels for the reference point's position
-#: error over the run, m (Gonzalez et al. 2006: low and high precision).
-IFTOMM_LEVELS = (1e-1, 1e-3)
 #: A failed verdict names a reference event within this fraction of the run's duration
 #: of the time the trust was lost (the first tolerance excess): an error that starts
 #: growing there was started by the event (a singular crossing is where an engine picks
@@ -68,12 +67,6 @@ NEAR_EVENT_FRACTION = 0.05
 #: Reference events named for a failed verdict (a turning point of the motion is not a
 #: place where anything is singular).
 EVENT_KINDS = ("switch", "singular", "limit")
-
-#: The IFToMM problems among the cases, and their reference point (body, point): A01's
-#: lumped mass, A02's B0 (the tip of the first vertical link).  A03 (Andrews) publishes
-#: angles at 0.03 s, not a point's path: it has no position class.
-IFTOMM_POINTS = {"iftomm-a01-pendulum": ("link", "P1"),
-                 "iftomm-a02-n-four-bar": ("crank0", "B")}
 
 
 @dataclass(frozen=True)
@@ -207,25 +200,6 @@ def judge(quantity: str, family: str, unit: str, times, reference, test, toleran
     return FreeComparison(quantity, family, unit, max_abs, float(scale), normalisation,
                           normalised, at, tolerance, horizon_of(t, norm, tolerance),
                           measured_until, float(t[-1]) if len(t) else 0.0, norm, unread)
-
-
-@dataclass(frozen=True)
-class IftommAccuracy:
-    """The IFToMM accuracy rule on one run: the reference point ``body.point``'s
-    position error (Euclidean, m) over the run, its time, and its class: ``"1e-3"``
-    (high precision: at most 1e-3 m), ``"1e-1"`` (low: at most 1e-1 m), ``"none"``
-    (beyond both, or not measured over the whole run)."""
-
-    problem: str
-    body: str
-    point: str
-    max_error: float
-    at: float
-    measured: bool
-    level: str
-
-    def as_json(self) -> dict:
-        return json_safe(self.__dict__.copy())
 
 
 @dataclass(frozen=True)
@@ -429,56 +403,6 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
                    step_note=free_step_note(run, ref, mech))
 
 
-def grounded_point(mech, body: str, point: str, theta: np.ndarray) -> np.ndarray:
-    """``(N, 2)`` world position, m, of ``point`` of ``body`` when ``body`` is pinned to
-    the ground by a revolute joint and turned to the absolute angles ``theta`` (rad):
-    ``pin + R(theta) (p - pin_b)`` in the body frame.  Raises ValueError when the body
-    has no revolute joint to the ground."""
-    bodies = {b.name: b for b in mech.bodies}
-    for j in mech.joints:
-        if isinstance(j, Revolute) and {j.body_a, j.body_b} == {mech.ground, body}:
-            g_pt, b_pt = (j.point_a, j.point_b) if j.body_a == mech.ground else \
-                (j.point_b, j.point_a)
-            pin = np.asarray(bodies[mech.ground].points[g_pt], float)
-            rel = np.asarray(bodies[body].points[point], float) - \
-                np.asarray(bodies[body].points[b_pt], float)
-            c, s = np.cos(theta), np.sin(theta)
-            return pin + np.stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]], axis=1)
-    raise ValueError(f"body {body!r} has no revolute joint to the ground")
-
-
-def iftomm_level(max_error: float, measured: bool = True) -> str:
-    """The IFToMM precision class of a position error, m: ``"1e-3"``, ``"1e-1"`` or
-    ``"none"``."""
-    if not measured or not math.isfinite(max_error):
-        return "none"
-    for lim in sorted(IFTOMM_LEVELS):
-        if max_error <= lim:
-            return f"{lim:.0e}".replace("e-0", "e-")
-    return "none"
-
-
-def iftomm_accuracy(run, ref, mech) -> IftommAccuracy | None:
-    """The IFToMM accuracy rule where ``run.case`` is one of :data:`IFTOMM_POINTS`
-    (None otherwise): the reference point's position error over the run, from the body
-    angles of both (the point's body turns about a ground pin, so its angle fixes it)."""
-    where = IFTOMM_POINTS.get(run.case)
-    if where is None:
-        return None
-    body, point = where
-    names = [b.name for b in mech.bodies]
-    p_ref = grounded_point(mech, body, point, ref.theta[:, names.index(body)])
-    p_eng = grounded_point(mech, body, point, run.theta[:, list(run.body_names).index(body)])
-    err = np.linalg.norm(p_ref - p_eng, axis=1)
-    finite = np.isfinite(err)
-    if not finite.any():
-        return IftommAccuracy(run.case, body, point, math.inf, float(run.times[0]), False,
-                              "none")
-    k = int(np.argmax(np.where(finite, err, -1.0)))
-    return IftommAccuracy(run.case, body, point, float(err[k]), float(run.times[k]),
-                          bool(finite.all()), iftomm_level(float(err[k]), bool(finite.all())))
-
-
 def near_free_event(v: FreeVerdict, events) -> str | None:
     """For a failed verdict: the reference event (:data:`EVENT_KINDS`) nearest the time
     the trust was lost (its trusted horizon), when within :data:`NEAR_EVENT_FRACTION`
@@ -525,7 +449,6 @@ def free_step_note(run, ref, mech) -> str | None:
             "integrator) or not (the model or the constraint stabilisation)")
 
 
-__all__ = ["ENERGY_DRIFT", "FREE_DYNAMIC", "FREE_KINEMATIC", "IFTOMM_LEVELS",
-           "IFTOMM_POINTS", "LOOP_DRIFT", "FreeComparison", "FreeVerdict", "IftommAccuracy",
-           "compare_free", "energy_scale", "grounded_point", "horizon_of", "iftomm_accuracy",
-           "iftomm_level", "judge", "reference_samples"]
+__all__ = ["ENERGY_DRIFT", "FREE_DYNAMIC", "FREE_KINEMATIC", "LOOP_DRIFT", "FreeComparison",
+           "FreeVerdict", "compare_free", "energy_scale", "horizon_of", "judge",
+           "reference_samples"]

@@ -3,7 +3,7 @@
 :func:`run_verdict` is the one compile -> run -> compare of the project: ``xval compare``
 (:mod:`reports.cli.compare`), the report's engine tasks (:mod:`reports.report.build`, through
 :func:`run_comparison`), ``xval plot --engine``, the baselines
-(:func:`reports.regression.baseline.run_and_compare`) and the pytest plugin
+(:func:`reports.regression.baseline_record.run_and_compare`) and the pytest plugin
 (:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from
 :mod:`sim_models.registry` and their settings built there (``--set KEY=VALUE``); the
 compiled linkage (:func:`sim_models.compile_linkage`) is built once and passed down to

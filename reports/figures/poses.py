@@ -20,6 +20,7 @@ from reports.figures.free_plots import (
     sample_times,
 )
 from sim_models import compile_linkage
+from sim_models.engine_run import RunRequest
 from sim_models.engines import run
 from sim_models.registry import get_engine
 from sim_models.sampling import plan_samples, times_plan, travel_time
@@ -186,10 +187,11 @@ def engine_poses(run_, tree, values: np.ndarray, full: bool, times=None) -> Pose
 def engine_run(mech, tree, engine: str, frames: int, times=None):
     """An engine run sampled at the frames: at their ``times`` (s, the prescribed
     motion from t = 0: one sample a frame) when given, else at the verdict's plan
-    (``frames`` samples of the last of two turns)."""
+    (``frames`` samples of the last of :class:`sim_models.engine_run.RunRequest`'s
+    revolutions)."""
     settings = get_engine(engine).settings({})
     if times is not None:
         return run(tree, engine, settings, plan=times_plan(tree, np.asarray(times, float)))
-    return run(tree, engine, settings, revolutions=2, samples=frames)
+    return run(tree, engine, settings, revolutions=RunRequest.revolutions, samples=frames)
 
 

@@ -24,8 +24,8 @@ is then what the record holds (PyBullet's first-order step loses the released se
 four-bar after 0.85 s; a baseline guards that it does not lose it sooner).  A run that
 stopped or a quantity that is not finite is never recorded.
 
-The check (:func:`reports.regression.baseline.judge_free`): a quantity's error may not grow by
-more than the drift factor over its record (floored at
+The check (:func:`reports.regression.baseline_check.judge_free`): a quantity's error may
+not grow by more than the drift factor over its record (floored at
 :data:`reports.regression.baseline.DRIFT_FLOOR`, as for the prescribed runs); a quantity
 recorded within its tolerance must stay within it; and its trusted horizon may not
 come earlier than the recorded one by more than :data:`HORIZON_SLACK_SAMPLES` sample

@@ -143,8 +143,8 @@ def from_compare(case: str, results, revolute: bool, file: str = "") -> list[CiC
 
 
 def from_baseline(checks, base_dir: Path | None = None) -> list[CiCase]:
-    """``xval baseline check``'s :class:`reports.regression.baseline.RunCheck` list (``base_dir``:
-    the baseline file's folder, where recorded model paths start)."""
+    """``xval baseline check``'s :class:`reports.regression.baseline_check.RunCheck` list
+    (``base_dir``: the baseline file's folder, where recorded model paths start)."""
     out = []
     for chk in checks:
         rec = chk.record
@@ -187,7 +187,8 @@ def from_baseline(checks, base_dir: Path | None = None) -> list[CiCase]:
 
 
 def _problem_kind(problem: str) -> str:
-    """A run-level problem's JUnit ``type`` (see :func:`reports.regression.baseline.check_run`)."""
+    """A run-level problem's JUnit ``type`` (see
+    :func:`reports.regression.baseline_check.check_run`)."""
     if "changed since the baseline" in problem:
         return "model changed"
     if any(w in problem for w in ("no longer exists", "is gone", "is not available")):

@@ -1,13 +1,19 @@
 """What a baseline check says, as lines of text: ``xval baseline check``'s report and the
-pytest plugin's failure text both print them (:mod:`reports.regression.baseline` holds the checks).
+pytest plugin's failure text both print them (:mod:`reports.regression.baseline_check`
+holds the checks); and the failure message of the plugin's ``assert_agrees``
+(:func:`disagreement`).
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
+from pathlib import Path
 
+from analytic.input_display import format_input  # the one input convention
 from reports.regression import baseline as bl
+from reports.regression.baseline_check import severity
+from reports.regression.baseline_record import record_command
 
 
 def report_lines(base: bl.Baseline, checks, factor: float) -> list[str]:
@@ -71,4 +77,64 @@ def versions_line(checks) -> str:
         f"{k} {a} -> {b} ({n} runs)" for (k, a, b), n in sorted(changed.items()))
 
 
-__all__ = ["report_lines", "versions_line"]
+def _at_text(run_, at: float) -> str:
+    if not math.isfinite(at):
+        return "at an unreached sample"
+    return f"at input {format_input(at, 'm' if run_.extra.get('prismatic_driver') else 'deg')}"
+
+
+def _unit(quantity: str, run_) -> str:
+    """SI unit of a compared quantity (see :func:`reports.comparison.compare.compare_run`)."""
+    kind = quantity.rsplit(".", 1)[-1]
+    if kind == "alpha":
+        return "rad/s^2"
+    if kind == "a":
+        return "m/s^2"
+    if kind == "effort":
+        return "N" if run_.extra.get("prismatic_driver") else "N m"
+    return "N"
+
+
+def disagreement(label: str, run_, comps, tolerance: float, settings_text: str) -> str:
+    """The failure message of :meth:`reports.regression.pytest_plugin.Xval.assert_agrees`:
+    every failing quantity with its error (relative to peak and absolute), where in the
+    cycle, then the settings."""
+    bad = sorted((c for c in comps if not c.accepted),
+                 key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf,
+                 reverse=True)
+    lines = [f"{label}: {len(bad)} of {len(comps)} quantities disagree with the analytic "
+             f"solution by more than {tolerance:g} of peak"]
+    if not run_.ok:
+        lines.append(f"  the run failed: {run_.reason}")
+    for c in bad:
+        unit = _unit(c.quantity, run_)
+        lines.append(f"  {c.quantity}: error {c.normalised:.3g} of peak {_at_text(run_, c.at)}"
+                     f" (max |error| {c.max_abs:.4g} {unit}, peak {c.peak:.4g} {unit})")
+    lines.append(f"  settings: {settings_text}")
+    req = run_.request
+    lines.append(f"  run: {req.revolutions} revolutions, {req.samples} samples"
+                 + (" by time" if run_.by_time else " of the last revolution"))
+    return "\n".join(lines)
+
+
+def failure_text(base, checks, factor: float, root: Path) -> str:
+    """An ``assert_baseline`` failure: first line the worst failing quantity (its growth,
+    the factor and where) or the run's problem, then the check's report of the failed
+    runs, then how to record them again."""
+    failed = [c for c in checks if not c.passed]
+    worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
+    first = worst.problems[0] if worst.problems else worst.failures()[0].message()
+    lines = report_lines(base, checks, factor)
+    keep = [ln for ln in lines if not ln.startswith("pass ")]
+    again = bl.Baseline(tuple(c.record for c in failed), base.path, base.recorded)
+    return "\n".join([f"{worst.record.label}: {first}", *keep,
+                      "if the change is intended, record again: pytest --xval-update, or "
+                      f"(from {root}): {record_command(again, root)}"])
+
+
+def _sev(c) -> tuple:
+    f = c.failures()
+    return severity(f[0]) if f else (0, 0.0)
+
+
+__all__ = ["disagreement", "failure_text", "report_lines", "versions_line"]

@@ -18,16 +18,13 @@ A relative model or baseline path is relative to pytest's rootdir (the folder of
 
 Runs are cached for the session (per xdist worker), keyed by the mechanism's content, the
 engine, the settings object and the run request: any number of assertions on one run cost
-one run (:func:`session_run`).  The project's own engine tests share this cache.
+one run (:mod:`reports.regression.run_cache`).  The project's own engine tests share this
+cache.
 """
 
 from __future__ import annotations
 
-import copy
-import hashlib
-import math
 import os
-import time
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -36,170 +33,27 @@ import pytest
 
 from analytic import load_case
 from analytic.cases import case_names, free_case_names
-from analytic.errors import LinkageError
-from analytic.input_display import format_input  # the one input convention
 from analytic.tolerances import ENGINE_RELATIVE
-from reports.comparison import runs as verdict_runs
 from reports.comparison.free_cases import free_case
-from reports.comparison.runs import request_of
-from reports.regression import baseline as bl
-from reports.regression.baseline import (
-    DEFAULT_FACTOR,
-    Baseline,
-    _fmt_value,
-    _severity,
-    judged,
-    load,
+from reports.comparison.quantities import judged
+from reports.regression import baseline_check as bc
+from reports.regression import baseline_record as br
+from reports.regression import baseline_store as bs
+from reports.regression.baseline import DEFAULT_FACTOR, BaselineError
+from reports.regression.baseline_settings import (
+    fmt_value,
+    override_classes,
     overrides_for,
-    record_command,
-    request_dict,
+    settings_from_json,
     settings_line,
 )
-from reports.regression.baseline_free import is_free, run_and_compare_free
-from reports.regression.messages import report_lines
+from reports.regression.messages import disagreement, failure_text
+from reports.regression.run_cache import SESSION, RunCache, settings_of
 from reports.studies.free_studies import free_verdict
-from sim_models.registry import get_engine
-
-#: (mechanism digest, engine, settings, request) -> {"run", "tree", "comparisons"} or
-#: {"error": exception}: the session's runs.  Treat the cached runs as read-only.
-_CACHE: dict[tuple, dict] = {}
-_STATS = {"runs": 0, "hits": 0, "seconds": 0.0}
-#: What ``--xval-update`` rewrote this session (lines for the terminal summary).
-_UPDATES: list[str] = []
 
 
 class XvalLooseWarning(UserWarning):
     """An error shrank by more than the drift factor: the baseline no longer guards it."""
-
-
-# ============================================================================ the cache
-def _mech_digest(mech) -> str:
-    """A digest of a mechanism's content (its dataclass repr is exact: floats repr
-    round-trip), so a file loaded twice, by any path, or a built-in case loaded twice, is
-    one key.  The file name (``source``, kept for error messages) is left out."""
-    bare = copy.copy(mech)  # no __post_init__: a shallow copy, not a new validation
-    if getattr(bare, "source", None) is not None:
-        object.__setattr__(bare, "source", None)
-    return hashlib.sha256(repr(bare).encode()).hexdigest()
-
-
-def _settings_of(engine: str, settings):
-    """A settings object from None (recommended), a dict of overrides, or an object."""
-    eng = get_engine(engine)
-    if settings is None:
-        return eng.settings()
-    if isinstance(settings, dict):
-        return eng.settings(settings)
-    return settings
-
-
-def _request(revolutions=None, samples=None, max_violation=None, max_speed_error=None,
-             chords=None) -> dict:
-    """:func:`reports.regression.baseline.request_dict`: None takes ``RunRequest``'s default."""
-    return request_dict(revolutions, samples, max_violation, max_speed_error, chords)
-
-
-def _entry(mech, engine: str, settings, request: dict) -> dict:
-    key = (_mech_digest(mech), engine, type(settings).__qualname__, repr(settings),
-           tuple(sorted(request.items())))
-    hit = _CACHE.get(key)
-    if hit is not None:
-        _STATS["hits"] += 1
-    else:
-        hit = _CACHE[key] = _make_run(mech, engine, settings, request)
-    if "error" in hit:
-        raise hit["error"]
-    return hit
-
-
-def _free_entry(mech, engine: str, settings, request: dict):
-    """A free run and its judged quantities, cached for the session."""
-    key = ("free", _mech_digest(mech), engine, type(settings).__qualname__,
-           repr(settings), tuple(sorted(request.items())))
-    hit = _CACHE.get(key)
-    if hit is not None:
-        _STATS["hits"] += 1
-        return hit
-    t0 = time.perf_counter()
-    _STATS["runs"] += 1
-    try:
-        hit = _CACHE[key] = run_and_compare_free(mech, engine, settings, request)
-    finally:
-        _STATS["seconds"] += time.perf_counter() - t0
-    return hit
-
-
-def _make_run(mech, engine, settings, request) -> dict:
-    t0 = time.perf_counter()
-    _STATS["runs"] += 1
-    try:
-        v = verdict_runs.run_verdict(mech, engine, settings, request_of(request))
-    except LinkageError as e:  # a refusal or nothing to compare: cached like a result
-        return {"error": e}
-    finally:
-        _STATS["seconds"] += time.perf_counter() - t0
-    return {"run": v.run, "tree": v.tree, "comparisons": list(v.comparisons)}
-
-
-def session_run(mech, engine: str, settings=None, revolutions: int | None = None,
-                samples: int | None = None, max_violation: float | None = None,
-                max_speed_error: float | None = None, chords: str | None = None):
-    """:func:`sim_models.engines.run` of a Mechanism, cached for the session (same
-    arguments, same run object).  ``settings``: None, overrides or a settings object; a
-    request value left None is :class:`sim_models.engine_run.RunRequest`'s default."""
-    s = _settings_of(engine, settings)
-    req = _request(revolutions, samples, max_violation, max_speed_error, chords)
-    return _entry(mech, engine, s, req)["run"]
-
-
-def cached_runner(mech, engine: str, settings, request: dict):
-    """:data:`reports.regression.baseline.Runner` on the session cache (baseline checks); a
-    free-motion request (:mod:`reports.regression.baseline_free`) is released and judged by the
-    same function ``xval baseline`` uses, cached alike."""
-    if is_free(request):
-        return _free_entry(mech, engine, settings, request)
-    e = _entry(mech, engine, settings, request)
-    return e["run"], judged(e["comparisons"])
-
-
-# ============================================================================ messages
-def _at_text(run_, at: float) -> str:
-    if not math.isfinite(at):
-        return "at an unreached sample"
-    return f"at input {format_input(at, 'm' if run_.extra.get('prismatic_driver') else 'deg')}"
-
-
-def _unit(quantity: str, run_) -> str:
-    """SI unit of a compared quantity (see :func:`reports.comparison.compare.compare_run`)."""
-    kind = quantity.rsplit(".", 1)[-1]
-    if kind == "alpha":
-        return "rad/s^2"
-    if kind == "a":
-        return "m/s^2"
-    if kind == "effort":
-        return "N" if run_.extra.get("prismatic_driver") else "N m"
-    return "N"
-
-
-def disagreement(label: str, run_, comps, tolerance: float, settings_text: str) -> str:
-    """The failure message of :meth:`Xval.assert_agrees`: every failing quantity with its
-    error (relative to peak and absolute), where in the cycle, then the settings."""
-    bad = sorted((c for c in comps if not c.accepted),
-                 key=lambda c: c.normalised if math.isfinite(c.normalised) else math.inf,
-                 reverse=True)
-    lines = [f"{label}: {len(bad)} of {len(comps)} quantities disagree with the analytic "
-             f"solution by more than {tolerance:g} of peak"]
-    if not run_.ok:
-        lines.append(f"  the run failed: {run_.reason}")
-    for c in bad:
-        unit = _unit(c.quantity, run_)
-        lines.append(f"  {c.quantity}: error {c.normalised:.3g} of peak {_at_text(run_, c.at)}"
-                     f" (max |error| {c.max_abs:.4g} {unit}, peak {c.peak:.4g} {unit})")
-    lines.append(f"  settings: {settings_text}")
-    req = run_.request
-    lines.append(f"  run: {req.revolutions} revolutions, {req.samples} samples"
-                 + (" by time" if run_.by_time else " of the last revolution"))
-    return "\n".join(lines)
 
 
 # ============================================================================ the fixture
@@ -207,11 +61,12 @@ class Xval:
     """The ``xval`` fixture.  Paths are relative to ``root`` (pytest's rootdir)."""
 
     def __init__(self, root: Path, factor: float, update: bool = False,
-                 fail_loose: bool = False):
+                 fail_loose: bool = False, runs: RunCache | None = None):
         self.root = Path(root)
         self.factor = factor
         self.update = update          # --xval-update: rewrite what changed
         self.fail_loose = fail_loose  # --xval-fail-loose
+        self.runs = SESSION if runs is None else runs  # the session's run cache
 
     # -- models -----------------------------------------------------------------
     def resolve(self, model) -> Path | str:
@@ -233,7 +88,7 @@ class Xval:
     def run(self, model, engine: str = "mujoco", settings=None, *,
             revolutions: int | None = None, samples: int | None = None):
         """The engine run (cached for the session)."""
-        return session_run(self.mechanism(model), engine, settings, revolutions, samples)
+        return self.runs.run(self.mechanism(model), engine, settings, revolutions, samples)
 
     def compare(self, model, engine: str = "mujoco", tolerance: float | None = None,
                 settings=None, *, revolutions: int | None = None,
@@ -243,8 +98,8 @@ class Xval:
 
         tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
         mech = self.mechanism(model)
-        s = _settings_of(engine, settings)
-        e = _entry(mech, engine, s, _request(revolutions, samples))
+        s = settings_of(engine, settings)
+        e = self.runs.entry(mech, engine, s, br.request_dict(revolutions, samples))
         comps = [replace(c, tolerance=tol, passed=bool(c.normalised <= tol))
                  for c in judged(e["comparisons"])]
         if quantities is not None:
@@ -306,7 +161,7 @@ class Xval:
                        factor: float | None = None, settings=None, key=None):
         """``(Baseline, [RunCheck])`` of the recorded runs (those of ``case`` / ``engine``,
         or the one run ``key``); ``settings``: overrides of the recorded settings."""
-        base = bl.load(self.path(baseline))
+        base = bs.load(self.path(baseline))
         model = self.resolve(case) if case is not None else None
 
         def keep(rec):
@@ -315,10 +170,10 @@ class Xval:
                 and rec.model.path(base.base_dir).resolve() == model.resolve())
             return (key is None or rec.key == tuple(key)) and same and \
                 (engine is None or rec.engine == engine)
-        checks = bl.check(base, factor or self.factor, runner=cached_runner, select=keep,
+        checks = bc.check(base, factor or self.factor, runner=self.runs.runner, select=keep,
                           fail_loose=self.fail_loose,
                           overrides=_overrides(settings, [r.engine for r in base.runs],
-                                               bl.override_classes(base)))
+                                               override_classes(base)))
         if not checks:
             raise KeyError(f"{baseline}: no recorded run of case={case!r} engine={engine!r}")
         return base, checks
@@ -340,7 +195,7 @@ class Xval:
         try:
             base, checks = self.check_baseline(baseline, case=case, engine=engine,
                                                factor=factor, settings=settings, key=key)
-        except bl.BaselineError as e:  # an unusable file: one line, no traceback
+        except BaselineError as e:  # an unusable file: one line, no traceback
             pytest.fail(f"xval: error: {e}", pytrace=False)
         except KeyError as e:  # no such run recorded: as a missing file, for that run
             return self._missing(path, case, engine, settings, e.args[0])
@@ -379,19 +234,19 @@ class Xval:
                 why: str) -> None:
         """Record one run through the session cache and merge it into ``path``."""
         __tracebackhide__ = True
-        s = _settings_of(engine, settings)
-        new = bl.record([model], [engine], path, {engine: s}, request, tolerance,
-                        runner=cached_runner)
-        problems = bl.record_problems(new)
+        s = settings_of(engine, settings)
+        new = br.record([model], [engine], path, {engine: s}, request, tolerance,
+                        runner=self.runs.runner)
+        problems = br.record_problems(new)
         if problems:
             raise AssertionError(f"--xval-update: {problems[0]} (a baseline records a "
                                  "passing state; not written)")
         label = new.runs[0].label
         if path.exists():
-            new, _ = bl.merge(bl.load(path), new)
-        bl.save(new)
-        _UPDATES.append(f"xval --xval-update: {label} in {os.path.relpath(path, self.root)}:"
-                        f" {why}")
+            new, _ = br.merge(bs.load(path), new)
+        bs.save(new)
+        rel = os.path.relpath(path, self.root)
+        self.runs.updates.append(f"xval --xval-update: {label} in {rel}: {why}")
 
     def _rewrite(self, base, changed, settings) -> None:
         """``--xval-update``: record the changed runs again, as they were recorded (model,
@@ -400,7 +255,7 @@ class Xval:
             rec = c.record
             model = rec.model.name if rec.model.kind == "builtin" else \
                 str(rec.model.path(base.base_dir))
-            s = bl.settings_from_json(rec, str(base.path),
+            s = settings_from_json(rec, str(base.path),
                                       _overrides(settings, [rec.engine]).get(rec.engine))
             # a free run's tolerances are the named ones of each quantity
             tol = rec.quantities[0].tolerance if rec.quantities and not rec.free else None
@@ -414,28 +269,8 @@ def _overrides(settings, engines, classes=None) -> dict:
     per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
     if not settings:
         return {}
-    return overrides_for([f"{k}={_fmt_value(v)}" for k, v in dict(settings).items()], engines,
+    return overrides_for([f"{k}={fmt_value(v)}" for k, v in dict(settings).items()], engines,
                          classes)
-
-
-def failure_text(base, checks, factor: float, root: Path) -> str:
-    """An ``assert_baseline`` failure: first line the worst failing quantity (its growth,
-    the factor and where) or the run's problem, then the check's report of the failed
-    runs, then how to record them again."""
-    failed = [c for c in checks if not c.passed]
-    worst = max(failed, key=lambda c: (not c.problems, *(_sev(c))))
-    first = worst.problems[0] if worst.problems else worst.failures()[0].message()
-    lines = report_lines(base, checks, factor)
-    keep = [ln for ln in lines if not ln.startswith("pass ")]
-    again = Baseline(tuple(c.record for c in failed), base.path, base.recorded)
-    return "\n".join([f"{worst.record.label}: {first}", *keep,
-                      "if the change is intended, record again: pytest --xval-update, or "
-                      f"(from {root}): {record_command(again, root)}"])
-
-
-def _sev(c) -> tuple:
-    f = c.failures()
-    return _severity(f[0]) if f else (0, 0.0)
 
 
 def make_xval(config) -> Xval:
@@ -455,8 +290,8 @@ def run_params(path, root: Path) -> list:
                              f"record CASES_OR_FILES --engine ENGINE --out {path}"),
                              id="xval_baseline")]
     try:
-        base = bl.load(p)
-    except bl.BaselineError as e:
+        base = bs.load(p)
+    except BaselineError as e:
         return [pytest.param(("error", f"xval: error: {e}"), id="xval_baseline")]
     return [pytest.param(("run", r.key), id=f"{r.case}/{r.engine}" + ("/free" if r.free
                                                                         else ""))
@@ -483,10 +318,6 @@ def baseline_checker(xval: Xval, path: str, param):
     return check
 
 
-def update_lines() -> list[str]:
-    return list(_UPDATES)
-
-
 def baseline_params(path, root: Path | None = None) -> list:
     """``pytest.param(case, engine, id="case/engine")`` for every run recorded in a
     baseline file (relative to ``root``, pytest's rootdir;
@@ -495,9 +326,8 @@ def baseline_params(path, root: Path | None = None) -> list:
     p = Path(path)
     if root is not None and not p.is_absolute():
         p = Path(root) / p
-    return [pytest.param(r.case, r.engine, id=f"{r.case}/{r.engine}") for r in load(p).runs]
+    return [pytest.param(r.case, r.engine, id=f"{r.case}/{r.engine}") for r in bs.load(p).runs]
 
 
-__all__ = ["Xval", "XvalLooseWarning", "baseline_checker", "baseline_params", "cached_runner",
-           "disagreement", "failure_text", "make_xval", "run_params", "session_run",
-           "update_lines"]
+__all__ = ["Xval", "XvalLooseWarning", "baseline_checker", "baseline_params", "make_xval",
+           "run_params"]

@@ -14,8 +14,6 @@ Modules:
 * :mod:`reports.report.layout`: The report page, top-down: title, summary card, contents,
   then one section per subject, each opening with a paragraph that says what it shows and
   how to read it.
-* :mod:`reports.report.readme_figures`: Put a report run's headline figures into the README
-  (between marker comments).
 * :mod:`reports.report.tables`: The report's tables, from the task results (pandas
   DataFrames).
 """

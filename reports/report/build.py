@@ -55,6 +55,7 @@ from reports.studies.hard_cases import hard_cases
 from reports.studies.scene import scene_economy, scene_figure
 from reports.studies.scheduler import PriorityExecutor
 from sim_models import compile_linkage, make_settings
+from sim_models.engine_run import RunRequest
 from sim_models.registry import available_engines
 
 #: Where a report goes without --out: under the current folder (in the checkout, the
@@ -63,6 +64,9 @@ DEFAULT_OUT = Path("reports") / "out"
 #: Cases of the speed-against-error grid when no --cases are given.
 GRID_CASES = {True: ("seed-slider-crank",),
               False: ("seed-four-bar", "seed-slider-crank", "near-toggle-four-bar")}
+#: Samples per revolution of the verdict runs: the full report's own choice, and with
+#: ``--quick`` the run default (:class:`sim_models.engine_run.RunRequest`).
+SAMPLES = {False: 72, True: RunRequest.samples}
 
 
 @dataclass(frozen=True)
@@ -74,8 +78,8 @@ class ReportConfig:
     quick: bool = False
     cases: tuple[str, ...] = ()
     engines: tuple[str, ...] = ()
-    revolutions: int = 2
-    samples: int = 72
+    revolutions: int = RunRequest.revolutions
+    samples: int = SAMPLES[False]
     studies: bool = True
     workers: int | None = None
     dask: str | None = None

@@ -1,8 +1,9 @@
 """The report's tables, from the task results (pandas DataFrames).
 
-The frames written to CSV keep their machine column names (``reports.report.readme_figures``
-reads them); :func:`for_reading` makes the versions shown on the page: units in every
-header, the input position with its unit, verdicts as ``pass``/``FAIL``.
+The frames written to CSV keep their machine column names (the maintainer script
+``scripts/readme_figures.py`` reads them); :func:`for_reading` makes the versions shown on
+the page: units in every header, the input position with its unit, verdicts as
+``pass``/``FAIL``.
 """
 
 from __future__ import annotations

@@ -111,6 +111,7 @@ from reports.studies.runs import (  # noqa: F401 - re-exported: the studies' eng
     trace_diagnostics,
 )
 from sim_models import compile_linkage
+from sim_models.engine_run import RunRequest
 from sim_models.engines import run
 from sim_models.engines import time_engine as session_time
 from sim_models.mjcf import HARD_SOLIMP, direct_solref
@@ -124,8 +125,13 @@ QUICK_CASES = ("seed-four-bar", "seed-slider-crank")
 FULL_CASES = ("seed-four-bar", "seed-slider-crank", "near-toggle-four-bar")
 #: Long run: revolutions in full and quick mode.
 LONG_RUN_REVOLUTIONS = {False: 1000, True: 50}
-#: Samples per revolution of the low-level loops (long run, change point).
+#: Samples per revolution of the long run's trace (every revolution sampled, for the
+#: per-revolution diagnostics): the study's own choice, not the run default
+#: (:class:`sim_models.engine_run.RunRequest` samples only a run's last revolution).
 LONG_RUN_SAMPLES = 36
+#: Samples per revolution of a speed/error grid run: the run default with ``--quick``,
+#: else 72 (the full report's verdict runs sample as many: ``reports.report.build.SAMPLES``).
+GRID_SAMPLES = {True: RunRequest.samples, False: 72}
 
 #: MuJoCo's own defaults (its XML defaults) for the "stock" family.
 STOCK_SOLREF = (0.02, 1.0)
@@ -378,7 +384,7 @@ def _gather(futures: list[tuple[Future, dict]], fallback=None) -> list:
 
 # ============================================================================ grids
 def _grid_futures(ex, case: str, quick: bool) -> list[tuple[Future, dict]]:
-    revs, samples = 2, (36 if quick else 72)
+    revs, samples = RunRequest.revolutions, GRID_SAMPLES[quick]
     cap, reps = (3000, 3) if quick else (20000, 3)
     futs = []
     for item in grid_plan(case, quick):

@@ -5,7 +5,7 @@ the baseline (an error divided by 100 must read as a 100x growth; a tolerance se
 the recorded error must be exceeded); the JUnit documents are validated against a schema
 written from the format's own description (``junit.xsd`` beside this file) and their
 counts against the cases run.  Runs go through the session cache of the pytest plugin
-(:func:`reports.regression.pytest_plugin.cached_runner`), shared with the engine tests and the
+(:func:`reports.regression.run_cache.cached_runner`), shared with the engine tests and the
 committed-baseline check, so most cost nothing extra; the command-line checks re-run.
 """
 
@@ -22,7 +22,12 @@ import pytest
 from analytic.cases import case_names, case_path
 from reports.cli.xval import main
 from reports.regression import baseline as bl
-from reports.regression.pytest_plugin import baseline_params, cached_runner
+from reports.regression import baseline_check as bc
+from reports.regression import baseline_record as br
+from reports.regression import baseline_settings as bset
+from reports.regression import baseline_store as bs
+from reports.regression.pytest_plugin import baseline_params
+from reports.regression.run_cache import cached_runner
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILTIN = ROOT / "tests" / "baselines" / "builtin.json"
@@ -42,12 +47,12 @@ def test_builtin_baseline(xval, case, engine):
 
 
 def test_builtin_baseline_names_its_re_record_command():
-    assert bl.record_command(bl.load(BUILTIN), ROOT) == RE_RECORD
+    assert br.record_command(bs.load(BUILTIN), ROOT) == RE_RECORD
 
 
 def test_builtin_baseline_covers_every_case_and_engine():
     from sim_models.registry import engine_names
-    base = bl.load(BUILTIN)
+    base = bs.load(BUILTIN)
     assert {(r.case, r.engine) for r in base.runs} >= \
         {(c, e) for c in case_names() for e in ("mujoco", "pybullet")}
     assert {r.engine for r in base.runs} <= set(engine_names())
@@ -55,7 +60,7 @@ def test_builtin_baseline_covers_every_case_and_engine():
     for r in base.runs:
         # recorded at the recommended settings: every recorded field is still the engine's
         # default (a field added since is run at its default, and the check notes it)
-        now = bl.settings_json(r.engine, get_engine(r.engine).settings())["fields"]
+        now = bset.settings_json(r.engine, get_engine(r.engine).settings())["fields"]
         changed = {k: (v, now[k]) for k, v in r.settings["fields"].items()
                    if k in now and now[k] != v}
         assert not changed, f"{r.label}: recommended settings changed since the baseline " \
@@ -68,10 +73,10 @@ def mujoco_baseline(tmp_path_factory):
     """Every built-in case in MuJoCo, recorded through the session cache (the runs of
     the committed-baseline check and the engine tests: same request and settings)."""
     out = tmp_path_factory.mktemp("baseline") / "mujoco.json"
-    base = bl.record(case_names(), ["mujoco"], out, request=bl.request_dict(samples=24),
+    base = br.record(case_names(), ["mujoco"], out, request=br.request_dict(samples=24),
                      runner=cached_runner)
-    assert not bl.record_problems(base)
-    bl.save(base)
+    assert not br.record_problems(base)
+    bs.save(base)
     return out
 
 
@@ -158,11 +163,11 @@ def test_a_large_improvement_says_the_baseline_is_loose(mujoco_baseline, tmp_pat
     assert f"FAIL  quick-return / mujoco: {picked['quantity']}: improved " in out
     # an improvement within the factor, or one below the floor, is not loose
     rec = bl.QuantityRecord("x.alpha", 9e-7, 0.0, "deg", 1e-3, 0.0, 1.0)
-    assert bl.judge(rec, 1e-9, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    assert bc.judge(rec, 1e-9, 0.0, bl.DEFAULT_FACTOR).status == "ok"
     rec = bl.QuantityRecord("x.alpha", 2e-5, 0.0, "deg", 1e-3, 0.0, 1.0)
-    assert bl.judge(rec, 3e-6, 0.0, bl.DEFAULT_FACTOR).status == "ok"
-    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR).status == "improved"
-    assert bl.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR, fail_loose=True).failed
+    assert bc.judge(rec, 3e-6, 0.0, bl.DEFAULT_FACTOR).status == "ok"
+    assert bc.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR).status == "improved"
+    assert bc.judge(rec, 1.9e-6, 0.0, bl.DEFAULT_FACTOR, fail_loose=True).failed
 
 
 def test_check_under_other_settings_names_them(mujoco_baseline, tmp_path, capsys):
@@ -186,7 +191,7 @@ def test_check_under_other_settings_names_them(mujoco_baseline, tmp_path, capsys
 def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
     """An error below the floor divided by 100 is not drift (1e-8 -> 1e-10 is round-off
     territory: the limit is factor x floor); the same error set to 0 is not either."""
-    base = bl.load(mujoco_baseline)
+    base = bs.load(mujoco_baseline)
     run = next(r for r in base.runs if r.case == "seed-four-bar")
     small = [q for q in run.quantities if 0 < q.error < bl.DRIFT_FLOOR]
     assert small
@@ -194,10 +199,10 @@ def test_the_floor_keeps_round_off_from_tripping(mujoco_baseline):
         for recorded in (q.error / 100, 0.0):
             rec = bl.QuantityRecord(q.quantity, recorded, q.at, q.at_unit, q.tolerance,
                                     q.max_abs, q.peak)
-            assert bl.judge(rec, q.error, q.at, bl.DEFAULT_FACTOR).status == "ok"
+            assert bc.judge(rec, q.error, q.at, bl.DEFAULT_FACTOR).status == "ok"
     # just above the limit it is drift, and the message states the floor
     rec = bl.QuantityRecord("x.alpha", 1e-12, 0.0, "deg", 1e-3, 0.0, 1.0)
-    v = bl.judge(rec, 1.01 * bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR, 30.0, bl.DEFAULT_FACTOR)
+    v = bc.judge(rec, 1.01 * bl.DEFAULT_FACTOR * bl.DRIFT_FLOOR, 30.0, bl.DEFAULT_FACTOR)
     assert v.status == "drift" and "below the floor 1e-07" in v.message()
 
 
@@ -210,8 +215,8 @@ def test_over_tolerance_missing_quantity_and_missing_case_fail(mujoco_baseline, 
              "at_unit": "deg", "max_abs": 0.0, "peak": 1.0})
         gone = _run(doc, "quick-return")
         gone["model"] = {"builtin": "no-such-case", "sha256": "0" * 64}
-    base = bl.load(_edited(mujoco_baseline, tmp_path / "e.json", edit))
-    checks = {c.record.case: c for c in bl.check(base, runner=cached_runner)}
+    base = bs.load(_edited(mujoco_baseline, tmp_path / "e.json", edit))
+    checks = {c.record.case: c for c in bc.check(base, runner=cached_runner)}
     four = checks["seed-four-bar"]
     assert not four.passed and four.failures()[0].status == "over-tolerance"
     assert "exceeds its tolerance" in four.failures()[0].message()
@@ -241,22 +246,22 @@ def test_a_model_file_is_stored_relative_and_a_change_is_detected(tmp_path):
     shutil.copy(case_path("seed-four-bar"), model)
     out = proj / "ci" / "baseline.json"
     out.parent.mkdir()
-    base = bl.record([str(model)], ["mujoco"], out, request=bl.request_dict(samples=12),
+    base = br.record([str(model)], ["mujoco"], out, request=br.request_dict(samples=12),
                      runner=cached_runner)
-    bl.save(base)
+    bs.save(base)
     doc = json.loads(out.read_text())
     assert doc["runs"][0]["model"]["file"] == "../linkages/four.toml"
     moved = tmp_path / "moved"
     shutil.copytree(proj, moved)
-    assert all(c.passed for c in bl.check(bl.load(moved / "ci" / "baseline.json"),
+    assert all(c.passed for c in bc.check(bs.load(moved / "ci" / "baseline.json"),
                                           runner=cached_runner))
     text = model.read_text()
     model.write_text(text.replace("mass = 0.6", "mass = 0.61", 1))
     assert text != model.read_text()
-    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    (chk,) = bc.check(bs.load(out), runner=cached_runner)
     assert not chk.passed and "changed since the baseline" in chk.problems[0]
     model.unlink()
-    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    (chk,) = bc.check(bs.load(out), runner=cached_runner)
     assert not chk.passed and "is gone" in chk.problems[0]
 
 
@@ -268,17 +273,17 @@ def test_model_identity_is_the_parsed_mechanism_not_the_bytes(tmp_path):
     text = Path(case_path("seed-four-bar")).read_text()
     model.write_text(text)
     out = tmp_path / "b.json"
-    bl.save(bl.record([str(model)], ["mujoco"], out, request=bl.request_dict(samples=12),
+    bs.save(br.record([str(model)], ["mujoco"], out, request=br.request_dict(samples=12),
                       runner=cached_runner))
     recorded = json.loads(out.read_text())["runs"][0]["model"]
     assert recorded["content"]["bodies.coupler.mass"] == 0.6
     for same in ("# a comment the user added\n" + text, text.replace("\n", "\r\n")):
         model.write_bytes(same.encode())
         assert bl.file_sha256(model) != bl.file_sha256(case_path("seed-four-bar"))
-        (chk,) = bl.check(bl.load(out), runner=cached_runner)
+        (chk,) = bc.check(bs.load(out), runner=cached_runner)
         assert chk.passed, chk.problems
     model.write_text(text.replace("mass = 0.6", "mass = 0.61", 1))
-    (chk,) = bl.check(bl.load(out), runner=cached_runner)
+    (chk,) = bc.check(bs.load(out), runner=cached_runner)
     assert not chk.passed
     assert "changed since the baseline (parsed mechanism): bodies.coupler.mass 0.6 -> " \
            "0.61" in chk.problems[0], chk.problems
@@ -337,8 +342,8 @@ def test_changed_versions_are_named(mujoco_baseline, tmp_path, capsys):
 def test_file_is_sorted_and_one_line_per_quantity(mujoco_baseline):
     text = mujoco_baseline.read_text()
     doc = json.loads(text)
-    assert text == bl.dumps(bl.load(mujoco_baseline)).replace(
-        bl.load(mujoco_baseline).recorded, doc["recorded"])
+    assert text == bs.dumps(bs.load(mujoco_baseline)).replace(
+        bs.load(mujoco_baseline).recorded, doc["recorded"])
     lines = [ln.strip() for ln in text.splitlines()]
     for run in doc["runs"]:
         names = [q["quantity"] for q in run["quantities"]]
@@ -478,7 +483,7 @@ def test_junit_for_ci_pages(tmp_path, capsys):
     model.parent.mkdir()
     shutil.copy(case_path("seed-four-bar"), model)
     base = tmp_path / "b.json"
-    bl.save(bl.record([str(model)], ["mujoco"], base, request=bl.request_dict(samples=12),
+    bs.save(br.record([str(model)], ["mujoco"], base, request=br.request_dict(samples=12),
                       runner=cached_runner))
     import os
     cwd = os.getcwd()
@@ -513,15 +518,15 @@ def test_record_command_names_settings_that_differ_from_the_defaults(mujoco_base
     from dataclasses import replace
 
     from sim_models.registry import get_engine, split_overrides
-    base = bl.load(mujoco_baseline)
+    base = bs.load(mujoco_baseline)
     run = base.runs[0]
     fields = dict(run.settings["fields"], timestep=1e-4, solref=[-20000.0, -300.0])
     edited = replace(base, runs=(replace(run, settings=dict(run.settings, fields=fields)),
                                  *base.runs[1:]))
-    cmd = bl.record_command(edited, mujoco_baseline.parent)
+    cmd = br.record_command(edited, mujoco_baseline.parent)
     sets = [w for w in cmd.split("--set ")[1:]]
     assert [s.split()[0] for s in sets] == ["mujoco.solref=-20000,-300",
                                             "mujoco.timestep=0.0001"], cmd
     over = split_overrides([s.split()[0] for s in sets], ["mujoco"])["mujoco"]
     assert get_engine("mujoco").settings(over) == \
-        bl.settings_from_json(edited.runs[0], "test")
+        bset.settings_from_json(edited.runs[0], "test")

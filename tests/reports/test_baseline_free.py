@@ -19,9 +19,12 @@ import re
 import pytest
 
 from reports.cli.xval import main
-from reports.regression import baseline as bl
+from reports.regression import baseline_check as bc
+from reports.regression import baseline_record as br
+from reports.regression import baseline_settings as bset
+from reports.regression import baseline_store as bs
 from reports.regression.baseline_free import free_request
-from reports.regression.pytest_plugin import cached_runner
+from reports.regression.run_cache import cached_runner
 from tests.reports.test_bad_inputs import assert_one_line_error
 
 #: The recorded runs: A01 in MuJoCo (within every tolerance; no loop) and the released
@@ -33,12 +36,12 @@ DURATION, SAMPLES = 1.0, 51
 def recorded(tmp_path_factory):
     path = tmp_path_factory.mktemp("free-baseline") / "free.json"
     req = free_request(DURATION, SAMPLES)
-    a = bl.record(["iftomm-a01-pendulum"], ["mujoco"], path, request=req,
+    a = br.record(["iftomm-a01-pendulum"], ["mujoco"], path, request=req,
                   runner=cached_runner)
-    b = bl.record(["seed-four-bar"], ["pybullet"], path, request=req, runner=cached_runner)
-    assert not bl.record_problems(a) and not bl.record_problems(b)
-    base, _ = bl.merge(a, b)
-    bl.save(base)
+    b = br.record(["seed-four-bar"], ["pybullet"], path, request=req, runner=cached_runner)
+    assert not br.record_problems(a) and not br.record_problems(b)
+    base, _ = br.merge(a, b)
+    bs.save(base)
     return path
 
 
@@ -57,7 +60,7 @@ def _q(run, name):
 def _check(tmp_path, doc):
     p = tmp_path / "b.json"
     p.write_text(json.dumps(doc))
-    return {c.record.engine: c for c in bl.check(bl.load(p), runner=cached_runner)}
+    return {c.record.engine: c for c in bc.check(bs.load(p), runner=cached_runner)}
 
 
 def test_record_holds_errors_horizons_and_drifts(recorded):
@@ -72,7 +75,7 @@ def test_record_holds_errors_horizons_and_drifts(recorded):
     assert all(q["at_unit"] == "s" for q in a01["quantities"])
     h = _q(seed, "O4.x")["horizon_s"]
     assert 0.5 < h < 1.0 and _q(seed, "O4.x")["error"] > _q(seed, "O4.x")["tolerance"]
-    cmd = bl.record_command(bl.load(recorded))
+    cmd = br.record_command(bs.load(recorded))
     assert "--free --duration 1 --samples 51" in cmd and "--engine pybullet" in cmd
 
 
@@ -165,9 +168,9 @@ def test_check_set_takes_the_free_settings(tmp_path, recorded, capsys):
     assert_one_line_error(capsys, ["baseline", "check", str(p), "--set",
                                    "mujoco.armature=1"],
                           r"no engine here has a setting 'armature'")
-    classes = bl.override_classes(bl.load(recorded))
+    classes = bset.override_classes(bs.load(recorded))
     assert classes["pybullet"].__name__ == "PybulletFreeSettings"
-    assert bl.overrides_for(["pybullet.first_step=1e-5"], ["pybullet"], classes) == {
+    assert bset.overrides_for(["pybullet.first_step=1e-5"], ["pybullet"], classes) == {
         "pybullet": {"first_step": "1e-5"}}
 
 
@@ -318,8 +321,8 @@ def test_record_refuses_a_run_that_stopped(tmp_path):
         run, comps = cached_runner(mech, engine, settings, request)
         return type("R", (), {"ok": False, "t_fail": 0.25, "reason": "NaN state",
                               "case": run.case})(), comps
-    base = bl.record(["iftomm-a01-pendulum"], ["mujoco"], tmp_path / "b.json",
+    base = br.record(["iftomm-a01-pendulum"], ["mujoco"], tmp_path / "b.json",
                      request=req, runner=stopped)
-    assert bl.record_problems(base) == ["iftomm-a01-pendulum / mujoco (free, 0.5 s): the "
+    assert br.record_problems(base) == ["iftomm-a01-pendulum / mujoco (free, 0.5 s): the "
                                         "run stopped at t = 0.25 s: NaN state"]
     assert math.isfinite(base.runs[0].quantities[0].error)

@@ -18,8 +18,9 @@ from pathlib import Path
 import pytest
 
 from reports.regression import baseline as bl
-from reports.regression import pytest_plugin
-from reports.regression.pytest_plugin import cached_runner
+from reports.regression import baseline_record as br
+from reports.regression import baseline_store as bs
+from reports.regression.run_cache import SESSION, cached_runner
 
 #: A user's own crank-rocker (Grashof: 40 + 150 <= 120 + 100), with gravity, in mm.
 USER_TOML = """\
@@ -108,9 +109,9 @@ def user_project(tmp_path_factory):
     (root / "linkages" / "four_bar.toml").write_text(USER_TOML)
     (root / "tests" / "test_linkages.py").write_text(USER_TESTS)
     (root / "pytest.ini").write_text("[pytest]\nxval_baseline = tests/baseline.json\n")
-    base = bl.record([str(root / "linkages" / "four_bar.toml")], ["mujoco"],
+    base = br.record([str(root / "linkages" / "four_bar.toml")], ["mujoco"],
                      root / "tests" / "baseline.json", runner=cached_runner)
-    bl.save(base)
+    bs.save(base)
     return root
 
 
@@ -187,16 +188,30 @@ def test_plugin_registered_through_the_entry_point(pytestconfig):
 
 
 def test_assertions_share_one_cached_run(xval):
-    before = dict(pytest_plugin._STATS)
+    before = dict(SESSION.stats)
     r1 = xval.run("seed-four-bar", "mujoco", samples=24)
     comps = xval.assert_agrees("seed-four-bar", engine="mujoco", samples=24)
     r2, _ = xval.compare("seed-four-bar", "mujoco", tolerance=1e-3, samples=24,
                          quantities=["B.force"])
     assert r1 is r2
-    assert pytest_plugin._STATS["runs"] - before["runs"] <= 1
+    assert SESSION.stats["runs"] - before["runs"] <= 1
     assert {c.quantity for c in comps} >= {"coupler.alpha", "rocker.alpha", "B.force"}
     with pytest.raises(KeyError, match="no quantity 'B.torque'"):
         xval.compare("seed-four-bar", "mujoco", samples=24, quantities=["B.torque"])
+
+
+def test_the_run_cache_is_an_object(tmp_path):
+    """An ``Xval`` given its own :class:`RunCache` runs, counts and serves from that one;
+    the session's (:data:`SESSION`) is left as it was."""
+    from reports.regression.pytest_plugin import Xval
+    from reports.regression.run_cache import RunCache
+    cache, before = RunCache(), dict(SESSION.stats)
+    x = Xval(tmp_path, bl.DEFAULT_FACTOR, runs=cache)
+    r1 = x.run("seed-four-bar", "mujoco", samples=24)
+    r2 = x.run("seed-four-bar", "mujoco", samples=24)
+    assert r1 is r2
+    assert (cache.stats["runs"], cache.stats["hits"], len(cache.entries)) == (1, 1, 1)
+    assert SESSION.stats == before
 
 
 def test_failure_names_quantity_error_where_and_settings(xval):
@@ -281,7 +296,7 @@ def drift_project(tmp_path_factory):
         "def test_plain():\n    assert True\n")
     (root / "pytest.ini").write_text("[pytest]\nxval_baseline = tests/baseline.json\n")
     out = root / "tests" / "baseline.json"
-    bl.save(bl.record([str(root / "linkages" / "four_bar.toml")],
+    bs.save(br.record([str(root / "linkages" / "four_bar.toml")],
                       ["mujoco", "pybullet", "exudyn"], out, runner=cached_runner))
     import json
     doc = json.loads(out.read_text())

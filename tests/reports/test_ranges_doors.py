@@ -30,15 +30,17 @@ BUILTIN = Path(__file__).resolve().parents[1] / "baselines" / "builtin.json"
 def no_run(monkeypatch):
     """Fail the test if any engine run or comparison starts."""
     import reports.comparison.runs as vr
-    import reports.regression.baseline as bl
+    import reports.regression.baseline_check as bc
+    import reports.regression.baseline_record as br
     from sim_models import engines
 
     def ran(*a, **k):
         pytest.fail("an engine ran for an impossible setting")
     monkeypatch.setattr(vr, "run_comparison", ran)
     monkeypatch.setattr(vr, "run_verdict", ran)
-    monkeypatch.setattr(bl, "run_and_compare", ran)
-    monkeypatch.setattr(bl, "record", ran)
+    monkeypatch.setattr(br, "run_and_compare", ran)
+    monkeypatch.setattr(bc, "run_and_compare", ran)  # check's default runner
+    monkeypatch.setattr(br, "record", ran)
     monkeypatch.setattr(engines, "open_session", ran)
 
 
@@ -217,12 +219,12 @@ def test_baseline_file_edits(capsys, no_run, tmp_path, name):
 
 def test_the_unedited_base_of_the_edits_loads(tmp_path):
     """The edits above change one thing of a file that is otherwise accepted."""
-    import reports.regression.baseline as bl
+    import reports.regression.baseline_store as bs
     doc = json.loads((BUGS / "baseline-zero-revolutions.json").read_text())
     doc["runs"][0]["request"]["revolutions"] = 2
     p = tmp_path / "b.json"
     p.write_text(json.dumps(doc))
-    assert len(bl.load(p).runs) == 1
+    assert len(bs.load(p).runs) == 1
 
 
 # ============================================================== drift factor options

@@ -37,13 +37,13 @@ def calls(monkeypatch):
 
 
 def test_every_caller_runs_through_run_verdict(calls, monkeypatch):
-    from reports.regression import baseline, pytest_plugin
-    monkeypatch.setattr(pytest_plugin, "_STATS", {"runs": 0, "hits": 0, "seconds": 0.0})
+    from reports.regression import baseline_record
+    from reports.regression.run_cache import RunCache
     mech = load_case("seed-four-bar")
-    req = baseline.request_dict(3, 24, 2e-3, 3e-2, "moving")
-    run_, comps = baseline.run_and_compare(mech, "mujoco", None, req)
+    req = baseline_record.request_dict(3, 24, 2e-3, 3e-2, "moving")
+    run_, comps = baseline_record.run_and_compare(mech, "mujoco", None, req)
     assert [c.quantity for c in comps] == ["rocker.alpha"]  # judged only
-    entry = pytest_plugin._make_run(mech, "pybullet", None, req)
+    entry = RunCache().make_run(mech, "pybullet", None, req)
     assert [c.quantity for c in entry["comparisons"]] == ["rocker.alpha", "B.force[engine]"]
     r, comps = vr.run_comparison("TREE", "exudyn", None, "instantaneous", 1, 5)
     assert len(comps) == 2

@@ -9,7 +9,7 @@ import pytest
 
 from analytic import Linkage, case_names, load_case
 from analytic.sweep import input_values
-from reports.regression.pytest_plugin import session_run
+from reports.regression.run_cache import session_run
 from sim_models.engines import EngineRun, mujoco_instantaneous, run
 from sim_models.mjcf import MujocoSettings, direct_solref
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from analytic import case_names, load_case
-from reports.regression.pytest_plugin import session_run
+from reports.regression.run_cache import session_run
 from sim_models.engines import run
 from sim_models.tree import SimTree
 

@@ -1,6 +1,11 @@
 """Put a report run's headline figures into the README (between marker comments).
 
-    python -m reports.report.readme_figures reports/out/<timestamp>
+    python scripts/readme_figures.py reports/out/<timestamp>
+
+A maintainer script, run from a checkout (with linkage-xval installed in it, ``pip
+install -e .``): it edits this checkout's ``README.md`` and ``docs/``, so it is not part
+of the installed package (``pyproject.toml`` installs ``analytic``, ``sim_models`` and
+``reports`` only).
 
 Rewrites the blocks between ``<!-- verdict:start -->`` / ``<!-- verdict:end -->`` and
 ``<!-- cheapest:start -->`` / ``<!-- cheapest:end -->`` from the run's CSV files and
@@ -18,6 +23,7 @@ import pandas as pd
 
 from analytic.input_display import input_number
 
+#: The checkout: the folder above ``scripts/``.
 ROOT = Path(__file__).resolve().parents[1]
 PLOT = "pareto-seed-slider-crank.png"
 
