@@ -145,13 +145,38 @@ def test_run_is_reproducible_from_its_record(name, tmp_path):
     r = run(tree, name, revolutions=2, samples=12)
     assert r.ok, r.reason
     assert r.mechanism is mech and r.settings == get_engine(name).settings()
+    assert r.linkage is tree.linkage  # the compiled object itself travels back up
     assert_run_within(r, tree.linkage, ENGINE_RELATIVE, name)
     # the arithmetic the run records is the one its settings declare (the error floor's)
     assert r.extra.get("precision", "float64") == r.settings.arithmetic.name
     r2 = rerun(r)
+    assert r2.linkage is tree.linkage  # re-run on the Linkage it carries, not a new one
     for k in ("values", "alpha", "drive_effort", "joint_force"):
         np.testing.assert_allclose(getattr(r2, k), getattr(r, k), rtol=1e-9, atol=1e-9,
                                    err_msg=k)
+
+
+def test_instantaneous_run_carries_its_compiled_linkage():
+    """The instantaneous mode's run, too, carries the very Linkage of the tree it was
+    made from (and its mechanism is that Linkage's)."""
+    from sim_models.engines import instantaneous
+    _available("mujoco")
+    tree = compile_linkage(load_case("seed-four-bar"))
+    r = instantaneous(tree, "mujoco", values=[0.5, 1.0])
+    assert r.linkage is tree.linkage and r.mechanism is tree.linkage.mech
+
+
+def test_a_tree_refuses_the_linkage_of_another_description():
+    """A SimTree given a Linkage built from another description (an equal copy
+    included) refuses it, naming both: the Linkage a run carries is its own
+    description's."""
+    from analytic import Linkage
+    from sim_models import SimModelError, SimTree
+    a, b = load_case("seed-four-bar"), load_case("seed-four-bar")
+    with pytest.raises(SimModelError, match="another description"):
+        SimTree(a, Linkage(b))
+    lk = Linkage(a)
+    assert compile_linkage(a, lk).linkage is lk
 
 
 def _free_engines():
