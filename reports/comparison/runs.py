@@ -83,7 +83,7 @@ def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
     else:
         r = run(tree, engine, settings, revolutions=req.revolutions, samples=req.samples,
                 max_violation=req.max_violation, max_speed_error=req.max_speed_error)
-    return Verdict(tree, r, tuple(compare_run(r, tree.linkage)))
+    return Verdict(tree, r, tuple(compare_run(r)))  # against r.linkage, tree.linkage itself
 
 
 def engine_list(choice: str, mode: str = "run") -> list[str]:

@@ -146,7 +146,7 @@ def test_run_is_reproducible_from_its_record(name, tmp_path):
     assert r.ok, r.reason
     assert r.mechanism is mech and r.settings == get_engine(name).settings()
     assert r.linkage is tree.linkage  # the compiled object itself travels back up
-    assert_run_within(r, tree.linkage, ENGINE_RELATIVE, name)
+    assert_run_within(r, ENGINE_RELATIVE, name)
     # the arithmetic the run records is the one its settings declare (the error floor's)
     assert r.extra.get("precision", "float64") == r.settings.arithmetic.name
     r2 = rerun(r)
@@ -227,7 +227,7 @@ def test_reversing_input_runs_to_a_verdict(name):
     from reports.comparison.compare import compare_run
     tree = compile_linkage(load_mechanism(BUGS / "reversing-input.toml"))
     r = run(tree, name)
-    comps = compare_run(r, tree.linkage)
+    comps = compare_run(r)
     assert comps and all(np.isfinite(c.normalised) for c in comps if r.ok)
 
 
@@ -274,4 +274,4 @@ def test_limited_range_reversing_input_stays_off_its_limits():
     assert x.min() >= lo + (hi - lo) / 48 * 0.99 and x.max() <= hi - (hi - lo) / 48 * 0.99
     assert np.any(np.diff(x) < 0) and np.any(np.diff(x) > 0)  # out and back
     r = run(tree, "mujoco", samples=24)
-    assert r.ok and verdict(compare_run(r, tree.linkage))
+    assert r.ok and verdict(compare_run(r))
