@@ -7,7 +7,8 @@
 (:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from
 :mod:`sim_models.registry` and their settings built there (``--set KEY=VALUE``); the
 compiled linkage (:func:`sim_models.compile_linkage`) is built once and passed down to
-the engine run and the comparison, and comes back in the :class:`Verdict`.
+the engine run, comes back up in it (``run.linkage is tree.linkage``), the comparison
+reads its reference there, and the tree comes back in the :class:`Verdict`.
 """
 
 from __future__ import annotations
