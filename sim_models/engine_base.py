@@ -11,8 +11,8 @@ Data flow (one compiled object passed down)::
 
     mech = load_case(...)                    # description (analytic.Mechanism)
     tree = compile_linkage(mech)             # SimTree: Linkage + reference solution + tree
-    run_ = run(tree, "mujoco", settings)     # EngineRun (carries tree.mech and settings)
-    comps = compare_run(run_, tree.linkage)  # reports.comparison.compare, the same Linkage
+    run_ = run(tree, "mujoco", settings)     # EngineRun (carries tree.linkage and settings)
+    comps = compare_run(run_)                # reports.comparison.compare: run_.linkage
 
 Writing an engine
 -----------------
@@ -154,7 +154,7 @@ def finish(session: Session, plan: Plan, rec: Recorder, request: RunRequest,
     ex.update(session.extra())
     readings = session.engine_readings
     return EngineRun(
-        case=mech.name, engine=engine or session.name, mechanism=mech,
+        case=mech.name, engine=engine or session.name, mechanism=mech, linkage=st.linkage,
         settings=session.settings, request=request, ok=reason is None, reason=reason,
         fail_value=fail_value, values=plan.values, times=plan.times,
         driver_velocity=plan.velocity, driver_acceleration=plan.acceleration,

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analytic import Mechanism
+from analytic import Linkage, Mechanism
 
 from . import ranges
 from .engine_settings import EngineSettings, SettingsError
@@ -259,12 +259,16 @@ class EngineRun:
     Arrays have N rows, one per sample; B bodies (``body_names``, the description's
     order), J joints (``joint_names``), P prismatic joints (``prismatic_names``).
     ``mechanism``, ``settings`` (the settings object) and ``request`` re-run it exactly:
-    :func:`rerun`.  ``settings_text`` is ``settings.describe()``.
+    :func:`rerun`.  ``settings_text`` is ``settings.describe()``.  ``linkage`` is the
+    compiled analytic :class:`~analytic.Linkage` the run was made from (the
+    :class:`~sim_models.tree.SimTree`'s own object, ``linkage.mech is mechanism``): the
+    comparison reads its reference from it and never builds another.
     """
 
     case: str
     engine: str
     mechanism: Mechanism
+    linkage: Linkage                  # the compiled object (SimTree.linkage), not a copy
     settings: EngineSettings
     request: RunRequest
     ok: bool

@@ -92,9 +92,10 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
 
 
 def rerun(r: EngineRun) -> EngineRun:
-    """Run ``r`` again from its own record (mechanism, settings object, request)."""
+    """Run ``r`` again from its own record (mechanism, settings object, request), on
+    the compiled :class:`~analytic.Linkage` it carries (not a rebuilt one)."""
     req = r.request
-    tree = compile_linkage(r.mechanism, chords=req.chords)
+    tree = compile_linkage(r.mechanism, r.linkage, chords=req.chords)
     base = r.engine.split("-")[0]
     if req.mode == "instantaneous":
         return instantaneous(tree, base, r.settings, r.values)

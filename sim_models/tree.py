@@ -133,6 +133,11 @@ class SimTree:
 
     def __init__(self, mech: Mechanism, linkage: Linkage | None = None,
                  chords: str = "moving"):
+        if linkage is not None and linkage.mech is not mech:
+            # the compiled Linkage travels with every run made from this tree: it must
+            # be the one of this very description, not of another (or an equal copy)
+            raise SimModelError(f"the Linkage given for {mech.name!r} was built from "
+                                f"another description ({linkage.mech.name!r})")
         self.mech = mech
         self.linkage = linkage or Linkage(mech)
         self.chords_mode = chords

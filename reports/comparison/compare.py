@@ -13,13 +13,14 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
+from analytic import Linkage
 from analytic.errors import LinkageError
 from analytic.input_display import convention_of, display_input, format_input, input_number
 from analytic.positions import size_of
 from analytic.sweep import nearest_event
 from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison.quantities import engine_reading, is_engine_reading, judged
-from reports.comparison.reference import MAX_CONDITION, analytic_reference, linkage_of
+from reports.comparison.reference import MAX_CONDITION, analytic_reference
 from sim_models.sampling import near_limit
 
 
@@ -174,16 +175,15 @@ def compare(quantity: str, reference, test, at, tolerance: float,
 
 # --- an engine run against the analytic solution ---------------------------------------
 
-# MAX_CONDITION (samples near a limit position left out) and the Linkage of a run come
-# from reports.comparison.reference, the one analytic reference the verdicts and the figures share
-_linkage_of = linkage_of
+# MAX_CONDITION (samples near a limit position left out) and the analytic reference come
+# from reports.comparison.reference, the one reference the verdicts and the figures share
 
 
-def analytic_at(run_, reference=None):
+def analytic_at(run_, linkage: Linkage | None = None):
     """The analytic kinematics (and forces, when the case has masses) at a run's samples,
-    with the driver rates the engine was given: ``(linkage, kin, frc)``.  ``reference``:
-    the Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
-    return analytic_reference(run_, reference)  # the one reference: figures read it too
+    with the driver rates the engine was given: ``(linkage, kin, frc)``, of the
+    compiled ``run_.linkage`` (or of ``linkage``, another one to compare with)."""
+    return analytic_reference(run_, linkage)  # the one reference: figures read it too
 
 
 #: A reference quantity whose peak is below this fraction of the mechanism's scale for
@@ -202,16 +202,17 @@ class NothingToCompare(LinkageError):
     the message says why.  The command line reports it like a refusal (status 2)."""
 
 
-def compare_run(run_, reference=None, tolerance: float | None = None,
+def compare_run(run_, *, linkage: Linkage | None = None, tolerance: float | None = None,
                 max_condition: float = MAX_CONDITION) -> list[Comparison]:
     """Every compared quantity of an :class:`sim_models.engine_base.EngineRun`.
 
-    ``reference`` is the analytic :class:`Linkage` the run was built from (pass the
-    compiled object down), a ``SimTree`` or a Mechanism; default the run's own
-    mechanism.  Quantities: ``<body>.alpha`` for each moving body (one whose exact alpha
-    is identically zero, such as a constant-speed crank or a piston, is judged against
-    the largest body's peak), ``<joint>.a`` for each slider, ``drive.effort``,
-    ``<joint>.force`` for each joint (vector error), ``<joint>.normal`` and
+    The reference is the solution of ``run_.linkage``, the compiled analytic
+    :class:`Linkage` the run was made from (nothing is rebuilt); ``linkage``: another
+    Linkage to compare the run with instead (a study judging a run against a
+    neighbouring description).  Quantities: ``<body>.alpha`` for each moving body
+    (one whose exact alpha is identically zero, such as a constant-speed crank or a
+    piston, is judged against the largest body's peak), ``<joint>.a`` for each slider,
+    ``drive.effort``, ``<joint>.force`` for each joint (vector error), ``<joint>.normal`` and
     ``<joint>.moment`` for each prismatic joint, and, where the engine has its own
     reading, ``<joint>.force[engine]`` and ``drive.effort[engine]``.  ``at`` is in
     degrees for a revolute driver, m for a prismatic one.  A failed run's NaN samples
@@ -219,7 +220,7 @@ def compare_run(run_, reference=None, tolerance: float | None = None,
     :class:`NothingToCompare` when no sample is comparable.
     """
     tol = ENGINE_RELATIVE if tolerance is None else tolerance
-    lk, kin, frc = analytic_at(run_, reference)
+    lk, kin, frc = analytic_at(run_, linkage)
     mech = lk.mech
     keep = ~near_limit(kin.condition, max_condition)
     if run_.ok:

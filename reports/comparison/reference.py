@@ -61,22 +61,6 @@ class Reference:
 MAX_CONDITION = LIMITED_RANGE_CONDITION
 
 
-def linkage_of(run_, reference=None):
-    """The analytic :class:`Linkage` to compare ``run_`` with: ``reference`` when it is
-    one (the compiled object passed down), else built from ``reference`` (a Mechanism)
-    or from the run's own mechanism (never found again by name)."""
-    if isinstance(reference, Linkage):
-        return reference
-    lk = getattr(reference, "linkage", None)  # a SimTree
-    if isinstance(lk, Linkage):
-        return lk
-    return Linkage(reference if reference is not None else run_.mechanism)
-
-
-def _linkage(run_, reference=None):
-    return linkage_of(run_, reference)
-
-
 def _kinematics(lk, values, velocity, acceleration):
     """Branch-continued kinematics at arbitrary inputs (the solver's ``kinematics_along``
     when present; ``kinematics`` continues the branch by default otherwise)."""
@@ -86,12 +70,14 @@ def _kinematics(lk, values, velocity, acceleration):
     return lk.kinematics(values, velocity, acceleration, on_singular="flag")
 
 
-def analytic_reference(run_, reference=None):
+def analytic_reference(run_, linkage: Linkage | None = None):
     """``(linkage, kin, frc)``: the analytic solution at ``run_``'s sampled inputs with
     the driver rate and acceleration the engine was given at each (the prescribed
-    motion; the description's rate where a sample has none).  ``reference``: the
-    Linkage (or SimTree, or Mechanism; default the run's own mechanism)."""
-    lk = _linkage(run_, reference)
+    motion; the description's rate where a sample has none).  The solution is
+    ``run_.linkage``'s, the compiled object the run was made from (never rebuilt);
+    ``linkage``: another Linkage to compare the run with instead (a study comparing a
+    run against a neighbouring description)."""
+    lk = run_.linkage if linkage is None else linkage
     mech = lk.mech
     vel = np.where(np.isfinite(run_.driver_velocity), run_.driver_velocity,
                    mech.driver.velocity)
@@ -113,9 +99,10 @@ def axis_of(run_, linkage) -> tuple[np.ndarray, str]:
     return u, "input (m)"
 
 
-def reference_of(run_, reference=None) -> Reference:
-    """:func:`analytic_reference` with the judged samples and the plotted axis."""
-    lk, kin, frc = analytic_reference(run_, reference)
+def reference_of(run_, linkage: Linkage | None = None) -> Reference:
+    """:func:`analytic_reference` (``run_.linkage``'s solution, or ``linkage``'s) with
+    the judged samples and the plotted axis."""
+    lk, kin, frc = analytic_reference(run_, linkage)
     judged = ~near_limit(kin.condition, MAX_CONDITION)
     if run_.ok:
         judged &= np.all(np.isfinite(run_.alpha), axis=1)

@@ -7,7 +7,8 @@
 (:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from
 :mod:`sim_models.registry` and their settings built there (``--set KEY=VALUE``); the
 compiled linkage (:func:`sim_models.compile_linkage`) is built once and passed down to
-the engine run and the comparison, and comes back in the :class:`Verdict`.
+the engine run, comes back up in it (``run.linkage is tree.linkage``), the comparison
+reads its reference there, and the tree comes back in the :class:`Verdict`.
 """
 
 from __future__ import annotations
@@ -83,7 +84,7 @@ def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
     else:
         r = run(tree, engine, settings, revolutions=req.revolutions, samples=req.samples,
                 max_violation=req.max_violation, max_speed_error=req.max_speed_error)
-    return Verdict(tree, r, tuple(compare_run(r, tree.linkage)))
+    return Verdict(tree, r, tuple(compare_run(r)))  # against r.linkage, tree.linkage itself
 
 
 def engine_list(choice: str, mode: str = "run") -> list[str]:

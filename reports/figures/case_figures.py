@@ -92,8 +92,9 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
                   line=analytic_line, plan=None, extra=(), tree=None) -> list[CurveFigure]:
     """The body angle, omega, alpha, slider s'', drive effort and joint-force figures
     of the (case) ``label`` from its engine runs (``{engine: EngineRun}``, one plan).
-    ``reference(run, linkage)`` gives each run's samples' reference (the verdict's) and
-    ``line(runs, linkage)`` the analytic lines (a test swaps in a wrong one to show
+    ``reference(run)`` gives each run's samples' reference (the verdict's: that of
+    ``run.linkage``, the compiled Linkage it carries) and ``line(runs, linkage)`` the
+    analytic lines (a test swaps in a wrong one to show
     that the plot-against-verdict check catches it).  Without runs, ``plan`` (anything
     with a run's ``times, values, driver_velocity, driver_acceleration, by_time,
     has_forces``: :func:`reports.cli.plot.plan_samples_of`) places the analytic lines
@@ -112,7 +113,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     lu, lkin, lfrc = line
     r0 = basis[0]
     _, xl = axis_of(r0, linkage)
-    refs = {e: reference(r, linkage) for e, r in runs.items()}
+    refs = {e: reference(r) for e, r in runs.items()}
     idx = {e: _index_in(lu, refs[e].u) for e in runs}
     events, feasible, covered = _range_marks(r0, linkage, lu)
 
@@ -258,7 +259,7 @@ def error_figure(label: str, runs: dict, comparisons: dict, linkage, tolerance: 
     for e, r in runs.items():
         if r is None:
             continue
-        ref = reference(r, linkage)
+        ref = reference(r)
         _, xl = axis_of(r, linkage)
         errs = sample_errors(r, ref, comparisons.get(e, []))
         if not errs:
@@ -323,18 +324,19 @@ def render(fig) -> bytes:
     return plots.curve_plot(fig)
 
 
-def case_figure_data(label: str, runs: dict, comparisons: dict, mech_or_linkage,
+def case_figure_data(label: str, runs: dict, comparisons: dict, linkage: Linkage,
                      tolerance: float, reference=reference_of) -> list:
-    """Every data figure of a case (curves, then errors), not yet rendered."""
-    lk = mech_or_linkage if isinstance(mech_or_linkage, Linkage) else Linkage(mech_or_linkage)
+    """Every data figure of a case (curves, then errors), not yet rendered; ``linkage``
+    draws the analytic lines (each run's markers and errors read its own reference)."""
+    lk = linkage
     figs = curve_figures(label, runs, lk, reference)
     ef = error_figure(label, runs, comparisons, lk, tolerance, reference)
     return figs + ([ef] if ef is not None else [])
 
 
-def linkage_figure(label: str, mech) -> bytes:
+def linkage_figure(label: str, linkage: Linkage) -> bytes:
     """The drawing of the linkage at four inputs over its range."""
-    lk = Linkage(mech)
+    lk = linkage
     vals, full, _ = input_values(lk, 4)
     if not full:
         vals = np.linspace(vals[0], vals[-1], 4)
@@ -343,9 +345,13 @@ def linkage_figure(label: str, mech) -> bytes:
 
 def render_case(label: str, runs: dict, comparisons: dict, mech, tolerance: float
                 ) -> dict[str, bytes]:
-    """PNG bytes of every figure of a case, by name (a picklable pool task)."""
-    out = {"linkage": linkage_figure(label, mech)}
-    for f in case_figure_data(label, runs, comparisons, mech, tolerance):
+    """PNG bytes of every figure of a case, by name (a picklable pool task).  The
+    analytic lines are those of the runs' own compiled Linkage (a pool worker's copy of
+    it); ``mech``'s is built only when no engine ran."""
+    carried = [r.linkage for r in runs.values() if r is not None]
+    lk = carried[0] if carried else Linkage(mech)
+    out = {"linkage": linkage_figure(label, lk)}
+    for f in case_figure_data(label, runs, comparisons, lk, tolerance):
         out[f.name] = render(f)
     return out
 

@@ -83,7 +83,7 @@ def failed_at(run_) -> float:
     full turn wrapped to [0, 360), or m: :mod:`analytic.input_display`); NaN if unknown."""
     if run_.fail_value is None or not math.isfinite(run_.fail_value):
         return np.nan
-    return display_input(run_.fail_value, convention_of(Linkage(run_.mechanism)))
+    return display_input(run_.fail_value, convention_of(run_.linkage))
 
 
 def input_unit(mech) -> str:

@@ -9,6 +9,7 @@ from dataclasses import asdict, replace
 import numpy as np
 import pandas as pd
 
+from analytic import Linkage
 from reports.figures.study_plots import pareto_plot
 from reports.studies.runs import load, make_settings
 from reports.studies.speed_accuracy import run_errors, time_engine
@@ -54,10 +55,11 @@ def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: 
         tree = compile_linkage(mech)
         s = make_settings("mujoco", dict(settings_dict, scene=scene))
         r = run(tree, "mujoco", s)  # the run request's defaults
-        e = run_errors(r, tree.linkage)
+        e = run_errors(r)
         notes = [SCENE_VARIANTS[variant]]
         if mech is not mech0 and r.ok:
-            e0 = run_errors(r, mech0)
+            # deliberately judged against another description: its own Linkage
+            e0 = run_errors(r, Linkage(mech0))
             notes.append(f"against the gravity-free description: accel {e0['accel_error']:.2g},"
                          f" force {e0['force_error']:.2g}")
         sps = time_engine(tree, "mujoco", s, r.timestep, timing_steps, repeats)

@@ -221,13 +221,14 @@ def _is_force(quantity: str) -> bool:
     return quantity == "drive.effort" or quantity.endswith(".force")
 
 
-def run_errors(run_, reference=None) -> dict:
+def run_errors(run_, linkage: Linkage | None = None) -> dict:
     """Normalised errors of an engine run through :func:`reports.comparison.compare.compare_run`
-    (``reference``: the compiled linkage's Linkage; default the run's own mechanism)."""
+    (against ``run_.linkage``, the compiled Linkage it was made from; ``linkage``: another
+    one to judge it against instead)."""
     if not run_.ok:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
-    comps = judged(compare_run(run_, reference))
+    comps = judged(compare_run(run_, linkage=linkage))
     acc = [c for c in comps if _is_accel(c.quantity)]
     frc = [c for c in comps if _is_force(c.quantity)]
     a = max((c.normalised for c in acc), default=math.nan)
@@ -241,14 +242,14 @@ def run_errors(run_, reference=None) -> dict:
                 worst_at=float(worst.at) if worst else math.nan)
 
 
-def sample_errors(run_, lk: Linkage | None = None) -> dict[str, np.ndarray]:
+def sample_errors(run_) -> dict[str, np.ndarray]:
     """Per-sample normalised errors of a run (for the study plots): ``alpha`` the worst
     acceleration quantity and ``force`` the worst force quantity at each sample
     (:func:`_is_accel`, :func:`_is_force`), each quantity divided by the peak its verdict
     divides by (:func:`reports.comparison.reference.sample_errors`, the one per-sample error), so a
     curve's largest value is the row's ``accel_error`` / ``force_error``; NaN where the
     verdict judges no sample."""
-    errs = per_quantity(run_, reference_of(run_, lk), compare_run(run_, lk))
+    errs = per_quantity(run_, reference_of(run_), compare_run(run_))  # run_.linkage's
     out = {}
     for key, family in (("alpha", _is_accel), ("force", _is_force)):
         cols = [e for q, e in errs.items() if family(q)]
@@ -315,7 +316,7 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
                    timestep=float(r.timestep), steps_per_rev=float(r.steps_per_rev),
                    run_seconds_per_rev=float(r.wall_per_rev), ok=bool(r.ok),
                    reason=r.reason or "")
-        row.update(run_errors(r, tree.linkage))
+        row.update(run_errors(r))
         n = int(min(max(1, round(r.steps_per_rev)), timing_steps))
         try:
             # the same session class and stepping loop as the run above
@@ -329,7 +330,7 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
         if keep_samples and r.ok:  # the plots draw successful runs only
             row["samples"] = {"input_deg": np.degrees(r.values).tolist(),
                               **{k: v.tolist()
-                                 for k, v in sample_errors(r, tree.linkage).items()}}
+                                 for k, v in sample_errors(r).items()}}
         return row
     except Exception as e:  # noqa: BLE001 - a study row, never an exception
         return _failed_row(meta, f"{type(e).__name__}: {e}")

@@ -45,7 +45,7 @@ def runs_of(case: str):
     if case not in _RUNS:
         tree = compile_linkage(load_case(case))
         runs = {e: run(tree, e, None, revolutions=2, samples=36) for e in ENGINES}
-        comps = {e: compare_run(r, tree.linkage) for e, r in runs.items()}
+        comps = {e: compare_run(r) for e, r in runs.items()}
         _RUNS[case] = (tree, runs, comps)
     return _RUNS[case]
 
@@ -124,7 +124,7 @@ def plotted_excess(fig, comps: dict, refs: dict | None = None) -> list[str]:
 
 def refs_of(tree, runs):
     from reports.comparison.reference import reference_of
-    return {e: (reference_of(r, tree.linkage), r) for e, r in runs.items()}
+    return {e: (reference_of(r), r) for e, r in runs.items()}
 
 
 @pytest.mark.parametrize("case", case_names())

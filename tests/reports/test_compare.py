@@ -113,7 +113,7 @@ def test_nothing_to_compare_is_typed():
     r = run(tree, "mujoco", samples=6)
     blank = dataclasses.replace(r, alpha=np.full_like(r.alpha, np.nan))  # none reached
     with pytest.raises(NothingToCompare) as e:
-        compare_run(blank, tree.linkage)
+        compare_run(blank)
     assert isinstance(e.value, LinkageError) and "no sample can be compared" in str(e.value)
 
 

@@ -34,7 +34,7 @@ def keep_figure(monkeypatch):
 
 
 def test_png_is_150_dpi():
-    png = linkage_figure("seed-four-bar", load_case("seed-four-bar"))
+    png = linkage_figure("seed-four-bar", Linkage(load_case("seed-four-bar")))
     dpi = Image.open(io.BytesIO(png)).info["dpi"]
     assert dpi[0] == pytest.approx(150, abs=0.1)
 

@@ -54,11 +54,12 @@ def test_failed_slider_run_is_shown_in_metres():
     """report_tables once turned a slider-driven run that failed at 0.1 m into
     'at input 5.73 m' (degrees of 0.1 rad)."""
     from reports.report.tables import failed_at, summary_table, verdict_table
+    slider, four_bar = Linkage(load_case("hibbeler-16-30")), Linkage(load_case("seed-four-bar"))
     r = types.SimpleNamespace(ok=False, fail_value=0.1, reason="diverged",
-                              mechanism=load_case("hibbeler-16-30"), settings_text="")
+                              mechanism=slider.mech, linkage=slider, settings_text="")
     assert failed_at(r) == 0.1
     crank = types.SimpleNamespace(ok=False, fail_value=math.radians(390.0),
-                                  mechanism=load_case("seed-four-bar"))
+                                  mechanism=four_bar.mech, linkage=four_bar)
     assert failed_at(crank) == pytest.approx(30.0)
     import reports.comparison.compare as cmp
     orig = cmp.comparison_frame

@@ -76,7 +76,7 @@ def _coupler(comps):
 def test_within_the_float32_floor_reads_precision_limit_and_does_not_fail(base):
     tree, _ = base
     r, floor, at = _moved(base, 0.5, Float32Mujoco())
-    comps = compare_run(r, tree, tolerance=0.1 * floor)
+    comps = compare_run(r, tolerance=0.1 * floor)
     c = _coupler(comps)
     assert not c.passed and c.at == pytest.approx(at)
     assert c.floor == pytest.approx(floor, rel=1e-9)
@@ -106,7 +106,7 @@ def test_within_the_float32_floor_reads_precision_limit_and_does_not_fail(base):
 def test_above_the_float32_floor_fails(base):
     tree, _ = base
     r, floor, _ = _moved(base, 2.0, Float32Mujoco())
-    comps = compare_run(r, tree, tolerance=0.1 * floor)
+    comps = compare_run(r, tolerance=0.1 * floor)
     c = _coupler(comps)
     assert not c.limited and c.status == "FAIL"
     assert not verdict(comps) and verdict_word(comps) == "FAIL"
@@ -121,14 +121,14 @@ def test_float64_claims_no_floor(base):
     """The same error with float64 settings: a failure (u64 claims nothing)."""
     tree, _ = base
     r, floor, _ = _moved(base, 0.5, MujocoSettings())
-    c = _coupler(compare_run(r, tree, tolerance=0.1 * floor))
+    c = _coupler(compare_run(r, tolerance=0.1 * floor))
     assert c.floor == 0.0 and c.precision == "float64" and c.status == "FAIL"
 
 
 def test_a_stopped_run_claims_no_floor(base):
     tree, _ = base
     r, floor, _ = _moved(base, 0.5, Float32Mujoco(), ok=False)
-    comps = compare_run(r, tree, tolerance=0.1 * floor)
+    comps = compare_run(r, tolerance=0.1 * floor)
     assert _coupler(comps).floor == 0.0
     assert verdict_word(comps, run_ok=False) == "FAIL"
 

@@ -145,13 +145,38 @@ def test_run_is_reproducible_from_its_record(name, tmp_path):
     r = run(tree, name, revolutions=2, samples=12)
     assert r.ok, r.reason
     assert r.mechanism is mech and r.settings == get_engine(name).settings()
-    assert_run_within(r, tree.linkage, ENGINE_RELATIVE, name)
+    assert r.linkage is tree.linkage  # the compiled object itself travels back up
+    assert_run_within(r, ENGINE_RELATIVE, name)
     # the arithmetic the run records is the one its settings declare (the error floor's)
     assert r.extra.get("precision", "float64") == r.settings.arithmetic.name
     r2 = rerun(r)
+    assert r2.linkage is tree.linkage  # re-run on the Linkage it carries, not a new one
     for k in ("values", "alpha", "drive_effort", "joint_force"):
         np.testing.assert_allclose(getattr(r2, k), getattr(r, k), rtol=1e-9, atol=1e-9,
                                    err_msg=k)
+
+
+def test_instantaneous_run_carries_its_compiled_linkage():
+    """The instantaneous mode's run, too, carries the very Linkage of the tree it was
+    made from (and its mechanism is that Linkage's)."""
+    from sim_models.engines import instantaneous
+    _available("mujoco")
+    tree = compile_linkage(load_case("seed-four-bar"))
+    r = instantaneous(tree, "mujoco", values=[0.5, 1.0])
+    assert r.linkage is tree.linkage and r.mechanism is tree.linkage.mech
+
+
+def test_a_tree_refuses_the_linkage_of_another_description():
+    """A SimTree given a Linkage built from another description (an equal copy
+    included) refuses it, naming both: the Linkage a run carries is its own
+    description's."""
+    from analytic import Linkage
+    from sim_models import SimModelError, SimTree
+    a, b = load_case("seed-four-bar"), load_case("seed-four-bar")
+    with pytest.raises(SimModelError, match="another description"):
+        SimTree(a, Linkage(b))
+    lk = Linkage(a)
+    assert compile_linkage(a, lk).linkage is lk
 
 
 def _free_engines():
@@ -202,7 +227,7 @@ def test_reversing_input_runs_to_a_verdict(name):
     from reports.comparison.compare import compare_run
     tree = compile_linkage(load_mechanism(BUGS / "reversing-input.toml"))
     r = run(tree, name)
-    comps = compare_run(r, tree.linkage)
+    comps = compare_run(r)
     assert comps and all(np.isfinite(c.normalised) for c in comps if r.ok)
 
 
@@ -249,4 +274,4 @@ def test_limited_range_reversing_input_stays_off_its_limits():
     assert x.min() >= lo + (hi - lo) / 48 * 0.99 and x.max() <= hi - (hi - lo) / 48 * 0.99
     assert np.any(np.diff(x) < 0) and np.any(np.diff(x) > 0)  # out and back
     r = run(tree, "mujoco", samples=24)
-    assert r.ok and verdict(compare_run(r, tree.linkage))
+    assert r.ok and verdict(compare_run(r))

@@ -54,7 +54,7 @@ def test_run_matches_analytic(case):
     mech = load_case(case)
     r = run(mech, "mujoco_warp", MujocoWarpSettings(), revolutions=2, samples=36)
     assert r.ok, r.reason
-    assert_run_within(r, mech, WARP_RUN, case)
+    assert_run_within(r, WARP_RUN, case)
 
 
 def test_run_agrees_with_mujoco_on_the_same_model():
@@ -96,7 +96,7 @@ def test_report_states_the_precision_beside_the_verdict():
     for engine in ("mujoco_warp", "mujoco"):
         r = run(mech, engine, revolutions=2, samples=36)
         results.append({"case": mech.name, "engine": engine, "run": r,
-                        "comparisons": compare_run(r, mech, 1e-6)})
+                        "comparisons": compare_run(r, tolerance=1e-6)})
     summary = summary_table(verdict_table(results))
     rows = {d["engine"]: d for d in summary.to_dict("records")}
     assert rows["mujoco_warp"]["precision"] == "float32"

@@ -28,7 +28,7 @@ def test_short_run_matches_analytic(case):
     mech = load_case(case)
     r = run(mech, "pybullet", SETTINGS[case], revolutions=2, samples=36)
     assert r.ok, r.reason
-    assert_run_within(r, mech, ENGINE_RELATIVE, case)
+    assert_run_within(r, ENGINE_RELATIVE, case)
     assert np.max(r.loop_violation) < 1e-4
     np.testing.assert_allclose(
         np.remainder(r.measured_values - r.values + 1, 2 * math.pi) - 1, 0, atol=1e-9)
@@ -40,7 +40,7 @@ def test_short_run_matches_analytic(case):
                       if tj.parent == st.ground and tj.child not in parents]
     assert leaf_on_ground
     for name in leaf_on_ground:
-        assert engine_reading(r, mech, f"{name}.force[engine]").passed
+        assert engine_reading(r, f"{name}.force[engine]").passed
 
 
 @pytest.mark.parametrize("case", [c for c in case_names() if c not in SETTINGS])
@@ -49,7 +49,7 @@ def test_every_case_runs(case):
     # the session's run (reports.regression.pytest_plugin), shared with the committed-baseline check
     r = session_run(mech, "pybullet", PybulletSettings(), revolutions=2, samples=24)
     assert r.ok, r.reason
-    assert_run_within(r, mech, ENGINE_RELATIVE, case)
+    assert_run_within(r, ENGINE_RELATIVE, case)
 
 
 def test_divergence_is_a_failed_run_not_a_crash():
