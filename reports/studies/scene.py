@@ -10,11 +10,11 @@ import numpy as np
 import pandas as pd
 
 from analytic import Linkage
+from reports.comparison.runs import run_verdict
 from reports.figures.study_plots import pareto_plot
 from reports.studies.runs import load, make_settings
-from reports.studies.speed_accuracy import run_errors, time_engine
+from reports.studies.speed_accuracy import run_errors, time_engine, verdict_errors
 from sim_models import compile_linkage
-from sim_models.engines import run
 from sim_models.mjcf import MujocoSettings
 
 SCENE_VARIANTS = {
@@ -54,8 +54,9 @@ def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: 
         mech = replace(mech0, gravity=(0.0, -9.81)) if gravity else mech0
         tree = compile_linkage(mech)
         s = make_settings("mujoco", dict(settings_dict, scene=scene))
-        r = run(tree, "mujoco", s)  # the run request's defaults
-        e = run_errors(r)
+        v = run_verdict(tree, "mujoco", s)  # the one run-and-compare, the request's defaults
+        r = v.run
+        e = verdict_errors(r, v.comparisons)
         notes = [SCENE_VARIANTS[variant]]
         if mech is not mech0 and r.ok:
             # deliberately judged against another description: its own Linkage

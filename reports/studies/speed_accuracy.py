@@ -89,7 +89,7 @@ from reports.comparison.compare import compare_run
 from reports.comparison.quantities import judged
 from reports.comparison.reference import reference_of
 from reports.comparison.reference import sample_errors as per_quantity
-from reports.comparison.runs import request_of
+from reports.comparison.runs import request_of, run_verdict
 from reports.figures.study_plots import pareto_frontier_plot
 from reports.studies.change_point import (  # noqa: F401 - re-exported: the change-point study
     CHANGE_POINT_MAX_VIOLATION,
@@ -112,7 +112,6 @@ from reports.studies.runs import (  # noqa: F401 - re-exported: the studies' eng
 )
 from sim_models import compile_linkage
 from sim_models.engine_run import RunRequest
-from sim_models.engines import run
 from sim_models.engines import time_engine as session_time
 from sim_models.mjcf import HARD_SOLIMP, direct_solref
 from sim_models.registry import available_engines
@@ -226,9 +225,18 @@ def run_errors(run_, linkage: Linkage | None = None) -> dict:
     (against ``run_.linkage``, the compiled Linkage it was made from; ``linkage``: another
     one to judge it against instead)."""
     if not run_.ok:
+        return verdict_errors(run_, ())
+    return verdict_errors(run_, compare_run(run_, linkage=linkage))
+
+
+def verdict_errors(run_, comparisons) -> dict:
+    """The study row's errors from a run's comparisons (a :class:`Verdict`'s): the worst
+    judged acceleration and force quantity, normalised as the verdict normalises them;
+    infinite for a run that did not finish."""
+    if not run_.ok:
         return dict(accel_error=math.inf, force_error=math.inf, error=math.inf,
                     worst_quantity="", worst_at=math.nan)
-    comps = judged(compare_run(run_, linkage=linkage))
+    comps = judged(comparisons)
     acc = [c for c in comps if _is_accel(c.quantity)]
     frc = [c for c in comps if _is_force(c.quantity)]
     a = max((c.normalised for c in acc), default=math.nan)
@@ -301,7 +309,8 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
               timing_steps: int = 5000,
               timing_repeats: int = 3, meta: dict | None = None,
               keep_samples: bool = False) -> dict:
-    """One engine run at one setting: errors (engine run + :func:`run_errors`) and speed
+    """One engine run at one setting: errors (:func:`reports.comparison.runs.run_verdict`,
+    the one run-and-compare, read by :func:`verdict_errors`) and speed
     (bare stepping loop); ``revolutions``/``samples`` None: the run request's defaults.
     Never raises: failures are rows with ``ok = False``."""
     meta = dict(meta or {})
@@ -310,13 +319,14 @@ def grid_task(case_name: str, engine: str, settings_dict: dict, label: str = "",
         tree = compile_linkage(load(case_name))  # one compiled linkage for run and errors
         s = make_settings(engine, settings_dict)
         req = request_of({"revolutions": revolutions, "samples": samples})
-        r = run(tree, engine, s, revolutions=req.revolutions, samples=req.samples)
+        v = run_verdict(tree, engine, s, req)  # the one run-and-compare
+        r = v.run
         row = {k: meta.get(k) for k in GRID_COLUMNS}
         row.update(case=case_name, engine=engine, label=label, settings=s.describe(),
                    timestep=float(r.timestep), steps_per_rev=float(r.steps_per_rev),
                    run_seconds_per_rev=float(r.wall_per_rev), ok=bool(r.ok),
                    reason=r.reason or "")
-        row.update(run_errors(r))
+        row.update(verdict_errors(r, v.comparisons))
         n = int(min(max(1, round(r.steps_per_rev)), timing_steps))
         try:
             # the same session class and stepping loop as the run above
