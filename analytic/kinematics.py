@@ -62,6 +62,9 @@ class Linkage:
         self.topo: Topology = build_topology(mech)
         self.eqs = LoopEquations(self.topo)
         self.positions = PositionSolver(self.topo, self.eqs, branch_rule)
+        #: the fused kernel of this linkage (:class:`analytic.fused.FusedKernel`), built
+        #: by :func:`analytic.fused.kernel_for` on first use; ``None`` until then
+        self.fused_kernel = None
 
     def body_index(self, name: str) -> int:
         try:
@@ -140,8 +143,8 @@ class Linkage:
             kin = fk.kinematics(values, velocity, acceleration, "flag", branch,
                                 forces or guess is not None, joints)
             if guess is not None:
-                kin._forces_guess = guess
-            if not kin._fused_singular:  # singular samples are the numpy path's to treat
+                kin.fused.forces_guess = guess
+            if not kin.fused.singular:  # singular samples are the numpy path's to treat
                 return kin
         d = self.mech.driver
         values = np.atleast_1d(np.asarray(d.value if values is None else values, float))
@@ -297,13 +300,13 @@ class Linkage:
         Of a result of the fused kernel: the forces its pass wrote (:meth:`solve`, or
         :meth:`kinematics` once forces have followed kinematics: see
         :meth:`_forces_guess`), else one more pass writing only the forces."""
-        if getattr(kin, "_fused_kernel", None) is not None:  # the kernel's forces pass
-            d = kin.__dict__
-            if d.get("_fused_forces") is None:  # asked for after a kinematics-only pass
+        tag = getattr(kin, "fused", None)
+        if tag is not None:  # the kernel's forces pass
+            if tag.forces is None:  # asked for after a kinematics-only pass
                 self.__dict__.update(_forces_follow=True, _forces_last=None)
-            elif d.get("_forces_guess") is not None:
-                d["_forces_guess"].used = True
-            return kin._fused_kernel.forces(kin)
+            elif tag.forces_guess is not None:
+                tag.forces_guess.used = True
+            return tag.kernel.forces(kin)
         from .kinetostatics import solve_forces
         return solve_forces(self, kin)
 

@@ -109,7 +109,7 @@ def evaluate_blocked(linkage, values, velocity=None, acceleration=None, forces=N
         x = part(a, b)
         kin, frc = fk.solve_block(x, velocity, acceleration, out, carry, level,
                                   branch, on_singular)
-        if kin._fused_singular:  # a singular sample: the numpy path treats the block
+        if kin.fused.singular:  # a singular sample: the numpy path treats the block
             kin = linkage.kinematics(x, velocity, acceleration,
                                      on_singular=on_singular)
             frc = linkage.forces(kin) if forces else None
