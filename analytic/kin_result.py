@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 
 from .linalg import condition
-from .positions import as_xy, cplx
+from .planar import as_xy, cplx
 
 
 @dataclass

@@ -25,8 +25,9 @@ from .kin_result import DEFERRED, CompactKinematics, Kinematics  # noqa: F401 - 
 from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
+from .planar import cplx
 from .position_solver import PositionSolver
-from .positions import cplx, size_of
+from .positions import size_of
 from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
 

@@ -27,6 +27,7 @@ import numpy as np
 from .errors import AssemblyError
 from .loops import LoopEquations
 from .mechanism import Revolute, mechanism_size
+from .planar import cplx, cross
 from .tolerances import (
     ASSEMBLY_STARTS,
     HINT_DISTANCE,
@@ -36,21 +37,6 @@ from .tolerances import (
     TOGGLE_SNAP,
 )
 from .topology import Topology
-
-
-def as_xy(z: np.ndarray) -> np.ndarray:
-    """View a complex array ``(...)`` as real ``(..., 2)`` (x, y), without copying."""
-    z = np.ascontiguousarray(z)
-    return z.view(np.float64).reshape(*z.shape, 2)
-
-
-def cplx(v) -> complex:
-    return complex(float(v[0]), float(v[1]))
-
-
-def cross(a, b):
-    """z-component of the planar cross product of complex vectors: Im(conj(a) b)."""
-    return a.real * b.imag - a.imag * b.real
 
 
 def size_of(topo: Topology) -> float:

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import MissingMassError
 from ..mechanism import Revolute
 from ..motion_spec import JointSpring, PointDamper, PointSpring
+from ..planar import cplx
 
 
 @dataclass
@@ -79,7 +80,6 @@ def _massive(lk):
     complex), masses and inertias, cached on the linkage."""
     got = lk.__dict__.get("_free_massive")
     if got is None:
-        from ..positions import cplx
         rows = [(b, cplx(body.com), body.mass or 0.0, body.inertia or 0.0)
                 for b, body in enumerate(lk.mech.bodies)
                 if b != lk.topo.ground and (body.mass or body.inertia)]

@@ -25,7 +25,8 @@ import math
 import numpy as np
 
 from ..mechanism import Revolute
-from ..positions import cplx, rrr_disc_factor
+from ..planar import cplx
+from ..positions import rrr_disc_factor
 from ..tolerances import SINGULAR_CONDITION, TOGGLE_SNAP
 
 #: inputs per chunk of the position stages (their scratch: ~50 bytes per body and
