@@ -97,6 +97,12 @@ class Kinematics:
     #: the fused kernel's tag on a result it made (:class:`FusedTag`); ``None`` on the
     #: numpy path
     fused: FusedTag | None = field(default=None, repr=False, compare=False)
+    #: the branch argument the rates at singular samples were continued on
+    #: (:func:`analytic.singular.rate_limits`; its forces follow the same branch)
+    singular_branch: str = field(default="continued", repr=False, compare=False)
+    #: what the sweep's analyses compute once from these kinematics (by name: the
+    #: limit positions and least transmission angles of :mod:`analytic.refine`)
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     @cached_property
     def condition(self) -> np.ndarray:
@@ -198,7 +204,7 @@ class CompactKinematics(Kinematics):
         ``(N,)``; ``forces``: those the same pass wrote (:attr:`FusedTag.forces`)."""
         # not Kinematics.__init__: the deferred fields stay unset until asked for
         self.__dict__.update(linkage=linkage, value=value, _rates=(velocity, acceleration),
-                             q=q, qd=qd, qdd=qdd, at_singular=None,
+                             q=q, qd=qd, qdd=qdd, at_singular=None, memo={},
                              fused=FusedTag(kernel, branch, forces=forces))
 
     def __getattr__(self, name):  # only for attributes not set: the deferred ones
