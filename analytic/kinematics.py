@@ -66,6 +66,9 @@ class Linkage:
         #: the fused kernel of this linkage (:class:`analytic.fused.FusedKernel`), built
         #: by :func:`analytic.fused.kernel_for` on first use; ``None`` until then
         self.fused_kernel = None
+        #: what other modules derive from this linkage once and keep with it, by name
+        #: (:mod:`analytic.free_motion.dynamics`: ``"free_chain"``, ``"free_massive"``)
+        self.derived: dict = {}
 
     def body_index(self, name: str) -> int:
         try:
