@@ -46,7 +46,7 @@ from .kernels.cache import (  # noqa: F401 - cache_dir and module_name: the modu
     module_name,
     on_disk,
 )
-from .kin_result import DEFERRED, CompactKinematics, Kinematics
+from .kin_result import DEFERRED, CompactKinematics, FusedTag, Kinematics
 from .kinetostatics import Forces, solve_forces
 from .linalg import condition
 from .positions import _fmt_value, _infeasible
@@ -349,10 +349,9 @@ class FusedKernel:
                                         level, fresh=True)
         self._check(values, bad, wi, worst)
         self._singular(values, susp, out["A"], on_singular)
-        kin, frc = self._wrap(values, vel, acc, out, branch, forces)
         # a sample near a singular position (bound on the condition number reached)
-        kin._fused_singular = susp is None or len(susp) > 0
-        return kin, frc
+        singular = susp is None or len(susp) > 0
+        return self._wrap(values, vel, acc, out, branch, forces, singular)
 
     def solve_block(self, values, velocity, acceleration, out: dict, carry: np.ndarray,
                     level: int = 3, branch: str = "continued", on_singular="flag"):
@@ -368,11 +367,12 @@ class FusedKernel:
         cut = {k: (a[:N] if a.shape[0] else a) for k, a in out.items()}
         self._check(values, bad, wi, worst)
         self._singular(values, susp, cut["A"], on_singular)
-        kin, frc = self._wrap(values, vel, acc, cut, branch, level >= 3)
-        kin._fused_singular = susp is None or len(susp) > 0
-        return kin, frc
+        singular = susp is None or len(susp) > 0
+        return self._wrap(values, vel, acc, cut, branch, level >= 3, singular)
 
-    def _wrap(self, values, vel, acc, out, branch, forces):
+    def _wrap(self, values, vel, acc, out, branch, forces, singular):
+        """The full :class:`Kinematics` of ``out`` (views), tagged with this kernel
+        (``Linkage.forces`` runs its forces pass), and the forces where written."""
         trans = [(name, out["trv"][:, 2 * d], out["trv"][:, 2 * d + 1])
                  for d, name in enumerate(self.trans_names)]
         jp = {j: out["jp"][:, j] for j in range(self.J)}
@@ -383,9 +383,7 @@ class FusedKernel:
             qd=out["qd"], qdd=out["qdd"], theta=out["theta"], omega=out["omega"],
             alpha=out["alpha"], E=out["E"], zO=out["zO"], zv=out["zv"], za=out["za"],
             jacobian=out["A"], determinant=out["det"], transmission_vectors=trans,
-            joint_point=jp)
-        kin._fused_branch = branch
-        kin._fused_kernel = self  # Linkage.forces(kin) runs the kernel's forces pass
+            joint_point=jp, fused=FusedTag(self, branch, singular))
         return kin, (self._forces(out) if forces else None)
 
     def kinematics(self, values=None, velocity=None, acceleration=None, on_singular="raise",
@@ -395,7 +393,7 @@ class FusedKernel:
         first use), or where a sample is near a singular position the full result of
         :meth:`solve` (its Jacobians screen the samples, and flag them for the numpy
         path's singular treatment).  ``forces``: the same pass writes the forces too
-        (kept on the result for :meth:`forces`: ``_fused_forces``); ``joints``: and
+        (kept on the result for :meth:`forces`: its ``fused.forces``); ``joints``: and
         every joint's point (``joint_point``), so neither costs another pass."""
         values, vel, acc = self._inputs(values, velocity, acceleration)
         if forces:
@@ -407,12 +405,10 @@ class FusedKernel:
         self._check(values, bad, wi, worst)
         if susp is None or len(susp):
             kin, frc = self.solve(values, vel, acc, on_singular, branch, forces)
-            kin._fused_forces = frc
+            kin.fused.forces = frc
             return kin
         kin = CompactKinematics(self, self.lk, values, vel, acc, out["q"], out["qd"],
-                                out["qdd"], branch)
-        if forces:
-            kin._fused_forces = self._forces(out)
+                                out["qdd"], branch, self._forces(out) if forces else None)
         if joints:
             kin.joint_point = {j: out["jp"][:, j] for j in range(self.J)}
         return kin
@@ -420,7 +416,7 @@ class FusedKernel:
     def deferred(self, kin) -> dict:
         """The arrays a :class:`analytic.kinematics.CompactKinematics` defers, from one
         full pass at its inputs."""
-        full, _ = self.solve(kin.value, *_rates(kin), "flag", kin._fused_branch)
+        full, _ = self.solve(kin.value, *_rates(kin), "flag", kin.fused.branch)
         return {k: getattr(full, k) for k in DEFERRED}
 
     def forces(self, kin):
@@ -428,12 +424,12 @@ class FusedKernel:
         made ``kin`` where it wrote them (:meth:`kinematics` ``forces=True``), else one
         more pass of the kernel at ``kin``'s inputs, writing only the forces."""
         self._require_mass()
-        done = kin.__dict__.get("_fused_forces")
-        if done is not None:
-            return done
+        tag = kin.fused
+        if tag is not None and tag.forces is not None:
+            return tag.forces
         N = kin.n
         out = self.alloc(N, 3, state=False)  # the state is kin's: the forces only
-        branch = getattr(kin, "_fused_branch", "continued")
+        branch = "continued" if tag is None else tag.branch
         _, vel, acc = self._inputs(kin.value, *_rates(kin))
         self.run(kin.value, vel, acc, self.signs_for(kin.value, branch), out, 3, fresh=True)
         return self._forces(out)
@@ -549,7 +545,7 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
     neither in this process nor worth loading yet (see :data:`COMPILE_NOW_POINTS`).
     Once in this process, the kernel serves every call whatever its size;
     ``XVAL_FUSED=always`` takes it (compiling it if need be) at any ``n``."""
-    fk = linkage.__dict__.get("_fused_kernel")
+    fk = linkage.fused_kernel
     mode = os.environ.get("XVAL_FUSED")
     if mode is None and fk is not None and fk._fn is not None and fk._fn.overloads:
         return fk  # the common case, first: in the process and not overridden
@@ -576,12 +572,12 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
 
 
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:
-    """The linkage's fused kernel (built once and kept on the linkage), or ``None``
-    on the Newton path, when disabled (``XVAL_FUSED=0``) or without numba."""
+    """The linkage's fused kernel (built once and kept in the linkage's declared
+    ``fused_kernel``), or ``None`` on the Newton path, when disabled (``XVAL_FUSED=0``)
+    or without numba."""
     if not (enabled() if enabled_ is None else enabled_) or linkage.topo.plan is None:
         return None
-    fk = linkage.__dict__.get("_fused_kernel")
+    fk = linkage.fused_kernel
     if fk is None:
-        fk = FusedKernel(linkage)
-        linkage.__dict__["_fused_kernel"] = fk
+        fk = linkage.fused_kernel = FusedKernel(linkage)
     return fk

@@ -12,6 +12,7 @@ axis of the sweep); a prismatic input in metres, never converted.  SI in
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,9 @@ INPUT_DIGITS = 6
 #: Degrees are rounded to this many decimals before wrapping, so that 360 deg - 1 ulp
 #: (a sample one turn on, 2*pi*k in floating point) reads 0 deg, not 359.999999999.
 WRAP_DECIMALS = 9
+#: linkage -> its :class:`InputConvention` (the feasible ranges cost a scan and
+#: bisection: once per linkage)
+_CONVENTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True)
@@ -40,8 +44,11 @@ class InputConvention:
 def convention_of(linkage) -> InputConvention:
     """The :class:`InputConvention` of an analytic :class:`analytic.Linkage` (a full
     turn exactly when :func:`analytic.sweep.input_values` sweeps a full turn)."""
-    cached = getattr(linkage, "_input_convention", None)
-    if isinstance(cached, InputConvention):
+    try:
+        cached = _CONVENTIONS.get(linkage)
+    except TypeError:  # a linkage that cannot be a weak key: recomputed each time
+        cached = None
+    if cached is not None:
         return cached
     if not linkage.driver_is_revolute:
         conv = InputConvention(False, False)
@@ -49,9 +56,9 @@ def convention_of(linkage) -> InputConvention:
         feas = linkage.feasible_ranges()
         full = len(feas) == 1 and feas[0][1] - feas[0][0] >= 2 * math.pi * (1 - 1e-9)
         conv = InputConvention(True, bool(full))
-    try:  # the feasible ranges cost a scan and bisection: once per linkage
-        linkage._input_convention = conv
-    except AttributeError:  # a linkage that takes no attributes: recomputed next time
+    try:
+        _CONVENTIONS[linkage] = conv
+    except TypeError:  # a linkage that cannot be a weak key: recomputed next time
         pass
     return conv
 

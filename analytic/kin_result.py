@@ -15,7 +15,36 @@ from functools import cached_property
 import numpy as np
 
 from .linalg import condition
-from .positions import as_xy, cplx
+from .planar import as_xy, cplx
+
+
+@dataclass
+class FusedTag:
+    """What a result of the fused kernel (:mod:`analytic.fused`) carries for the calls
+    that follow it: ``Linkage.forces(kin)`` runs (or reads) the same kernel's forces
+    pass, and a compact result computes its deferred arrays by it.
+
+    Attributes
+    ----------
+    kernel : analytic.fused.FusedKernel
+        The kernel that made the result.
+    branch : str
+        The branch argument of its pass (``"continued"`` or ``"held"``).
+    singular : bool
+        A sample lies near a singular position (the condition-number screen's bound
+        reached): the numpy path treats the call.
+    forces : analytic.kinetostatics.Forces or None
+        The forces the same pass wrote, when it wrote them.
+    forces_guess : object or None
+        The mark of a pass that wrote the forces unasked
+        (``analytic.kinematics.Linkage._forces_guess``), ``used`` once they are read.
+    """
+
+    kernel: object
+    branch: str = "continued"
+    singular: bool = False
+    forces: object | None = None
+    forces_guess: object | None = None
 
 
 @dataclass
@@ -65,6 +94,15 @@ class Kinematics:
     #: their limits along the branch (passed through), 3 not determined (NaN); see
     #: :mod:`analytic.singular`.  ``None``: no singular sample was processed.
     at_singular: np.ndarray | None = None
+    #: the fused kernel's tag on a result it made (:class:`FusedTag`); ``None`` on the
+    #: numpy path
+    fused: FusedTag | None = field(default=None, repr=False, compare=False)
+    #: the branch argument the rates at singular samples were continued on
+    #: (:func:`analytic.singular.rate_limits`; its forces follow the same branch)
+    singular_branch: str = field(default="continued", repr=False, compare=False)
+    #: what the sweep's analyses compute once from these kinematics (by name: the
+    #: limit positions and least transmission angles of :mod:`analytic.refine`)
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     @cached_property
     def condition(self) -> np.ndarray:
@@ -159,15 +197,15 @@ class CompactKinematics(Kinematics):
     kernel at the same inputs on first use, the same numbers bit for bit.  A caller
     that needs only ``q, q', q''``, a slider's motion or the forces never holds them."""
 
-    def __init__(self, kernel, linkage, value, velocity, acceleration, q, qd, qdd, branch):
+    def __init__(self, kernel, linkage, value, velocity, acceleration, q, qd, qdd, branch,
+                 forces=None):
         """``velocity, acceleration``: ``(1,)`` for a constant rate (the ``(N,)`` view
         is made when first read: a broadcast view costs more than a small call) or
-        ``(N,)``."""
+        ``(N,)``; ``forces``: those the same pass wrote (:attr:`FusedTag.forces`)."""
         # not Kinematics.__init__: the deferred fields stay unset until asked for
         self.__dict__.update(linkage=linkage, value=value, _rates=(velocity, acceleration),
-                             q=q, qd=qd, qdd=qdd, at_singular=None,
-                             _fused_kernel=kernel, _fused_branch=branch,
-                             _fused_singular=False)
+                             q=q, qd=qd, qdd=qdd, at_singular=None, memo={},
+                             fused=FusedTag(kernel, branch, forces=forces))
 
     def __getattr__(self, name):  # only for attributes not set: the deferred ones
         if name in ("velocity", "acceleration"):
@@ -177,6 +215,6 @@ class CompactKinematics(Kinematics):
             return d[name]
         if name in DEFERRED:
             d = self.__dict__
-            d.update(d["_fused_kernel"].deferred(self))
+            d.update(d["fused"].kernel.deferred(self))
             return d[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")

@@ -25,8 +25,9 @@ from .kin_result import DEFERRED, CompactKinematics, Kinematics  # noqa: F401 - 
 from .linalg import condition, det_small
 from .loops import LoopEquations
 from .mechanism import Mechanism, Revolute
+from .planar import cplx
 from .position_solver import PositionSolver
-from .positions import cplx, size_of
+from .positions import size_of
 from .tolerances import SINGULAR_CONDITION
 from .topology import Topology, build_topology
 
@@ -62,6 +63,12 @@ class Linkage:
         self.topo: Topology = build_topology(mech)
         self.eqs = LoopEquations(self.topo)
         self.positions = PositionSolver(self.topo, self.eqs, branch_rule)
+        #: the fused kernel of this linkage (:class:`analytic.fused.FusedKernel`), built
+        #: by :func:`analytic.fused.kernel_for` on first use; ``None`` until then
+        self.fused_kernel = None
+        #: what other modules derive from this linkage once and keep with it, by name
+        #: (:mod:`analytic.free_motion.dynamics`: ``"free_chain"``, ``"free_massive"``)
+        self.derived: dict = {}
 
     def body_index(self, name: str) -> int:
         try:
@@ -140,8 +147,8 @@ class Linkage:
             kin = fk.kinematics(values, velocity, acceleration, "flag", branch,
                                 forces or guess is not None, joints)
             if guess is not None:
-                kin._forces_guess = guess
-            if not kin._fused_singular:  # singular samples are the numpy path's to treat
+                kin.fused.forces_guess = guess
+            if not kin.fused.singular:  # singular samples are the numpy path's to treat
                 return kin
         d = self.mech.driver
         values = np.atleast_1d(np.asarray(d.value if values is None else values, float))
@@ -297,13 +304,13 @@ class Linkage:
         Of a result of the fused kernel: the forces its pass wrote (:meth:`solve`, or
         :meth:`kinematics` once forces have followed kinematics: see
         :meth:`_forces_guess`), else one more pass writing only the forces."""
-        if getattr(kin, "_fused_kernel", None) is not None:  # the kernel's forces pass
-            d = kin.__dict__
-            if d.get("_fused_forces") is None:  # asked for after a kinematics-only pass
+        tag = getattr(kin, "fused", None)
+        if tag is not None:  # the kernel's forces pass
+            if tag.forces is None:  # asked for after a kinematics-only pass
                 self.__dict__.update(_forces_follow=True, _forces_last=None)
-            elif d.get("_forces_guess") is not None:
-                d["_forces_guess"].used = True
-            return kin._fused_kernel.forces(kin)
+            elif tag.forces_guess is not None:
+                tag.forces_guess.used = True
+            return tag.kernel.forces(kin)
         from .kinetostatics import solve_forces
         return solve_forces(self, kin)
 

@@ -34,7 +34,7 @@ import numpy as np
 from .errors import MissingMassError
 from .linalg import solve_small
 from .mechanism import Revolute
-from .positions import as_xy, cross
+from .planar import as_xy, cross
 from .singular import force_limits, singular_samples
 from .tolerances import POWER_BALANCE
 

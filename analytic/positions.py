@@ -27,6 +27,7 @@ import numpy as np
 from .errors import AssemblyError
 from .loops import LoopEquations
 from .mechanism import Revolute, mechanism_size
+from .planar import cplx, cross
 from .tolerances import (
     ASSEMBLY_STARTS,
     HINT_DISTANCE,
@@ -36,21 +37,6 @@ from .tolerances import (
     TOGGLE_SNAP,
 )
 from .topology import Topology
-
-
-def as_xy(z: np.ndarray) -> np.ndarray:
-    """View a complex array ``(...)`` as real ``(..., 2)`` (x, y), without copying."""
-    z = np.ascontiguousarray(z)
-    return z.view(np.float64).reshape(*z.shape, 2)
-
-
-def cplx(v) -> complex:
-    return complex(float(v[0]), float(v[1]))
-
-
-def cross(a, b):
-    """z-component of the planar cross product of complex vectors: Im(conj(a) b)."""
-    return a.real * b.imag - a.imag * b.real
 
 
 def size_of(topo: Topology) -> float:
@@ -73,11 +59,35 @@ def rrr_disc_factor(c1: complex, c2: complex) -> float:
     return (L1 + L2) / (L1 * L2 * max(L1, L2))
 
 
+class _Placement:
+    """The poses :meth:`ClosedForm.run` builds, step by step: angles ``theta (N, B)``,
+    ``E = exp(i theta)`` and origins ``O`` (complex ``(N, B)``), the dyads'
+    discriminants and the transmission data, in the plan's order."""
+
+    def __init__(self, N: int, B: int):
+        self.theta = np.zeros((N, B))
+        self.E = np.ones((N, B), complex)
+        self.O = np.zeros((N, B), complex)
+        self.discs: list[np.ndarray] = []
+        self.trans: list[tuple] = []
+
+    def pt(self, b, c):
+        """World point of the body-frame point ``c`` of body ``b``."""
+        return self.O[:, b] + self.E[:, b] * c
+
+    def place(self, b, th, e=None):
+        """Set body ``b``'s angle ``th`` and ``E`` (``exp(i th)`` unless given)."""
+        self.theta[:, b] = th
+        self.E[:, b] = np.exp(1j * th) if e is None else e
+
+
 class ClosedForm:
     """Evaluate the dyad plan for a batch of input values and fixed branch signs.
 
     Planar vectors are complex numbers here (x + iy): a body frame's rotation is
-    ``E = exp(i theta)``, a body point is ``O + E c``.
+    ``E = exp(i theta)``, a body point is ``O + E c``.  One solver per step kind
+    (:meth:`_driven_revolute`, :meth:`_driven_prismatic`, :meth:`_rrr`, :meth:`_rrp`,
+    :meth:`_rpr`, :meth:`_prp`), as :mod:`analytic.kernels.codegen` generates them.
     """
 
     def __init__(self, topo: Topology):
@@ -99,155 +109,166 @@ class ClosedForm:
         where a dyad cannot close) and the transmission data
         ``[(joint name, vector 1, vector 2)]``.
         """
-        topo, joints, at = self.topo, self.mech.joints, self.at
-        N, B = len(values), len(topo.body_names)
-        theta = np.zeros((N, B))
-        E = np.ones((N, B), complex)
-        O = np.zeros((N, B), complex)
-        discs = []
-        trans = []
+        N, B = len(values), len(self.topo.body_names)
+        p = _Placement(N, B)
         si = iter(signs)
-
-        def pt(b, c):
-            return O[:, b] + E[:, b] * c
-
-        def place(b, th, e=None):
-            theta[:, b] = th
-            E[:, b] = np.exp(1j * th) if e is None else e
-
         for st in self.plan:
             if st.kind == "driven_revolute":
-                (x,), (j,) = st.bodies, st.joints
-                k = topo.other(j, x)
-                sgn = 1.0 if topo.body_names[x] == joints[j].body_b else -1.0
-                place(x, theta[:, k] + sgn * values)
-                O[:, x] = pt(k, at[j, k]) - E[:, x] * at[j, x]
+                self._driven_revolute(p, st, values)
             elif st.kind == "driven_prismatic":
-                (x,), (j,) = st.bodies, st.joints
-                jt = joints[j]
-                k = topo.other(j, x)
-                ul = cmath.exp(1j * jt.direction)
-                if topo.body_names[x] == jt.slider:
-                    place(x, theta[:, k] + jt.angle, E[:, k] * cmath.exp(1j * jt.angle))
-                    PS = pt(k, at[j, k]) + values * (E[:, k] * ul)
-                    O[:, x] = PS - E[:, x] * at[j, x]
-                else:
-                    place(x, theta[:, k] - jt.angle, E[:, k] * cmath.exp(-1j * jt.angle))
-                    Q = pt(k, at[j, k]) - values * (E[:, x] * ul)
-                    O[:, x] = Q - E[:, x] * at[j, x]
+                self._driven_prismatic(p, st, values)
             elif st.kind == "RRR":
-                x1, x2 = st.bodies
-                j1, j2, j3 = st.joints
-                k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
-                P1, P3 = pt(k1, at[j1, k1]), pt(k3, at[j3, k3])
-                c1 = at[j2, x1] - at[j1, x1]
-                c2 = at[j3, x2] - at[j2, x2]
-                L1s, L2s = abs(c1) ** 2, abs(c2) ** 2
-                d = P3 - P1
-                D2 = d.real * d.real + d.imag * d.imag
-                D = np.sqrt(D2)
-                Dsafe = np.where(D > 0, D, 1.0)
-                a = (L1s - L2s + D2) / (2 * Dsafe)
-                h2 = L1s - a * a
-                disc = np.where(D > 0, h2 * rrr_disc_factor(c1, c2), -1.0)
-                discs.append(disc)
-                h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
-                sg = next(si)
-                P2 = P1 + d * (a + 1j * sg * h) / Dsafe
-                e1, e2 = P2 - P1, P3 - P2
-                # exp(i theta) of each link straight from geometry: no trigonometry
-                u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
-                u2 = e2 / np.abs(e2) * (c2 / abs(c2)).conjugate()
-                place(x1, np.angle(u1), u1)
-                place(x2, np.angle(u2), u2)
-                O[:, x1] = P1 - u1 * at[j1, x1]
-                O[:, x2] = P2 - u2 * at[j2, x2]
-                trans.append((joints[j2].name, -e1, e2))
+                self._rrr(p, st, si)
             elif st.kind == "RRP":
-                x1, x2 = st.bodies
-                j1, j2, j3 = st.joints
-                jt = joints[j3]
-                k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
-                P1 = pt(k1, at[j1, k1])
-                c1 = at[j2, x1] - at[j1, x1]
-                L1s = abs(c1) ** 2
-                ul = cmath.exp(1j * jt.direction)
-                if topo.body_names[x2] == jt.slider:
-                    place(x2, theta[:, k3] + jt.angle, E[:, k3] * cmath.exp(1j * jt.angle))
-                    u = E[:, k3] * ul
-                    ud = u
-                else:
-                    place(x2, theta[:, k3] - jt.angle, E[:, k3] * cmath.exp(-1j * jt.angle))
-                    u = E[:, x2] * ul
-                    ud = -u
-                base = pt(k3, at[j3, k3]) + E[:, x2] * (at[j2, x2] - at[j3, x2])
-                e = base - P1
-                eu = e.real * ud.real + e.imag * ud.imag
-                h2 = eu * eu - (e.real * e.real + e.imag * e.imag) + L1s
-                discs.append(h2 / L1s)
-                sg = next(si)
-                t = -eu + sg * np.where(h2 / L1s > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)),
-                                        0.0)
-                P2 = base + t * ud
-                e1 = P2 - P1
-                u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
-                place(x1, np.angle(u1), u1)
-                O[:, x1] = P1 - u1 * at[j1, x1]
-                O[:, x2] = P2 - E[:, x2] * at[j2, x2]
-                trans.append((joints[j2].name, -e1, 1j * u))
+                self._rrp(p, st, si)
             elif st.kind == "RPR":
-                x1, x2 = st.bodies
-                j1, j2, j3 = st.joints
-                jt = joints[j2]
-                g = x1 if topo.body_names[x1] == jt.guide else x2
-                s_ = x2 if g == x1 else x1
-                jg, js = (j1, j3) if g == x1 else (j3, j1)
-                kg, ks = topo.other(jg, g), topo.other(js, s_)
-                PG, PSr = pt(kg, at[jg, kg]), pt(ks, at[js, ks])
-                aG, aS = at[jg, g], at[js, s_]
-                nl = 1j * cmath.exp(1j * jt.direction)
-                kconst = (nl.conjugate() * (cmath.exp(1j * jt.angle) * (at[j2, s_] - aS)
-                                            - (at[j2, g] - aG))).real
-                d = PSr - PG
-                D = np.abs(d)
-                Dsafe = np.where(D > 0, D, 1.0)
-                ratio = -kconst / Dsafe
-                disc = np.where(D > 0, 1.0 - ratio * ratio, -1.0)
-                discs.append(disc)
-                sg = next(si)
-                psi = np.angle(d)
-                acos = np.where(disc > TOGGLE_SNAP, np.arccos(np.clip(ratio, -1, 1)),
-                                np.where(ratio > 0, 0.0, math.pi))
-                th = psi - (jt.direction + math.pi / 2) + sg * acos
-                place(g, th)
-                place(s_, th + jt.angle, E[:, g] * cmath.exp(1j * jt.angle))
-                O[:, g] = PG - E[:, g] * aG
-                O[:, s_] = PSr - E[:, s_] * aS
-                # no transmission angle: the slot's force is always normal to it
+                self._rpr(p, st, si)
             elif st.kind == "PRP":
-                x1, x2 = st.bodies
-                j1, j2, j3 = st.joints
-                bases, dirs = [], []
-                for x, j in ((x1, j1), (x2, j3)):
-                    jt = joints[j]
-                    k = topo.other(j, x)
-                    ul = cmath.exp(1j * jt.direction)
-                    if topo.body_names[x] == jt.slider:
-                        place(x, theta[:, k] + jt.angle, E[:, k] * cmath.exp(1j * jt.angle))
-                        u = E[:, k] * ul
-                    else:
-                        place(x, theta[:, k] - jt.angle, E[:, k] * cmath.exp(-1j * jt.angle))
-                        u = E[:, x] * ul
-                    bases.append(pt(k, at[j, k]) + E[:, x] * (at[j2, x] - at[j, x]))
-                    dirs.append(u)
-                cr = cross(dirs[0], dirs[1])
-                discs.append(np.abs(cr) - 1e-12)
-                t1 = cross(bases[1] - bases[0], dirs[1]) / np.where(cr != 0, cr, 1.0)
-                P2 = bases[0] + t1 * dirs[0]
-                O[:, x1] = P2 - E[:, x1] * at[j2, x1]
-                O[:, x2] = P2 - E[:, x2] * at[j2, x2]
-        disc = np.stack(discs, axis=1) if discs else np.ones((N, 0))
-        return theta, E, O, disc, trans
+                self._prp(p, st)
+        disc = np.stack(p.discs, axis=1) if p.discs else np.ones((N, 0))
+        return p.theta, p.E, p.O, disc, p.trans
+
+    def _on_slide(self, p: _Placement, x: int, j: int):
+        """Orient body ``x``, one of prismatic joint ``j``'s bodies, from the other one
+        ``k`` (the joint's fixed angle); returns ``k``, the line's direction in the world
+        and whether ``x`` is the slider."""
+        jt = self.mech.joints[j]
+        k = self.topo.other(j, x)
+        if self.topo.body_names[x] == jt.slider:
+            p.place(x, p.theta[:, k] + jt.angle, p.E[:, k] * cmath.exp(1j * jt.angle))
+            return k, p.E[:, k] * cmath.exp(1j * jt.direction), True
+        p.place(x, p.theta[:, k] - jt.angle, p.E[:, k] * cmath.exp(-1j * jt.angle))
+        return k, p.E[:, x] * cmath.exp(1j * jt.direction), False
+
+    def _driven_revolute(self, p: _Placement, st, values):
+        """The driven link of a revolute driver: its angle is the input from the body
+        it turns on."""
+        topo, at = self.topo, self.at
+        (x,), (j,) = st.bodies, st.joints
+        k = topo.other(j, x)
+        sgn = 1.0 if topo.body_names[x] == self.mech.joints[j].body_b else -1.0
+        p.place(x, p.theta[:, k] + sgn * values)
+        p.O[:, x] = p.pt(k, at[j, k]) - p.E[:, x] * at[j, x]
+
+    def _driven_prismatic(self, p: _Placement, st, values):
+        """The driven body of a prismatic driver: the input is the slider's
+        displacement along the line."""
+        at = self.at
+        (x,), (j,) = st.bodies, st.joints
+        k, u, slider = self._on_slide(p, x, j)
+        if slider:
+            PS = p.pt(k, at[j, k]) + values * u
+            p.O[:, x] = PS - p.E[:, x] * at[j, x]
+        else:
+            Q = p.pt(k, at[j, k]) - values * u
+            p.O[:, x] = Q - p.E[:, x] * at[j, x]
+
+    def _rrr(self, p: _Placement, st, si):
+        """An RRR dyad: the inner joint at an intersection of two circles."""
+        topo, at = self.topo, self.at
+        x1, x2 = st.bodies
+        j1, j2, j3 = st.joints
+        k1, k3 = topo.other(j1, x1), topo.other(j3, x2)
+        P1, P3 = p.pt(k1, at[j1, k1]), p.pt(k3, at[j3, k3])
+        c1 = at[j2, x1] - at[j1, x1]
+        c2 = at[j3, x2] - at[j2, x2]
+        L1s, L2s = abs(c1) ** 2, abs(c2) ** 2
+        d = P3 - P1
+        D2 = d.real * d.real + d.imag * d.imag
+        D = np.sqrt(D2)
+        Dsafe = np.where(D > 0, D, 1.0)
+        a = (L1s - L2s + D2) / (2 * Dsafe)
+        h2 = L1s - a * a
+        disc = np.where(D > 0, h2 * rrr_disc_factor(c1, c2), -1.0)
+        p.discs.append(disc)
+        h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
+        sg = next(si)
+        P2 = P1 + d * (a + 1j * sg * h) / Dsafe
+        e1, e2 = P2 - P1, P3 - P2
+        # exp(i theta) of each link straight from geometry: no trigonometry
+        u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
+        u2 = e2 / np.abs(e2) * (c2 / abs(c2)).conjugate()
+        p.place(x1, np.angle(u1), u1)
+        p.place(x2, np.angle(u2), u2)
+        p.O[:, x1] = P1 - u1 * at[j1, x1]
+        p.O[:, x2] = P2 - u2 * at[j2, x2]
+        p.trans.append((self.mech.joints[j2].name, -e1, e2))
+
+    def _rrp(self, p: _Placement, st, si):
+        """An RRP dyad: the inner joint where a circle meets the slider's line."""
+        topo, at = self.topo, self.at
+        x1, x2 = st.bodies
+        j1, j2, j3 = st.joints
+        k1 = topo.other(j1, x1)
+        P1 = p.pt(k1, at[j1, k1])
+        c1 = at[j2, x1] - at[j1, x1]
+        L1s = abs(c1) ** 2
+        k3, u, slider = self._on_slide(p, x2, j3)
+        ud = u if slider else -u
+        base = p.pt(k3, at[j3, k3]) + p.E[:, x2] * (at[j2, x2] - at[j3, x2])
+        e = base - P1
+        eu = e.real * ud.real + e.imag * ud.imag
+        h2 = eu * eu - (e.real * e.real + e.imag * e.imag) + L1s
+        p.discs.append(h2 / L1s)
+        sg = next(si)
+        t = -eu + sg * np.where(h2 / L1s > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)),
+                                0.0)
+        P2 = base + t * ud
+        e1 = P2 - P1
+        u1 = e1 / np.abs(e1) * (c1 / abs(c1)).conjugate()
+        p.place(x1, np.angle(u1), u1)
+        p.O[:, x1] = P1 - u1 * at[j1, x1]
+        p.O[:, x2] = P2 - p.E[:, x2] * at[j2, x2]
+        p.trans.append((self.mech.joints[j2].name, -e1, 1j * u))
+
+    def _rpr(self, p: _Placement, st, si):
+        """An RPR dyad: the slot's angle from the distance of its two pins (no
+        transmission angle: the slot's force is always normal to it)."""
+        topo, at = self.topo, self.at
+        x1, x2 = st.bodies
+        j1, j2, j3 = st.joints
+        jt = self.mech.joints[j2]
+        g = x1 if topo.body_names[x1] == jt.guide else x2
+        s_ = x2 if g == x1 else x1
+        jg, js = (j1, j3) if g == x1 else (j3, j1)
+        kg, ks = topo.other(jg, g), topo.other(js, s_)
+        PG, PSr = p.pt(kg, at[jg, kg]), p.pt(ks, at[js, ks])
+        aG, aS = at[jg, g], at[js, s_]
+        nl = 1j * cmath.exp(1j * jt.direction)
+        kconst = (nl.conjugate() * (cmath.exp(1j * jt.angle) * (at[j2, s_] - aS)
+                                    - (at[j2, g] - aG))).real
+        d = PSr - PG
+        D = np.abs(d)
+        Dsafe = np.where(D > 0, D, 1.0)
+        ratio = -kconst / Dsafe
+        disc = np.where(D > 0, 1.0 - ratio * ratio, -1.0)
+        p.discs.append(disc)
+        sg = next(si)
+        psi = np.angle(d)
+        acos = np.where(disc > TOGGLE_SNAP, np.arccos(np.clip(ratio, -1, 1)),
+                        np.where(ratio > 0, 0.0, math.pi))
+        th = psi - (jt.direction + math.pi / 2) + sg * acos
+        p.place(g, th)
+        p.place(s_, th + jt.angle, p.E[:, g] * cmath.exp(1j * jt.angle))
+        p.O[:, g] = PG - p.E[:, g] * aG
+        p.O[:, s_] = PSr - p.E[:, s_] * aS
+
+    def _prp(self, p: _Placement, st):
+        """A PRP dyad: the inner joint where the two sliders' lines cross (no branch)."""
+        at = self.at
+        x1, x2 = st.bodies
+        j1, j2, j3 = st.joints
+        bases, dirs = [], []
+        for x, j in ((x1, j1), (x2, j3)):
+            k, u, _ = self._on_slide(p, x, j)
+            bases.append(p.pt(k, at[j, k]) + p.E[:, x] * (at[j2, x] - at[j, x]))
+            dirs.append(u)
+        cr = cross(dirs[0], dirs[1])
+        p.discs.append(np.abs(cr) - 1e-12)
+        t1 = cross(bases[1] - bases[0], dirs[1]) / np.where(cr != 0, cr, 1.0)
+        P2 = bases[0] + t1 * dirs[0]
+        p.O[:, x1] = P2 - p.E[:, x1] * at[j2, x1]
+        p.O[:, x2] = P2 - p.E[:, x2] * at[j2, x2]
 
 
 def q_from_poses(topo: Topology, theta: np.ndarray, E: np.ndarray, O: np.ndarray) -> np.ndarray:

@@ -206,9 +206,10 @@ def turning_points(linkage, kin, periodic: bool) -> dict:
     its sliding velocity does (:func:`sign_brackets` of the regular samples,
     samples below 1e-9 of the input's rate scale being round-off).  Computed once per
     sweep (kept on ``kin``): the events and the summary read the same inputs."""
-    memo = getattr(kin, "_turning_points", None)
-    if memo is not None and memo[0] == periodic:
-        return memo[1]
+    memo = getattr(kin, "memo", None)
+    got = None if memo is None else memo.get("turning_points")
+    if got is not None and got[0] == periodic:
+        return got[1]
     from .tolerances import SINGULAR_CONDITION
     x = np.asarray(kin.value, float)
     regular = np.asarray(kin.condition < SINGULAR_CONDITION)
@@ -216,10 +217,8 @@ def turning_points(linkage, kin, periodic: bool) -> dict:
     series = rate_series(linkage, kin, regular)
     out = _roots_together(linkage, xr, periodic, series) if len(xr) > 1 else \
         {k: [] for k in series}
-    try:
-        kin._turning_points = (periodic, out)
-    except AttributeError:  # pragma: no cover - a kinematics without a __dict__
-        pass
+    if memo is not None:
+        memo["turning_points"] = (periodic, out)
     return out
 
 
@@ -291,14 +290,13 @@ def least_transmission(linkage, kin, periodic: bool) -> list[tuple[str, float, f
     ``(joint, least_deg, at (SI), raw_deg)``.  An interior least value is located on
     the solver where the two links' relative angular velocity vanishes (the transmission
     angle is the angle between them); one at an end of a limited sweep stays there."""
-    memo = getattr(kin, "_least_transmission", None)
-    if memo is not None and memo[0] == periodic:
-        return memo[1]
+    memo = getattr(kin, "memo", None)
+    got = None if memo is None else memo.get("least_transmission")
+    if got is not None and got[0] == periodic:
+        return got[1]
     out = _least_transmission(linkage, kin, periodic)
-    try:
-        kin._least_transmission = (periodic, out)  # the events and the summary read it
-    except AttributeError:  # pragma: no cover - a kinematics without a __dict__
-        pass
+    if memo is not None:  # the events and the summary read it
+        memo["least_transmission"] = (periodic, out)
     return out
 
 

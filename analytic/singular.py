@@ -113,7 +113,7 @@ def rate_limits(linkage, kin, idx: np.ndarray, branch: str) -> None:
         for f in _RATE_FIELDS:
             getattr(kin, f)[i] = _extrapolate(getattr(side, f))[0]
     kin.at_singular = status
-    kin._branch = branch
+    kin.singular_branch = branch
 
 
 def singular_samples(kin) -> np.ndarray:
@@ -174,7 +174,7 @@ def force_limits(linkage, kin, frc, idx: np.ndarray) -> None:
     status = np.array(kin.at_singular if getattr(kin, "at_singular", None) is not None
                       else np.zeros(kin.n, np.int8), np.int8)
     arrays = _force_arrays(frc)
-    branch = getattr(kin, "_branch", "continued")
+    branch = getattr(kin, "singular_branch", "continued")
     for i in np.asarray(idx, int):
         pending, passed = list(range(len(arrays))), False
         for h in (FORCE_LIMIT_STEP if status[i] != UNDETERMINED else ()):

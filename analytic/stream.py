@@ -109,7 +109,7 @@ def evaluate_blocked(linkage, values, velocity=None, acceleration=None, forces=N
         x = part(a, b)
         kin, frc = fk.solve_block(x, velocity, acceleration, out, carry, level,
                                   branch, on_singular)
-        if kin._fused_singular:  # a singular sample: the numpy path treats the block
+        if kin.fused.singular:  # a singular sample: the numpy path treats the block
             kin = linkage.kinematics(x, velocity, acceleration,
                                      on_singular=on_singular)
             frc = linkage.forces(kin) if forces else None
@@ -189,22 +189,14 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         SweepResult,
         find_events,
         grashof,
-        input_grid,
         nearest_event,
-        range_grid,
         singular_notes,
-        singular_records,
-        to_frame,
         unbounded_events,
     )
     from .sweep_facts import StreamFacts
     if points < 2:
         raise ValueError(f"a sweep needs at least 2 points, got {points}")
-    if input_range is not None:
-        grid, full, feas, auto = range_grid(linkage, input_range, points), False, \
-            linkage.feasible_ranges(), False
-    else:
-        (grid, full, feas), auto = input_grid(linkage, points, start), True
+    grid, full, feas, auto = _stream_grid(linkage, points, start, input_range)
     if forces is None:
         forces = linkage.mech.has_mass
     d = linkage.mech.driver
@@ -212,7 +204,47 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
     ends = [e for r in feas for e in r] if not full else []
     facts = StreamFacts(linkage, grid, vel, d.acceleration, forces, ends, _power_terms)
     balance = StreamedForces() if forces else None
-    records = []  # the singular samples (analytic.sweep.singular_records)
+    records = _write_blocks(linkage, grid, vel, forces, block, path, parquet, convert,
+                            facts, balance)
+    facts.finish()
+    again = facts.refeed_keys()
+    if again:  # a series' first blocks were below its final round-off level
+        facts.start_refeed(again)
+        for _, kin, _ in evaluate_blocked(linkage, grid, vel, None, False, block):
+            facts.refeed(kin)
+        facts.finish_refeed()
+    lo, hi = facts.bounds
+    notes = singular_notes(linkage, records, forces)
+    crossings = linkage.branch_crossings(lo, hi)
+    notes += _range_notes(linkage, auto and not full, feas, crossings)
+    kin = StreamedKinematics(linkage, facts.n, facts)
+    events = unbounded_events(linkage, records, find_events(
+        linkage, kin, full, None if full else feas, crossings, facts))
+    res = SweepResult(kin, balance, None, events, full, feas, grashof(linkage), notes,
+                      crossings)
+    res.summary = summarise(res, nearest_event)
+    res.written = True
+    return res
+
+
+def _stream_grid(linkage, points: int, start, input_range):
+    """``(grid, full cycle, feasible ranges, range chosen by the sweep)``: the input
+    values as :func:`analytic.sweep.sweep` chooses them, made block by block."""
+    from .sweep import input_grid, range_grid
+    if input_range is not None:
+        return (range_grid(linkage, input_range, points), False, linkage.feasible_ranges(),
+                False)
+    grid, full, feas = input_grid(linkage, points, start)
+    return grid, full, feas, True
+
+
+def _write_blocks(linkage, grid, vel, forces: bool, block: int, path, parquet: bool,
+                  convert, facts, balance) -> list:
+    """Solve and write the table block by block, feeding each block to ``facts`` and
+    ``balance``; returns the singular samples
+    (:func:`analytic.sweep.singular_records`)."""
+    from .sweep import singular_records, to_frame
+    records = []
     try:
         with _Writer(path, parquet) as out:
             for a, kin, frc in evaluate_blocked(linkage, grid, vel, None, forces, block):
@@ -225,30 +257,20 @@ def sweep_csv(linkage, points: int, path, *, start=None, velocity=None, input_ra
         raise
     except OSError as e:  # a full disk or a vanished folder, mid-way
         raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
-    facts.finish()
-    again = facts.refeed_keys()
-    if again:  # a series' first blocks were below its final round-off level
-        facts.start_refeed(again)
-        for _, kin, _ in evaluate_blocked(linkage, grid, vel, None, False, block):
-            facts.refeed(kin)
-        facts.finish_refeed()
-    lo, hi = facts.bounds
-    notes = singular_notes(linkage, records, forces)
-    if auto and not full and linkage.driver_is_revolute:
+    return records
+
+
+def _range_notes(linkage, partial: bool, feas: list, crossings: list) -> list[str]:
+    """Notes on the range swept (``partial``: the input cannot turn fully, the sweep
+    covers the feasible range) and on change points whose branch was held."""
+    notes = []
+    if partial and linkage.driver_is_revolute:
         notes.append("the input link cannot turn fully; the sweep covers the feasible range "
                      + ", ".join(f"[{math.degrees(a):.4f}, {math.degrees(b):.4f}] deg"
                                  for a, b in feas) + " on the assembled branch")
-    crossings = linkage.branch_crossings(lo, hi)
     undecided = [c for c in crossings if c.rule.startswith("held: ")]
     if undecided:
         notes.append(f"{len(undecided)} change point(s) where continuity of velocity cannot "
                      "decide the branch: dyad signs held (Linkage(branch_rule='switch') or "
                      "xval sweep --branch-rule switch takes the other)")
-    kin = StreamedKinematics(linkage, facts.n, facts)
-    events = unbounded_events(linkage, records, find_events(
-        linkage, kin, full, None if full else feas, crossings, facts))
-    res = SweepResult(kin, balance, None, events, full, feas, grashof(linkage), notes,
-                      crossings)
-    res.summary = summarise(res, nearest_event)
-    res.written = True
-    return res
+    return notes

@@ -250,11 +250,24 @@ def find_events(linkage, kin: Kinematics, periodic: bool,
     (:mod:`analytic.sweep_facts`; default :class:`ArrayFacts` of ``kin``'s arrays, a
     streamed sweep's gathered block by block).
     """
-    topo = linkage.topo
     rev = linkage.driver_is_revolute
     F = ArrayFacts(linkage, kin, None) if facts is None else facts
-    n = F.n
     conv = np.degrees if rev else (lambda v: v)
+    rows = _singular_rows(F, periodic, conv)
+    rows += _turning_rows(linkage, F, periodic, conv)
+    if not periodic and feasible is not None and F.n:
+        rows += _input_limit_rows(linkage, F, feasible, conv)
+    rows += _change_point_rows(linkage, F, crossings, conv)
+    for jn, least, at, raw in F.transmission(periodic):
+        rows.append(("min_transmission", jn, float(conv(at)),
+                     f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
+                     f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
+    return _event_frame(rows, F, periodic and rev)
+
+
+def _singular_rows(F, periodic: bool, conv) -> list[tuple]:
+    """Events where the loop Jacobian's determinant changes sign or its condition
+    number is past :data:`SINGULAR_CONDITION` at a sample."""
     rows = []
     for v in F.det_roots(periodic):
         rows.append(("singular", "loop Jacobian", float(conv(v)),
@@ -262,10 +275,17 @@ def find_events(linkage, kin: Kinematics, periodic: bool,
     for xi, ci in F.singular():
         rows.append(("singular", "loop Jacobian", float(conv(xi)),
                      f"condition number {ci:.3g}"))
+    return rows
+
+
+def _turning_rows(linkage, F, periodic: bool, conv) -> list[tuple]:
+    """Limit positions of the outputs: a rotation group's angular velocity or a
+    slider's velocity changes sign (the driver's own bodies and joint excepted)."""
     # rates at a singular sample are not determined by the input: no limits from them
     # (analytic.refine.turning_points: the regular samples bracket, the solver locates)
+    topo = linkage.topo
     turns = F.turns(periodic)
-    size = size_of(topo)
+    rows = []
     djb = {linkage.mech.driver_joint.body_a, linkage.mech.driver_joint.body_b}
     for b, name in enumerate(topo.body_names):
         if topo.group_of[b] < 0 or name in djb:
@@ -281,18 +301,32 @@ def find_events(linkage, kin: Kinematics, periodic: bool,
             continue
         for v in turns[("slider", jn)]:
             rows.append(("limit", jn, float(conv(v)), "slider velocity = 0 (dead centre)"))
+    return rows
+
+
+def _input_limit_rows(linkage, F, feasible: list, conv) -> list[tuple]:
+    """The input's own limit positions at the ends of a limited sweep's range."""
+    rows = []
+    for lo, hi in feasible:
+        for end in (lo, hi):
+            if F.distance(end) <= 1e-3 * max(hi - lo, 1e-300) and \
+                    is_input_limit(linkage, end):
+                rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
+                             "input limit position: the loops cannot close beyond it "
+                             "on this branch (the drive effort grows without bound "
+                             "toward it)"))
+    return rows
+
+
+def _change_point_rows(linkage, F, crossings: list | None, conv) -> list[tuple]:
+    """The change points within the sweep: the branch crossings of the dyad plan
+    (``crossings``) and those a traced (Newton-path) branch passes."""
+    rev = linkage.driver_is_revolute
+    n = F.n
     fmt = (lambda v: f"{math.degrees(v):.6g} deg") if rev else (lambda v: f"{v:.6g} m")
-    eps = 1e-9 * (1.0 if rev else size)  # an event at the sweep's end belongs to it
-    if not periodic and feasible is not None and n:
-        for lo, hi in feasible:
-            for end in (lo, hi):
-                if F.distance(end) <= 1e-3 * max(hi - lo, 1e-300) and \
-                        is_input_limit(linkage, end):
-                    rows.append(("limit", linkage.mech.driver.joint, float(conv(end)),
-                                 "input limit position: the loops cannot close beyond it "
-                                 "on this branch (the drive effort grows without bound "
-                                 "toward it)"))
+    eps = 1e-9 * (1.0 if rev else size_of(linkage.topo))  # an event at the end belongs to it
     xmin, xmax = F.bounds if n else (math.nan, math.nan)
+    rows = []
     for c in crossings or []:
         if n and xmin - eps <= c.value <= xmax + eps:
             mode = parallelogram_mode(linkage, c.value + math.copysign(
@@ -312,12 +346,14 @@ def find_events(linkage, kin: Kinematics, periodic: bool,
                                  "the assembled branch passes this singular position "
                                  "continuously (continuation with a tangent predictor: "
                                  "the branch whose velocity is continuous)"))
-    for jn, least, at, raw in F.transmission(periodic):
-        rows.append(("min_transmission", jn, float(conv(at)),
-                     f"least transmission angle {least:.3f} deg (raw {raw:.3f} deg; "
-                     f"largest deviation from 90 deg: {90.0 - least:.3f} deg)"))
+    return rows
+
+
+def _event_frame(rows: list[tuple], F, wrap: bool) -> pd.DataFrame:
+    """The events table sorted by input; ``wrap``: a full turn's inputs wrapped into one
+    turn from the sweep's first value (deg)."""
     ev = pd.DataFrame(rows, columns=["kind", "where", "input", "detail"])
-    if periodic and rev and len(ev) and n:
+    if wrap and len(ev) and F.n:
         a = float(np.degrees(F.x_at([0])[0]))
         ev["input"] = a + np.mod(ev["input"].to_numpy() - a, 360.0)
     if len(ev):

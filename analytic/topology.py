@@ -32,6 +32,7 @@ import numpy as np
 
 from .errors import DescriptionError
 from .mechanism import Mechanism, Prismatic, Revolute
+from .planar import rotation
 
 
 @dataclass(frozen=True)
@@ -118,11 +119,6 @@ class Topology:
         jt = self.mech.joints[j]
         a, c = self.body_names.index(jt.body_a), self.body_names.index(jt.body_b)
         return c if b == a else a
-
-
-def _rot(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s], [s, c]])
 
 
 def spanning_tree(mech: Mechanism, priority: list[int]):
@@ -359,7 +355,7 @@ def _loop_terms(topo: Topology) -> LoopTerms:
         for body, jin, jout in seq:
             # vector inside the body, from the joint entered by to the joint left by
             c = topo.attach(jout, body) - topo.attach(jin, body)
-            c = _rot(topo.offset[body]) @ c
+            c = rotation(topo.offset[body]) @ c
             r = float(np.hypot(*c))
             if r > 0:
                 L.append(li)

@@ -28,6 +28,7 @@ import numpy as np
 from ..errors import MissingMassError
 from ..mechanism import Revolute
 from ..motion_spec import JointSpring, PointDamper, PointSpring
+from ..planar import cplx
 
 
 @dataclass
@@ -65,27 +66,26 @@ def coefficients(lk, q) -> Coefficients:
 
 
 def _chain(lk):
-    """The linkage's parallelogram chain (:mod:`.parallelograms`) or None, cached on it:
-    the solver's own rates are ill-conditioned at a window's change point."""
-    d = lk.__dict__
-    if "_free_chain" not in d:
+    """The linkage's parallelogram chain (:mod:`.parallelograms`) or None, kept in its
+    ``derived``: the solver's own rates are ill-conditioned at a window's change point."""
+    d = lk.derived
+    if "free_chain" not in d:
         from .parallelograms import Chain
-        d["_free_chain"] = Chain.of(lk)
-    return d["_free_chain"]
+        d["free_chain"] = Chain.of(lk)
+    return d["free_chain"]
 
 
 def _massive(lk):
     """The moving bodies with mass or inertia: indices, centres of mass (body frame,
-    complex), masses and inertias, cached on the linkage."""
-    got = lk.__dict__.get("_free_massive")
+    complex), masses and inertias, kept in the linkage's ``derived``."""
+    got = lk.derived.get("free_massive")
     if got is None:
-        from ..positions import cplx
         rows = [(b, cplx(body.com), body.mass or 0.0, body.inertia or 0.0)
                 for b, body in enumerate(lk.mech.bodies)
                 if b != lk.topo.ground and (body.mass or body.inertia)]
         bs, com, mass, inertia = zip(*rows, strict=True) if rows else ((), (), (), ())
-        got = lk._free_massive = (np.array(bs, int), np.array(com, complex),
-                                  np.array(mass, float), np.array(inertia, float))
+        got = lk.derived["free_massive"] = (np.array(bs, int), np.array(com, complex),
+                                            np.array(mass, float), np.array(inertia, float))
     return got
 
 

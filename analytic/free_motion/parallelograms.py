@@ -38,7 +38,7 @@ import numpy as np
 
 from ..kin_result import Kinematics
 from ..mechanism import Revolute, mechanism_size
-from ..positions import cplx
+from ..planar import cplx
 
 #: Agreement of the solver's pose with the chain's at the middle of a stretch between
 #: change points (fraction of the size; the solver is exact to ~1e-15 there, the

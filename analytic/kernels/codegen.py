@@ -25,7 +25,8 @@ import math
 import numpy as np
 
 from ..mechanism import Revolute
-from ..positions import cplx, rrr_disc_factor
+from ..planar import cplx
+from ..positions import rrr_disc_factor
 from ..tolerances import SINGULAR_CONDITION, TOGGLE_SNAP
 
 #: inputs per chunk of the position stages (their scratch: ~50 bytes per body and
@@ -626,8 +627,25 @@ class KernelSource:
 
     # -- kinetostatics: solve_forces ---------------------------------------------
     def _forces(self):
+        """The phases of :func:`analytic.kinetostatics.solve_forces`, emitted in its
+        order: effective wrenches, chord columns, subtree sums, tree-joint rows, the
+        unknowns, the reactions and the power terms."""
+        self._effective_wrenches()
+        n_x = self._chord_columns()
+        eps = self._chord_signs(n_x)
+        self._subtree_sums()
+        td, sd, rows = self._tree_rows(eps, n_x)
+        nu = n_x - 1
+        self._solve_unknowns(rows, td, sd, nu)
+        self._chord_reactions()
+        self._tree_reactions(eps, n_x)
+        self._power_terms(nu)
+
+    def _effective_wrenches(self):
+        """Each moving body's effective force ``f{b}`` (inertia less gravity and loads)
+        and its moment ``mo{b}`` about the origin, with the kinetic-energy rate ``ke``
+        and the loads' power ``lp``."""
         s, topo, mech = self.s, self.topo, self.mech
-        joints, names = mech.joints, topo.body_names
         g = s.c(complex(*mech.gravity))
         s.emit("ke = 0.0")
         s.emit("lp = 0.0")
@@ -644,23 +662,33 @@ class KernelSource:
             s.emit(f"ke += ({m} * (aG.real * vG.real + aG.imag * vG.imag) + {I} * al{b} * w{b})")
             s.emit(f"lp += {m} * (vG.real * {g}.real + vG.imag * {g}.imag)")
             for ld in mech.loads:
-                if ld.body != body.name:
-                    continue
-                F, tq = s.c(complex(*ld.force)), s.f(ld.torque)
-                if ld.point is not None:
-                    c = s.c(cplx(topo.body_points[b][ld.point]))
-                    s.emit(f"rl = cm(E{b}, {c})")
-                    s.emit(f"rP = O{b} + rl")
-                    s.emit(f"vP = V{b} + 1j * w{b} * rl")
-                else:
-                    s.emit("rP = rG")
-                    s.emit("vP = vG")
-                s.emit(f"f{b} -= {F}")
-                s.emit("dr = rP - rG")
-                s.emit(f"hh = hh - {tq} - (dr.real * {F}.imag - dr.imag * {F}.real)")
-                s.emit(f"lp += vP.real * {F}.real + vP.imag * {F}.imag + {tq} * w{b}")
+                if ld.body == body.name:
+                    self._load_wrench(b, ld)
             s.emit(f"mo{b} = hh + (rG.real * f{b}.imag - rG.imag * f{b}.real)")
-        chords = topo.chords
+
+    def _load_wrench(self, b: int, ld):
+        """Subtract an external load on body ``b`` from its effective wrench and add
+        its power to ``lp``."""
+        s = self.s
+        F, tq = s.c(complex(*ld.force)), s.f(ld.torque)
+        if ld.point is not None:
+            c = s.c(cplx(self.topo.body_points[b][ld.point]))
+            s.emit(f"rl = cm(E{b}, {c})")
+            s.emit(f"rP = O{b} + rl")
+            s.emit(f"vP = V{b} + 1j * w{b} * rl")
+        else:
+            s.emit("rP = rG")
+            s.emit("vP = vG")
+        s.emit(f"f{b} -= {F}")
+        s.emit("dr = rP - rG")
+        s.emit(f"hh = hh - {tq} - (dr.real * {F}.imag - dr.imag * {F}.real)")
+        s.emit(f"lp += vP.real * {F}.real + vP.imag * {F}.imag + {tq} * w{b}")
+
+    def _chord_columns(self) -> int:
+        """Force ``Fc{k}`` and moment ``Mc{k}`` of each unknown's unit value (two per
+        chord joint, then the effort's, which acts on no chord); returns their count."""
+        s, joints, names = self.s, self.mech.joints, self.topo.body_names
+        chords = self.topo.chords
         n_x = 2 * len(chords) + 1
         for i, j in enumerate(chords):
             jt = joints[j]
@@ -677,18 +705,37 @@ class KernelSource:
                 s.emit(f"Mc{2 * i + 1} = 1.0")
         s.emit(f"Fc{n_x - 1} = 0j")  # the effort's column acts on no chord
         s.emit(f"Mc{n_x - 1} = 0.0")
+        return n_x
+
+    def _chord_signs(self, n_x: int) -> np.ndarray:
+        """``eps (tree joints, n_x)``: +1 where a chord's reaction acts on the subtree
+        beyond a tree joint (its body_b inside, body_a outside), -1 the other way, 0 where
+        it does not cross (known from the structure: nothing emitted)."""
+        topo, joints, names = self.topo, self.mech.joints, self.topo.body_names
         nt = len(topo.tree)
         eps = np.zeros((nt, n_x))
         for t in range(nt):
             S = topo.subtree[t]
-            for i, j in enumerate(chords):
+            for i, j in enumerate(topo.chords):
                 a, b = names.index(joints[j].body_a), names.index(joints[j].body_b)
                 e = (1.0 if S[b] and not S[a] else -1.0 if S[a] and not S[b] else 0.0)
                 eps[t, 2 * i:2 * i + 2] = e
-        for t in range(nt):
+        return eps
+
+    def _subtree_sums(self):
+        """Net effective force ``Sf{t}`` and moment ``Smo{t}`` of each tree joint's
+        subtree."""
+        s, topo = self.s, self.topo
+        for t in range(len(topo.tree)):
             mem = np.flatnonzero(topo.subtree[t])
             s.emit(f"Sf{t} = {' + '.join(f'f{b}' for b in mem)}")
             s.emit(f"Smo{t} = {' + '.join(f'mo{b}' for b in mem)}")
+
+    def _tree_rows(self, eps: np.ndarray, n_x: int):
+        """One equation per tree joint along its free direction (``F{t}_{k} x = R{t}``):
+        a revolute joint's moment about its pin, a prismatic joint's force along its
+        line.  Returns the driven joint's row and sign, and the other rows."""
+        s, topo, joints, names = self.s, self.topo, self.mech.joints, self.topo.body_names
         td = sd = None
         rows = []
         for t, j in enumerate(topo.tree):
@@ -714,21 +761,28 @@ class KernelSource:
                     s.emit(f"F{t}_{kx} = {float(eps[t, kx])!r} * (uj.real * Fc{kx}.real "
                            f"+ uj.imag * Fc{kx}.imag)")
                 s.emit(f"R{t} = uj.real * Sf{t}.real + uj.imag * Sf{t}.imag")
-        nu = n_x - 1
+        return td, sd, rows
+
+    def _solve_unknowns(self, rows: list[int], td: int, sd: float, nu: int):
+        """The chord reactions ``x0 .. x{nu-1}`` from the rows of the undriven tree
+        joints, then the effort ``x{nu}`` from the driven joint's row."""
+        s = self.s
         for r, t in enumerate(rows):
             for kx in range(nu):
                 s.emit(f"A2[{r}, {kx}] = F{t}_{kx}")
         if nu:
             self._emit_solve("A2", [f"R{t}" for t in rows], nu, "xf")
-        else:
-            pass
         for kx in range(nu):
             s.emit(f"x{kx} = xf[{kx}]")
         dot = " + ".join(f"F{td}_{kx} * x{kx}" for kx in range(nu)) or "0.0"
         s.emit(f"x{nu} = (R{td} - ({dot})) / {sd!r}")
-        # joint forces (by body_a on body_b), normal and moment of prismatic joints
+
+    def _chord_reactions(self):
+        """The chord joints' forces (by body_a on body_b), and a prismatic chord's
+        normal force and moment, from the unknowns."""
+        s, topo, joints = self.s, self.topo, self.mech.joints
         pidx = {j: i for i, j in enumerate(topo.prismatic)}
-        for i, j in enumerate(chords):
+        for i, j in enumerate(topo.chords):
             jt = joints[j]
             if isinstance(jt, Revolute):
                 s.emit(f"jf[i, {j}, 0] = x{2 * i}")
@@ -739,6 +793,13 @@ class KernelSource:
                 s.emit(f"fz = Fc{2 * i} * x{2 * i}")
                 s.emit(f"jf[i, {j}, 0] = fz.real")
                 s.emit(f"jf[i, {j}, 1] = fz.imag")
+
+    def _tree_reactions(self, eps: np.ndarray, n_x: int):
+        """Each tree joint's reaction: its subtree's net effective force less the chord
+        reactions acting on the subtree (a prismatic joint's normal force and moment
+        too)."""
+        s, topo, joints, names = self.s, self.topo, self.mech.joints, self.topo.body_names
+        pidx = {j: i for i, j in enumerate(topo.prismatic)}
         for t, j in enumerate(topo.tree):
             jt = joints[j]
             c = topo.tree_child[t]
@@ -749,22 +810,27 @@ class KernelSource:
             if isinstance(jt, Revolute):
                 s.emit(f"jf[i, {j}, 0] = tb.real")
                 s.emit(f"jf[i, {j}, 1] = tb.imag")
-            else:
-                nn = s.c(1j * cmath.exp(1j * jt.direction))
-                s.emit(f"nv = cm(E{names.index(jt.guide)}, {nn})")
-                s.emit("nn = nv.real * tb.real + nv.imag * tb.imag")
-                s.emit(f"nm[i, {pidx[j]}, 0] = nn")
-                s.emit("fz = nv * nn")
-                s.emit(f"jf[i, {j}, 0] = fz.real")
-                s.emit(f"jf[i, {j}, 1] = fz.imag")
-                PS = f"JP{j}"
-                terms = []
-                for kx in range(n_x):
-                    terms.append(f"((Mc{kx} - ({PS}.real * Fc{kx}.imag - {PS}.imag * "
-                                 f"Fc{kx}.real)) * x{kx}) * {float(eps[t, kx])!r}")
-                s.emit(f"mom = Smo{t} - ({PS}.real * Sf{t}.imag - {PS}.imag * Sf{t}.real) - "
-                       f"(0.0 + {' + '.join(terms)})")
-                s.emit(f"nm[i, {pidx[j]}, 1] = {'mom' if names[c] == jt.body_b else '-mom'}")
+                continue
+            nn = s.c(1j * cmath.exp(1j * jt.direction))
+            s.emit(f"nv = cm(E{names.index(jt.guide)}, {nn})")
+            s.emit("nn = nv.real * tb.real + nv.imag * tb.imag")
+            s.emit(f"nm[i, {pidx[j]}, 0] = nn")
+            s.emit("fz = nv * nn")
+            s.emit(f"jf[i, {j}, 0] = fz.real")
+            s.emit(f"jf[i, {j}, 1] = fz.imag")
+            PS = f"JP{j}"
+            terms = []
+            for kx in range(n_x):
+                terms.append(f"((Mc{kx} - ({PS}.real * Fc{kx}.imag - {PS}.imag * "
+                             f"Fc{kx}.real)) * x{kx}) * {float(eps[t, kx])!r}")
+            s.emit(f"mom = Smo{t} - ({PS}.real * Sf{t}.imag - {PS}.imag * Sf{t}.real) - "
+                   f"(0.0 + {' + '.join(terms)})")
+            s.emit(f"nm[i, {pidx[j]}, 1] = {'mom' if names[c] == jt.body_b else '-mom'}")
+
+    def _power_terms(self, nu: int):
+        """The effort, its power, ``dKE/dt``, the loads' power and the balance's
+        residual (:data:`FORCE_SCALARS`)."""
+        s = self.s
         s.emit(f"pw = x{nu} * wd")
         s.emit(f"sc[i, 0] = x{nu}")
         s.emit("sc[i, 1] = pw")
