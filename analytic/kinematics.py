@@ -70,6 +70,16 @@ class Linkage:
         #: (:mod:`analytic.free_motion.dynamics`: ``"free_chain"``, ``"free_massive"``)
         self.derived: dict = {}
 
+    def __getstate__(self) -> dict:
+        """Pickled without its process-local caches: the fused kernel holds a compiled
+        module, which cannot be pickled (an engine run carries its Linkage back from the
+        report's worker processes), and is found again on first use in the receiving
+        process; ``derived`` is rebuilt likewise."""
+        state = dict(self.__dict__)
+        state["fused_kernel"] = None
+        state["derived"] = {}
+        return state
+
     def body_index(self, name: str) -> int:
         try:
             return self.topo.body_names.index(name)

@@ -331,3 +331,23 @@ def test_forces_of_kinematics_is_one_pass(case, monkeypatch):
     lk.kinematics(x)  # forces written, never read: the guess stops
     lk.kinematics(x)
     assert levels == [3, 2]
+
+
+def test_a_linkage_with_its_kernel_pickles(monkeypatch):
+    """A Linkage whose fused kernel is loaded pickles (an engine run carries its Linkage
+    back from the report's worker processes; the kernel holds a compiled module, which
+    cannot be pickled): the copy has no kernel, finds it again on first use, and gives
+    the same numbers as the original's kernel."""
+    import pickle
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    lk = Linkage(load_case("seed-four-bar"))
+    x = input_values(lk, POINTS)[0]
+    kin, frc = lk.solve(x)
+    assert lk.fused_kernel is not None
+    back = pickle.loads(pickle.dumps(lk))
+    assert back.fused_kernel is None and back.mech == lk.mech
+    kin2, frc2 = back.solve(x)
+    np.testing.assert_allclose(kin2.alpha, kin.alpha, rtol=0,
+                               atol=AGREEMENT * np.max(np.abs(kin.alpha)))
+    np.testing.assert_allclose(frc2.effort, frc.effort, rtol=0,
+                               atol=AGREEMENT * np.max(np.abs(frc.effort)))
