@@ -33,6 +33,11 @@ from .positions import ClosedForm, input_span, size_of
 from .tolerances import CHANGE_POINT_DISC, CONTINUITY_RATIO, TOGGLE_SNAP
 from .topology import Topology
 
+#: Dyad kinds with two assemblies (a branch sign each).
+BRANCHING = ("RRR", "RRP", "RPR")
+#: Dyad kinds whose closed form reports a discriminant (:meth:`ClosedForm.run`'s columns,
+#: in the plan's order): the branching ones and PRP (its two guides must cross).
+WITH_DISCRIMINANT = (*BRANCHING, "PRP")
 #: Samples per turn (or span) searched for the discriminants' minima.
 _SAMPLES = 3600
 #: Most dyads touching at one change point whose sign combinations :meth:`decide`
@@ -95,7 +100,12 @@ class BranchSchedule:
         self._decide_memo: dict = {}
         # the inner joint of each branching dyad (the order of the signs)
         self.dyad_joints = [topo.joint_names[st.joints[1]] for st in topo.plan
-                            if st.kind in ("RRR", "RRP", "RPR")]
+                            if st.kind in BRANCHING]
+        # the closed form's discriminant columns of those dyads: it has one per dyad
+        # with a discriminant, a PRP's too (its guides' crossing), which has no branch
+        # sign; the signs and every column read here are the branching dyads'
+        with_disc = [st.kind for st in topo.plan if st.kind in WITH_DISCRIMINANT]
+        self._branch_cols = [c for c, kind in enumerate(with_disc) if kind in BRANCHING]
 
     # --- change points ------------------------------------------------------------
     def touches(self, signs) -> list[tuple[float, tuple[int, ...]]]:
@@ -151,7 +161,7 @@ class BranchSchedule:
             d = P3 - P1
             base2 = (d.real ** 2 + d.imag ** 2) / scale
             disc[:, k] = np.where(base2 == 0.0, 0.0, np.minimum(disc[:, k], base2))
-        return disc
+        return disc[:, self._branch_cols]
 
     @cached_property
     def _has_equal_rrr(self) -> bool:
@@ -165,7 +175,7 @@ class BranchSchedule:
         topo, cf = self.topo, self.cf
         col = -1
         for st in topo.plan:
-            if st.kind not in ("RRR", "RRP", "RPR", "PRP"):
+            if st.kind not in WITH_DISCRIMINANT:
                 continue
             col += 1
             if st.kind != "RRR":
@@ -200,7 +210,7 @@ class BranchSchedule:
     def _pose(self, x, signs):
         th, E, O, disc, _ = self.cf.run(np.asarray(x, float), signs)
         v = np.concatenate([th, O.real / self.size, O.imag / self.size], axis=1)
-        return v, disc
+        return v, disc[:, self._branch_cols]
 
     def decide(self, t: float, signs, dyads, d: int) -> Crossing:
         """The signs after the change point ``t`` met moving in direction ``d``."""
