@@ -91,7 +91,7 @@ def table(files: list[str]) -> None:
         w = d["worst_detail"]
         status = ("pass" if d["verdict"] == "pass" else "FAIL") + (
             "" if d["run_ok"] else f"; stopped at {d['t_fail_s']:.4g} s: {d['reason']}")
-        worst = (f"{w['normalised']:.2g}, {w['quantity']}" if w["measured"] else
+        worst = (f"{w['normalised']:.3g}, {w['quantity']}" if w["measured"] else
                  f"not measured from {w['measured_until_s']:.4g} s ({w['quantity']})")
         hz = ("whole run" if d["trusted_horizon_s"] is None
               else f"{d['trusted_horizon_s']:.4g} s")
