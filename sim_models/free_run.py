@@ -102,5 +102,9 @@ class FreeEngineRun:
 
     @property
     def cpu_per_simulated_second(self) -> float:
-        """Wall-clock seconds of stepping per simulated second (NaN if nothing ran)."""
-        return self.wall / self.request.duration if self.request.duration > 0 else np.nan
+        """Wall-clock seconds of stepping per simulated second stepped (NaN if nothing
+        ran): a run that stopped stepped to ``t_fail`` (the sample time the stop was
+        seen at; an engine that gave up within the last interval stepped a little less),
+        not to the requested duration."""
+        reached = self.request.duration if self.t_fail is None else self.t_fail
+        return self.wall / reached if reached > 0 else np.nan

@@ -188,6 +188,8 @@ def test_wall_clock_limit_is_a_result(seed):
                    reference=ref)
     assert not run.ok and "wall-clock" in run.reason
     assert math.isclose(run.t_fail, 0.1)
+    # CPU per simulated second counts the 0.1 s stepped, not the 1 s asked for
+    assert math.isclose(run.cpu_per_simulated_second, run.wall / 0.1)
 
 
 @pytest.mark.parametrize("name", ["iftomm-a03-andrews", "seed-four-bar", "quick-return",
