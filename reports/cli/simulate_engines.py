@@ -49,8 +49,8 @@ def add_options(s) -> None:
                    help=f"every engine's largest step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s (needs --engine)")
     s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
-                   help="end each engine's run after this much wall-clock time, above 0 and at most "
-                        "86400 s "
+                   help="end each engine's run after this much wall-clock time, above 0 "
+                        "and at most 86400 s "
                         f"(default {FreeRequest.wall_limit:g} s; a run that reaches it ends as "
                         "a result that says so; needs --engine)")
     opt.add_ci_outputs(s)
