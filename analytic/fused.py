@@ -127,6 +127,9 @@ class FusedKernel:
         self.T = ks.n_dyad_trans
         self.trans_names = [t[0] for t in ks.trans]
         self.n_branch = ks.n_branch
+        #: whether the source is over :data:`MAX_KERNEL_LINES` (compiled only when
+        #: ``XVAL_FUSED=always``)
+        self.too_large = ks.source.count("\n") > MAX_KERNEL_LINES
 
     @property
     def loaded(self) -> bool:
@@ -535,6 +538,12 @@ def _compact(x: np.ndarray) -> np.ndarray:
 NUMPY_CALL_S, NUMPY_POINT_S = 1e-3, 2e-6
 LOAD_S, LOAD_IMPORTED_S = 0.4, 0.1
 COMPILE_NOW_POINTS = 1 << 20
+#: Largest kernel source (lines) compiled unless ``XVAL_FUSED=always``: every built-in
+#: case is 335-844 lines (11.6 s to compile the six-bar's at load 2) and Andrews'
+#: mechanism 1258; the IFToMM N four-bar makes 1714 lines at N = 4, 4210 at N = 8 and
+#: about 58,000 at N = 40, whose background compile held 9.7 GB and 17 min of CPU and
+#: had not finished.  Beyond it the numpy path answers every call and nothing compiles.
+MAX_KERNEL_LINES = 2000
 #: estimated seconds spent on the numpy path per kernel module (this process)
 _SPENT: dict[str, float] = {}
 
@@ -554,6 +563,8 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
         return None
     if fk.loaded or (mode or "").strip() == "always":
         return fk
+    if fk.too_large:  # its compile would take minutes and gigabytes: numpy serves it
+        return None
     spent = _SPENT.get(fk.name, 0.0) + NUMPY_CALL_S + NUMPY_POINT_S * n
     if on_disk(fk.name):
         if spent >= (LOAD_IMPORTED_S if "numba" in sys.modules else LOAD_S):

@@ -42,7 +42,8 @@ import numpy as np
 
 from analytic import Mechanism
 
-from .engine_settings import EngineSettings
+from .engine_settings import EngineSettings, SettingsError
+from .ranges import WALL_LIMIT
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,14 @@ class FreeRequest:
     max_gap: float = 1e-2
     max_energy_growth: float = 10.0
     wall_limit: float = 120.0
+
+    def __post_init__(self):
+        """``wall_limit`` within :data:`sim_models.ranges.WALL_LIMIT` (the command
+        line's ``--wall-limit`` range): :class:`SettingsError` naming it otherwise."""
+        problem = WALL_LIMIT.problem(self.wall_limit)
+        if problem:
+            raise SettingsError(f"free run request wall_limit={self.wall_limit!r}: {problem}",
+                                "wall_limit", self.wall_limit, problem)
 
     def times(self) -> np.ndarray:
         """The sample times, s: ``samples + 1`` points, 0 and ``duration`` included."""

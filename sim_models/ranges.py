@@ -143,6 +143,12 @@ STATES = Range(1, 100 * MAX_SAMPLES, whole=True, why="states evaluated one by on
 
 #: Engine revolutions: the last one is compared; beyond 1000 a run measures only drift,
 #: which the report's long-run study covers.
+#: Wall-clock limit of one engine's free run (s): a run past it ends as a result ("wall-clock
+#: limit reached"), not an error.  The default 120 s suits the report's short runs; A02's
+#: 20 s takes PyBullet about 30 min on a shared 2-core machine.
+WALL_LIMIT = Range(0, 86400, lo_open=True, unit="s",
+                   why="at most one day of stepping per engine run")
+
 MAX_REVOLUTIONS = 1000
 REVOLUTIONS = Range(1, MAX_REVOLUTIONS, whole=True, why="the last revolution is compared")
 

@@ -48,13 +48,18 @@ def add_options(s) -> None:
     s.add_argument("--timestep", type=opt.timestep,
                    help=f"every engine's largest step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s (needs --engine)")
+    s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
+                   help="end each engine's run after this much wall-clock time, above 0 "
+                        "and at most 86400 s "
+                        f"(default {FreeRequest.wall_limit:g} s; a run that reaches it ends as "
+                        "a result that says so; needs --engine)")
     opt.add_ci_outputs(s)
 
 
 def engine_options_given(args) -> list[str]:
     """The engine-only options given without ``--engine`` (for the one-line refusal)."""
     named = {"--set": args.set, "--integrator": args.integrator, "--timestep": args.timestep,
-             "--junit": args.junit, "--summary": args.summary}
+             "--wall-limit": args.wall_limit, "--junit": args.junit, "--summary": args.summary}
     return [k for k, v in named.items() if v]
 
 
@@ -71,7 +76,8 @@ def run_engines(mech, traj, args, samples: int):
     """Every chosen engine's free run, judged: a list of :class:`FreeVerdict`."""
     engines = list(free_engine_names()) if args.engine == "all" else [args.engine]
     settings = free_settings_for(engines, args)
-    request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1))
+    request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1),
+                          **({"wall_limit": args.wall_limit} if args.wall_limit else {}))
     ref = reference_samples(traj, request.times())
     out = []
     for eng in engines:

@@ -144,3 +144,32 @@ def test_solve_without_masses_is_the_typed_error(mode, monkeypatch):
     with pytest.raises(MissingMassError):
         lk.solve(np.linspace(0.0, 1.0, 5))
     assert lk.kinematics(np.linspace(0.0, 1.0, 5)).n == 5
+
+
+def test_a_very_large_structure_compiles_nothing(monkeypatch, tmp_path):
+    """IFToMM A02 at N = 8 (4210 lines of kernel source; N = 40 makes about 58,000, whose
+    background compile held 9.7 GB and 17 min of CPU): no background process is started
+    and no kernel compiled for calls of any size; the numpy path answers.
+    ``XVAL_FUSED=always`` still asks for it."""
+    import tomllib
+
+    from analytic.free_motion.iftomm import n_four_bar_toml
+    from analytic.kernels import background
+    from analytic.toml_io import mechanism_from_dict
+    monkeypatch.delenv("XVAL_FUSED", raising=False)
+    monkeypatch.delenv("XVAL_BACKGROUND_COMPILE", raising=False)
+    monkeypatch.setenv("XVAL_KERNEL_CACHE", str(tmp_path))
+    monkeypatch.setattr(fused, "_MODULES", {})
+
+    def refuse(fk):
+        raise AssertionError(f"a background compile of {fk.name} was started")
+    monkeypatch.setattr(background, "start", refuse)
+    lk = Linkage(mechanism_from_dict(tomllib.loads(n_four_bar_toml(8)), "A02 N=8"))
+    fk = fused.kernel_for(lk)
+    assert fk.too_large and fk.source.source.count("\n") > fused.MAX_KERNEL_LINES
+    for n in (3, 1 << 20):
+        assert fused.dispatch(lk, n) is None
+    assert type(lk.kinematics(np.linspace(1.5, 1.6, 5))) is Kinematics
+    assert fk._fn is None  # never compiled nor loaded
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    assert fused.dispatch(lk, 3) is fk

@@ -76,3 +76,14 @@ def test_text_verdict_fits_80_columns_and_a_pendulum_has_no_loop_row(monkeypatch
     assert "loop-closure drift: none, the mechanism has no loop" in out
     assert "loop.gap" not in out
     assert max(len(line) for line in out.splitlines()) <= 80
+
+
+def test_the_wall_limit_reaches_the_run():
+    """``--wall-limit``: a run past it ends as a result that says so (a failed verdict,
+    status 1), not an error."""
+    code, out = run("simulate", "iftomm-a01-pendulum", "--engine", "mujoco", "--duration",
+                    "0.5", "--wall-limit", "1e-9", "--json")
+    assert code == 1, out
+    data = json.loads(out)
+    text = json.dumps(data)
+    assert "wall-clock limit 1e-09 s reached" in text, text[:2000]

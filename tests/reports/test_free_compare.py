@@ -152,3 +152,25 @@ def test_a_quantity_the_engine_never_reads_is_named_not_judged(a01):
     assert "O.force" not in {c.quantity for c in v.judged}
     stopped = synthetic_run(a01, A01_T, A01_N, stop_at=0)  # a run that stopped at once
     assert not fc.compare_free(stopped, a01).passed
+
+
+def test_an_event_is_named_only_nearer_than_halfway_to_its_neighbours():
+    """A02's singular crossings come every ~0.52 s of a 20 s run (5% of which is 1 s):
+    a trust lost at 0.10 s is not the crossing at 0.72 s's doing (it is nearer the run's
+    start than halfway), one lost 0.05 s before a crossing is."""
+    from types import SimpleNamespace
+
+    from analytic.free_motion.trajectory import Event
+    events = [Event(t, "singular", "G0", "40 dyads meet")
+              for t in (0.7215810248, 1.2440209039, 2.6871829535)]
+    lost = SimpleNamespace(quantity="L22.force")
+
+    def named(t_lost):
+        v = SimpleNamespace(horizon=t_lost, duration=20.0, lost_by=lost)
+        return fc.near_free_event(v, events)
+    assert named(0.10) is None                      # 0.62 s before, 0.72 s from the start
+    assert named(0.30) is None                      # 0.42 s before, 0.30 s from the start
+    msg = named(1.244 - 0.05)
+    assert msg is not None and "before" in msg and "1.24402" in msg
+    assert "after" in named(0.7215810248 + 0.2) and "0.721581" in named(0.92)
+    assert named(2.6871829535 + 1.1) is None        # past the last: 5% of 20 s is the bar

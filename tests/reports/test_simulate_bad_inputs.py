@@ -178,6 +178,13 @@ BAD = [
      r"argument --samples: 2000000 is out of range: the accepted range is 2 to 1000000"),
     ("option-samples-not-integer", four_bar, ("--samples", "many"),
      r"argument --samples: 'many' is not an integer"),
+    ("option-wall-limit-zero", four_bar, ("--engine", "mujoco", "--wall-limit", "0"),
+     r"argument --wall-limit: 0 is out of range: the accepted range is above 0 and at most "
+     r"86400 s"),
+    ("option-wall-limit-inf", four_bar, ("--engine", "mujoco", "--wall-limit", "inf"),
+     r"argument --wall-limit: inf is not a finite number"),
+    ("option-wall-limit-without-engine", four_bar, ("--wall-limit", "10"),
+     r"--wall-limit need\(s\) --engine"),
 ]
 
 

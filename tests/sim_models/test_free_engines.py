@@ -262,3 +262,11 @@ def test_body_angles_carry_the_reference_turns(engine):
     assert np.max(np.abs(run.theta[0] - s.theta[0])) < tol_start(engine)
     assert np.max(np.abs(run.x[0] - s.x[0])) < tol_start(engine)
     assert np.max(np.abs(run.theta - s.theta)) < 1e-2  # no whole turn anywhere
+
+
+@pytest.mark.parametrize("limit", [0.0, -1.0, math.inf, math.nan, 1e6])
+def test_the_wall_limit_is_range_checked(limit):
+    """Every door checks sim_models.ranges.WALL_LIMIT (``--wall-limit`` reads it too)."""
+    from sim_models.engine_settings import SettingsError
+    with pytest.raises(SettingsError, match="wall_limit"):
+        FreeRequest(1.0, wall_limit=limit)
