@@ -115,6 +115,36 @@ def _quiet_init(warp) -> list[str]:
 
 
 _INTEGRATORS = ("RK4", "Euler", "implicitfast", "implicit")
+
+#: Constraint rows of one MuJoCo equality, by ``mjtEq`` name (flex equalities: none
+#: in the project's models, refused by :func:`constraint_rows`).
+_EQ_ROWS = {"mjEQ_CONNECT": 3, "mjEQ_WELD": 6, "mjEQ_JOINT": 1, "mjEQ_TENDON": 1,
+            "mjEQ_DISTANCE": 1}
+
+
+def constraint_rows(mujoco, m) -> int:
+    """The most constraint rows ``m`` can have at any state: every equality (always
+    active), one row per limited joint or tendon, one per dof or tendon with friction
+    loss.  MuJoCo Warp preallocates ``njmax`` rows a world and, past it, **drops rows
+    silently** (``d.overflow`` flagged, a printf only when ``warn_overflow`` asks);
+    its default ``njmax`` is sized for contacts (64 for these models whatever their
+    loops), so without this A02 at N >= 22 (66 loop rows) lost loop rows.  Contacts
+    are off in the project's models (:func:`sim_models.mjcf.compile_spec`); a model
+    with contacts on is refused rather than guessed at."""
+    if not m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):
+        raise EngineRefusal("MuJoCo Warp: contacts are on in this model; the harness sizes "
+                            "Warp's constraint rows (njmax) for models without contacts")
+    rows = {int(getattr(mujoco.mjtEq, k)): n for k, n in _EQ_ROWS.items()}
+    total = 0
+    for t in np.asarray(m.eq_type, int):
+        if int(t) not in rows:
+            raise EngineRefusal(f"MuJoCo Warp: equality type {mujoco.mjtEq(int(t)).name} "
+                                "is not sized by the harness (njmax)")
+        total += rows[int(t)]
+    total += int(np.count_nonzero(m.jnt_limited)) + int(np.count_nonzero(m.tendon_limited))
+    total += int(np.count_nonzero(m.dof_frictionloss)) + \
+        int(np.count_nonzero(m.tendon_frictionloss))
+    return max(total, 1)
 _SOLVERS = {"newton": "mjSOL_NEWTON", "cg": "mjSOL_CG"}
 
 
@@ -270,13 +300,15 @@ class WarpStepping:
                 raise EngineRefusal(f"MuJoCo Warp cannot run this model: {e}") from None
             self.wm.opt.tolerance.fill_(float(s.tolerance))
             # the solver's kernels printf when the iteration cap is hit: no stdout noise
-            self.wm.opt.warn_overflow = 0
-            self.wd = mjw.put_data(m, self.data)
+            self.wm.opt.warn_overflow = 0  # overflows are read from d.overflow instead
+            self.njmax = constraint_rows(mujoco, m)
+            self.wd = mjw.put_data(m, self.data, njmax=self.njmax)
         self.cpu = self.device.is_cpu
         self.notes.extend(f"Warp: {m}" for m in INIT_MESSAGES)
         self.notes.append(f"MuJoCo Warp {_version(mjw)} on Warp device "
                           f"{self.device.alias} ({self.device.name}), float32; kernel cache "
-                          f"{wp.config.kernel_cache_dir}")
+                          f"{wp.config.kernel_cache_dir}; njmax {self.njmax} (every "
+                          f"constraint row the model can have)")
         self._step_graph = self._fwd_graph = None
         self._graphs()  # kernels loaded (compiled on first use) and graphs captured here
 
@@ -350,6 +382,21 @@ class WarpStepping:
         self.mjw.forward(self.wm, self.wd)
         self.mjw.rne_postconstraint(self.wm, self.wd)
 
+    def _overflow(self) -> str | None:
+        """Why the last steps are void when MuJoCo Warp flagged dropped constraint rows
+        (``d.overflow``: ``NEFC``, rows past ``njmax``; ``NJMAX_NNZ``, Jacobian entries
+        past ``njmax_nnz``; the flag is sticky), else None.  Its solver silently solves
+        without the dropped rows (measured on A02, N = 30: 90 loop rows, 64 kept under
+        the library's default ``njmax``; the chain fell with its loops open)."""
+        from mujoco_warp import OverflowType
+        flags = int(self.wd.overflow.numpy()[0])
+        lost = flags & int(OverflowType.NEFC | OverflowType.NJMAX_NNZ)
+        if not lost:
+            return None
+        n = int(self.wd.nefc.numpy()[0])
+        return (f"MuJoCo Warp dropped constraint rows (overflow flags {lost:#x}: nefc {n}, "
+                f"njmax {self.wd.njmax}, njmax_nnz {self.wd.njmax_nnz})")
+
     # -- state and drive ----------------------------------------------------------
     def _put_state(self) -> None:
         """Warp's world 0 from the host data (state, applied forces, time 0)."""
@@ -369,6 +416,9 @@ class WarpStepping:
         view.commit()
 
     def _diverged(self) -> str | None:
+        lost = self._overflow()
+        if lost is not None:
+            return lost
         qvel, qacc = self.wd.qvel.numpy(), self.wd.qacc.numpy()
         if not (abs(float(qvel.sum())) < HUGE and abs(float(qacc.sum())) < HUGE):
             return "non-finite or huge velocities (simulation diverged)"
@@ -502,5 +552,5 @@ def _version(mjw) -> str:
         return getattr(mjw, "__version__", "?")
 
 
-__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "WarpStepping",
+__all__ = ["INSTALL", "MujocoWarpSession", "MujocoWarpSettings", "WarpStepping", "constraint_rows",
            "require_warp", "warp_cache_dir"]

@@ -107,3 +107,48 @@ def test_report_states_the_precision_beside_the_verdict():
     assert rows["mujoco_warp"]["verdict"] == verdict_word(results[0]["comparisons"])
     assert all(c.floor == 0.0 for c in results[1]["comparisons"])
     assert any("mujoco_warp (float32)" in line for line in console_table(summary, 200))
+
+
+#: A02 N four-bar released (N = 22, 0.15 s), kinetic energy against the exact motion's,
+#: relative to its peak: measured 3.5e-7 (float32 RK4 1e-3 s; MuJoCo float64 on the same
+#: run 1.9e-11); with the loop rows past MuJoCo Warp's default njmax dropped, 3.7e-2.
+#: 1e-5: the free-motion energy tolerance of MuJoCo Warp (test_free_engines.TOL_ENERGY),
+#: its float32 floor over ~150 steps with margin across CPUs.
+A02_KINETIC = 1e-5
+
+
+def _a02(n: int):
+    import tomllib
+
+    from analytic.free_motion.iftomm import n_four_bar_toml
+    from analytic.toml_io import mechanism_from_dict
+    return mechanism_from_dict(tomllib.loads(n_four_bar_toml(n)), f"A02 N={n}")
+
+
+def test_released_a02_keeps_every_loop_row():
+    """A02 at N = 22 (66 loop rows): MuJoCo Warp's default ``njmax`` (64 here, sized for
+    contacts) dropped two rows silently and the chain fell with its last loop open;
+    the session sizes ``njmax`` for every row (``constraint_rows``).  Judged against
+    the exact motion's kinetic energy (gravity's work, an independent closed check)."""
+    from analytic.free_motion import simulate
+    from sim_models.free_engine import free_settings, run_free
+    from sim_models.free_run import FreeRequest
+    mech = _a02(22)
+    traj = simulate(mech, duration=0.15)
+    req = FreeRequest(duration=0.15, samples=3)
+    r = run_free(mech, "mujoco_warp", free_settings("mujoco_warp"), req, traj)
+    assert r.ok, r.reason
+    want = traj.at(req.times(), forces=False).kinetic
+    assert np.abs(r.kinetic - want).max() <= A02_KINETIC * np.abs(want).max()
+
+
+def test_dropped_constraint_rows_end_the_run(monkeypatch):
+    """Rows past ``njmax`` are a run's failure with the reason named, never a silent
+    wrong motion (``njmax`` forced below A02 N = 2's six loop rows)."""
+    from sim_models import mujoco_warp_engine
+    from sim_models.free_engine import free_settings, run_free
+    from sim_models.free_run import FreeRequest
+    monkeypatch.setattr(mujoco_warp_engine, "constraint_rows", lambda mujoco, m: 3)
+    r = run_free(_a02(2), "mujoco_warp", free_settings("mujoco_warp"),
+                 FreeRequest(duration=0.02, samples=2))
+    assert not r.ok and "dropped constraint rows" in r.reason and "njmax 3" in r.reason
