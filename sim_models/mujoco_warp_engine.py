@@ -116,6 +116,8 @@ def _quiet_init(warp) -> list[str]:
 
 _INTEGRATORS = ("RK4", "Euler", "implicitfast", "implicit")
 
+_SOLVERS = {"newton": "mjSOL_NEWTON", "cg": "mjSOL_CG"}
+
 #: Constraint rows of one MuJoCo equality, by ``mjtEq`` name (flex equalities: none
 #: in the project's models, refused by :func:`constraint_rows`).
 _EQ_ROWS = {"mjEQ_CONNECT": 3, "mjEQ_WELD": 6, "mjEQ_JOINT": 1, "mjEQ_TENDON": 1,
@@ -145,7 +147,6 @@ def constraint_rows(mujoco, m) -> int:
     total += int(np.count_nonzero(m.dof_frictionloss)) + \
         int(np.count_nonzero(m.tendon_frictionloss))
     return max(total, 1)
-_SOLVERS = {"newton": "mjSOL_NEWTON", "cg": "mjSOL_CG"}
 
 
 @dataclass(frozen=True)
