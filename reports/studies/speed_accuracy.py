@@ -20,10 +20,11 @@ Nothing here steps an engine or imports an engine library: every run and timing 
 through :mod:`sim_models` (the verdict runs' sessions), long and change-point runs
 through :mod:`reports.studies.runs` and :mod:`reports.studies.change_point`.
 
-* **Errors** come from one engine run per setting (:func:`sim_models.engines.run`,
-  ``revolutions`` turns, the last sampled at the analytic sweep's input values) and the
-  project's comparison helper :func:`reports.comparison.compare.compare_run`: every quantity's
-  largest error divided by its peak over the cycle.  ``accel_error`` is the worst of
+* **Errors** come from one verdict run per setting
+  (:func:`reports.comparison.runs.run_verdict`: ``revolutions`` turns, the last sampled
+  at the analytic sweep's input values, compared by
+  :func:`reports.comparison.compare.compare_run`): every quantity's largest error
+  divided by its peak over the cycle.  ``accel_error`` is the worst of
   the bodies' angular accelerations and the sliders' accelerations, ``force_error``
   the worst of the drive effort and every joint force (the values this project derives
   from the engine, not the engines' own defective readings); ``error`` is the larger.
@@ -224,9 +225,7 @@ def run_errors(run_, linkage: Linkage | None = None) -> dict:
     """Normalised errors of an engine run through :func:`reports.comparison.compare.compare_run`
     (against ``run_.linkage``, the compiled Linkage it was made from; ``linkage``: another
     one to judge it against instead)."""
-    if not run_.ok:
-        return verdict_errors(run_, ())
-    return verdict_errors(run_, compare_run(run_, linkage=linkage))
+    return verdict_errors(run_, compare_run(run_, linkage=linkage) if run_.ok else ())
 
 
 def verdict_errors(run_, comparisons) -> dict:
