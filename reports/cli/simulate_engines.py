@@ -28,6 +28,7 @@ from reports.regression.baseline import versions
 from reports.regression.ci_formats import CiCase, write_outputs
 from sim_models.free_engine import free_engine_names, free_session_class, run_free
 from sim_models.free_run import FreeRequest
+from sim_models.ranges import WALL_LIMIT
 from sim_models.registry import settings_from_options
 
 #: MuJoCo's integrators (``--integrator``: the same as ``--set mujoco.integrator=...``).
@@ -49,10 +50,9 @@ def add_options(s) -> None:
                    help=f"every engine's largest step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s (needs --engine)")
     s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
-                   help="end each engine's run after this much wall-clock time, above 0 "
-                        "and at most 86400 s "
-                        f"(default {FreeRequest.wall_limit:g} s; a run that reaches it ends as "
-                        "a result that says so; needs --engine)")
+                   help="end each engine's run after this much wall-clock time, "
+                        f"{WALL_LIMIT.text()} (default {FreeRequest.wall_limit:g} s; a run "
+                        "that reaches it ends as a result that says so; needs --engine)")
     opt.add_ci_outputs(s)
 
 
@@ -77,7 +77,7 @@ def run_engines(mech, traj, args, samples: int):
     engines = list(free_engine_names()) if args.engine == "all" else [args.engine]
     settings = free_settings_for(engines, args)
     request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1),
-                          **({"wall_limit": args.wall_limit} if args.wall_limit else {}))
+                          wall_limit=args.wall_limit or FreeRequest.wall_limit)
     ref = reference_samples(traj, request.times())
     out = []
     for eng in engines:
