@@ -31,7 +31,7 @@ the package imports none of its modules.
 
 from __future__ import annotations
 
-import importlib
+from reports.lazy_exports import lazy_getattr
 
 #: public name -> the module that defines it
 _EXPORTS = {
@@ -49,8 +49,4 @@ _EXPORTS = {
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _EXPORTS)
