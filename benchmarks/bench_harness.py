@@ -4,10 +4,10 @@ For each registered engine and case, in one process and interleaved (every repea
 every engine x case x method once, in turn; the order of harness and bare alternates),
 so the ratios hold on a shared, noisy machine even when the absolute times move:
 
-* ``harness``: :func:`sim_models.engine_base.drive` on an open session: one revolution
+* ``harness``: :func:`sim_models.engines.protocol.drive` on an open session: one revolution
   (``revolutions=1``, 36 samples, the sampling plan of a verdict run), reset, stepping,
   sampling, divergence checks, conversion to the analytic conventions and the
-  :class:`~sim_models.engine_run.EngineRun`; the model build is not timed (the bare
+  :class:`~sim_models.runs.engine_run.EngineRun`; the model build is not timed (the bare
   loop has none either);
 * ``bare``: the engine library's own step call in a plain Python loop, on the same
   model and data, from the same reset, for the same number of steps at the run's step
@@ -52,10 +52,10 @@ import sys
 import time
 
 from analytic import load_case
-from sim_models.engine_base import compile_linkage, drive, plan_samples
-from sim_models.engine_run import RunRequest
-from sim_models.engines import open_session
-from sim_models.registry import available_engines
+from sim_models.engines.protocol import compile_linkage, drive, plan_samples
+from sim_models.engines.registry import available_engines
+from sim_models.runs.driven import open_session
+from sim_models.runs.engine_run import RunRequest
 
 CASES = ("seed-four-bar", "six-bar")
 REVOLUTIONS, SAMPLES = 1, 36

@@ -3,8 +3,8 @@
     python benchmarks/free_a02_engines.py run ENGINE OUT.npz [--duration S] [--n N]
     python benchmarks/free_a02_engines.py plot OUT.png RUN.npz [RUN.npz ...]
 
-``run`` releases A02 in one engine (``sim_models.free_engine.run_free`` with the
-engine's default :func:`sim_models.free_engine.free_settings`) and saves, at the 401
+``run`` releases A02 in one engine (``sim_models.runs.free.run_free`` with the
+engine's default :func:`sim_models.runs.free.free_settings`) and saves, at the 401
 published sample times, the position of B0 (tip of ``crank0``: its pin is the
 origin and the link is 1 m, so B0 = (cos, sin) of its angle) from the engine and from
 the reference (:func:`analytic.free_motion.simulate`), the run's status and its
@@ -37,8 +37,8 @@ def _a02(n: int):
 
 def run(engine: str, out: str, duration: float, n: int, wall_limit: float) -> None:
     from analytic.free_motion import simulate
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
+    from sim_models.runs.free import free_settings, run_free
+    from sim_models.runs.free_run import FreeRequest
     m = _a02(n)
     t0 = time.perf_counter()
     ref = simulate(m, duration=duration)

@@ -7,10 +7,10 @@ free-motion settings: the rows of the free-motion verdict table.
 
 ``run`` does what ``xval simulate iftomm-a02-n-four-bar --engine ENGINE --json`` does
 (:mod:`reports.cli.simulate_engines`: the built-in case, the engine's recommended free
-settings, :func:`sim_models.free_engine.run_free`, judged by
+settings, :func:`sim_models.runs.free.run_free`, judged by
 :func:`reports.comparison.free_compare.compare_free` against the exact trajectory at
 the case's 401 samples) with one difference: the run's wall-clock limit
-(:attr:`sim_models.free_run.FreeRequest.wall_limit`, 120 s in ``xval simulate``) is
+(:attr:`sim_models.runs.free_run.FreeRequest.wall_limit`, 120 s in ``xval simulate``) is
 ``--wall-limit`` (default 3600 s), because A02's 20 s take PyBullet and Pinocchio longer
 than 120 s on this machine.  It writes the verdict's JSON (``FreeVerdict.as_json``
 without the per-quantity list, which has ~650 entries at N = 40; the ten worst of them
@@ -36,8 +36,8 @@ def run(engine: str, out: str, duration: float, samples: int, wall_limit: float)
     from reports.comparison.compare import json_safe
     from reports.comparison.free_cases import command_case
     from reports.comparison.free_compare import compare_free, reference_samples
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
+    from sim_models.runs.free import free_settings, run_free
+    from sim_models.runs.free_run import FreeRequest
     load0 = os.getloadavg()
     mech, _ = command_case(CASE, duration)
     t0 = time.perf_counter()

@@ -16,7 +16,7 @@ position error over the run, m; the judging's worst error (of its scale) and its
 quantity; CPU seconds of the stepping loop per simulated second stepped; whether the
 run reached the end.  A run that stopped keeps its errors up to the stop (``t_fail``)
 and is drawn hollow.  ``--wall-limit`` (default 900 s) replaces the 120 s of
-:class:`sim_models.free_run.FreeRequest`.  ``plot`` draws both errors against CPU per
+:class:`sim_models.runs.free_run.FreeRequest`.  ``plot`` draws both errors against CPU per
 simulated second, one line per engine, each point labelled with its step.  One engine
 per process.
 """
@@ -51,8 +51,8 @@ def run(engine: str, out: str, steps: list[float], duration: float, samples: int
     from reports.comparison.free_cases import free_case
     from reports.comparison.free_compare import compare_free, reference_samples
     from reports.studies.free_studies import free_row
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
+    from sim_models.runs.free import free_settings, run_free
+    from sim_models.runs.free_run import FreeRequest
     mech = free_case(CASE, duration)
     t0 = time.perf_counter()
     traj = simulate(mech)

@@ -37,10 +37,10 @@ import numpy as np
 
 from analytic import load_case
 from analytic.free_motion import simulate
-from sim_models.free_cases import released
-from sim_models.free_engine import free_engine_names, free_settings, run_free
-from sim_models.free_run import FreeRequest
-from sim_models.tree import SimTree
+from sim_models.builders.free_cases import released
+from sim_models.builders.tree import SimTree
+from sim_models.runs.free import free_engine_names, free_settings, run_free
+from sim_models.runs.free_run import FreeRequest
 
 DURATION = 20.0
 SEED = "seed-released"

@@ -11,7 +11,10 @@ one module per engine (:mod:`sim_models.mujoco_engine`, :mod:`sim_models.pybulle
 ...).  No engine library is imported until an engine is asked for.
 """
 
-from .engine_base import (
+from .builders.mjcf import EngineVersionError, MujocoSettings, build_mjcf, compile_mjcf
+from .builders.tree import SimModelError, SimTree, UnsupportedClosureError
+from .builders.urdf import Closure, build_urdf
+from .engines.protocol import (
     EngineRefusal,
     EngineRun,
     EngineSettings,
@@ -19,16 +22,13 @@ from .engine_base import (
     SettingsError,
     compile_linkage,
 )
-from .engines import instantaneous, mujoco_instantaneous, open_session, rerun, run
-from .mjcf import EngineVersionError, MujocoSettings, build_mjcf, compile_mjcf
-from .registry import engine_names, get_engine, make_settings, register_engine
-from .tree import SimModelError, SimTree, UnsupportedClosureError
-from .urdf import Closure, build_urdf
+from .engines.registry import engine_names, get_engine, make_settings, register_engine
+from .runs.driven import instantaneous, mujoco_instantaneous, open_session, rerun, run
 
 
 def __getattr__(name):  # PybulletSettings without importing pybullet eagerly
     if name == "PybulletSettings":
-        from .pybullet_engine import PybulletSettings
+        from .engines.pybullet.driven import PybulletSettings
         return PybulletSettings
     raise AttributeError(name)
 

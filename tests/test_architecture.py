@@ -123,7 +123,7 @@ def imports_of(name: str, path: Path) -> list[Import]:
 def imports_by_name(name: str, path: Path, modules) -> list[Import]:
     """A module that calls ``importlib.import_module``, or hands its names to
     :func:`reports.lazy_exports.lazy_getattr` (the front doors), imports, when asked, the
-    project modules it names in string constants (``sim_models.registry.BUILTIN``,
+    project modules it names in string constants (``sim_models.engines.registry.BUILTIN``,
     ``reports.cli.xval.COMMANDS``, a front door's ``_EXPORTS``): one edge each, its own
     name left out."""
     text = path.read_text(encoding="utf-8")

@@ -21,7 +21,7 @@ Modules:
   md|html|tex] [--out F]``: the worked solution of one configuration in the course notes'
   method and notation.
 * :mod:`reports.cli.models`: ``xval models [CASE|FILE] [--out DIR]``: the MJCF/URDF files of
-  one case, or of every built-in case (:func:`sim_models.models.write_models`).
+  one case, or of every built-in case (:func:`sim_models.builders.model_files.write_models`).
 * :mod:`reports.cli.options`: Command-line option types of ``xval``: every number and path
   is checked where it enters.
 * :mod:`reports.cli.paths`: Where the command line may write: file names made from a

@@ -34,7 +34,7 @@ from reports.figures.poses import (
     free_frames,
 )
 from sim_models import compile_linkage
-from sim_models.registry import engine_names
+from sim_models.engines.registry import engine_names
 
 
 def cmd_animate(args) -> int:

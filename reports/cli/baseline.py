@@ -29,9 +29,9 @@ from reports.regression import baseline_store as bs
 from reports.regression import ci_formats
 from reports.regression.baseline_free import DEFAULT_SAMPLES, free_mechanism, free_request
 from reports.regression.messages import report_lines
-from sim_models.engine_run import RunRequest
-from sim_models.free_engine import free_engine_names, free_session_class
-from sim_models.registry import engine_names, get_engine, settings_from_options
+from sim_models.engines.registry import engine_names, get_engine, settings_from_options
+from sim_models.runs.engine_run import RunRequest
+from sim_models.runs.free import free_engine_names, free_session_class
 
 
 # ============================================================================ record

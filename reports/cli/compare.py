@@ -22,8 +22,8 @@ from reports.comparison.quantities import is_engine_reading
 from reports.comparison.runs import engine_list, settings_for
 from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
 from sim_models import compile_linkage
-from sim_models.engine_run import RunRequest
-from sim_models.registry import engine_names, skipped_engines
+from sim_models.engines.registry import engine_names, skipped_engines
+from sim_models.runs.engine_run import RunRequest
 
 
 def cmd_compare(args) -> int:

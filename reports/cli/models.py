@@ -1,10 +1,10 @@
 """``xval models [CASE|FILE] [--out DIR]``: the MJCF/URDF files of one case, or of every
-built-in case (:func:`sim_models.models.write_models`)."""
+built-in case (:func:`sim_models.builders.model_files.write_models`)."""
 
 from __future__ import annotations
 
 from reports.cli import options as opt
-from sim_models.models import MODELS_DIR, write_models
+from sim_models.builders.model_files import MODELS_DIR, write_models
 
 
 def cmd_models(args) -> int:

@@ -52,14 +52,14 @@ SWEEP_MEMORY_BUDGET = 4 * 2 ** 30
 MAX_STREAMED_SWEEP_POINTS = 1_000_000_000
 
 #: Engine run ranges (samples, revolutions, time step) are defined once, in
-#: :mod:`sim_models.ranges`, and checked by the settings and the run request themselves;
+#: :mod:`sim_models.engines.ranges`, and checked by the settings and the run request themselves;
 #: read lazily (module ``__getattr__``) so that ``xval solve`` imports no engine code.
 _SIM_RANGES = ("MAX_SAMPLES", "MAX_REVOLUTIONS", "MIN_TIMESTEP", "MAX_TIMESTEP")
 
 
 def __getattr__(name: str):
     if name in _SIM_RANGES:
-        from sim_models import ranges
+        from sim_models.engines import ranges
         return getattr(ranges, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
@@ -121,10 +121,10 @@ sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_PO
 
 
 def sim_range(name: str, whole: bool = False):
-    """An argparse type checked against ``sim_models.ranges.<name>`` (the range the
+    """An argparse type checked against ``sim_models.engines.ranges.<name>`` (the range the
     settings and run requests check too; imported when the option is given)."""
     def parse(text: str):
-        from sim_models import ranges
+        from sim_models.engines import ranges
         try:
             v = int(text) if whole else float(text)
         except ValueError:

@@ -48,9 +48,9 @@ from reports.figures.display_units import DisplayUnits, convert_figure
 from reports.figures.free_plots import FREE_DEFAULT_WHAT, FREE_WHAT, FreeOptionError
 from reports.figures.plots import DPI
 from sim_models import compile_linkage
-from sim_models.engine_base import plan_samples
-from sim_models.engine_run import RunRequest
-from sim_models.registry import engine_names
+from sim_models.engines.protocol import plan_samples
+from sim_models.engines.registry import engine_names
+from sim_models.runs.engine_run import RunRequest
 
 #: ``--what`` words -> curve figure names of :func:`reports.figures.case_figures.curve_figures`.
 WHAT = {"angle": ("angle",), "omega": ("omega",), "alpha": ("alpha",),
@@ -83,7 +83,7 @@ class PlanSamples:
 def cycle_plan(linkage, tree=None, points: int = CYCLE_POINTS) -> PlanSamples:
     """The sweep's inputs (full turn from 0 deg, or the feasible range) at
     the times the description's constant rate reaches them; for an accelerating or
-    standing driver, the engines' plan (:func:`sim_models.engine_base.plan_samples`)."""
+    standing driver, the engines' plan (:func:`sim_models.engines.protocol.plan_samples`)."""
     d = linkage.mech.driver
     if d.acceleration == 0.0 and d.velocity != 0.0:
         vals, _, _ = input_values(linkage, points, start=0.0)  # a full turn: 0 to 360 deg
@@ -109,7 +109,7 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
                  quiet: tuple[str, ...] = ()):
     """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
     case: the report's figure code on the analytic solution and the engine runs
-    (``revolutions``/``samples`` None: :class:`sim_models.engine_run.RunRequest`'s)."""
+    (``revolutions``/``samples`` None: :class:`sim_models.runs.engine_run.RunRequest`'s)."""
     revolutions = RunRequest.revolutions if revolutions is None else revolutions
     samples = RunRequest.samples if samples is None else samples
 

@@ -3,7 +3,7 @@ each judged against the exact trajectory (:mod:`reports.comparison.free_compare`
 
 Options (added to ``xval simulate`` by :func:`add_options`): ``--engine``, ``--set
 KEY=VALUE`` (``ENGINE.KEY=VALUE`` for one engine; the ranges of
-:mod:`sim_models.ranges`, through :func:`sim_models.registry.settings_from_options`
+:mod:`sim_models.engines.ranges`, through :func:`sim_models.engines.registry.settings_from_options`
 with the free-motion settings classes), ``--integrator`` (MuJoCo's), ``--timestep``,
 ``--json``, ``--junit``, ``--summary``.  Exit status 1 when any verdict fails, 2 on bad
 input (one line).
@@ -26,10 +26,10 @@ from reports.comparison.free_compare import compare_free, reference_samples
 from reports.comparison.progress import engine_progress
 from reports.regression.baseline import versions
 from reports.regression.ci_formats import CiCase, write_outputs
-from sim_models.free_engine import free_engine_names, free_session_class, run_free
-from sim_models.free_run import FreeRequest
-from sim_models.ranges import WALL_LIMIT
-from sim_models.registry import settings_from_options
+from sim_models.engines.ranges import WALL_LIMIT
+from sim_models.engines.registry import settings_from_options
+from sim_models.runs.free import free_engine_names, free_session_class, run_free
+from sim_models.runs.free_run import FreeRequest
 
 #: MuJoCo's integrators (``--integrator``: the same as ``--set mujoco.integrator=...``).
 INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")

@@ -1,7 +1,7 @@
 """``xval view CASE|FILE``: MuJoCo's viewer on the harness's own session of a linkage.
 
 The model, its drive (armature and ``qfrc_applied``) and its loads are exactly those of
-the verdict runs (:func:`sim_models.viewer_model.run_viewer`); it starts at the analytic
+the verdict runs (:func:`sim_models.builders.viewer_model.run_viewer`); it starts at the analytic
 assembled state with the prescribed rate.  Without a display it says so in one line
 (status 2) and names the file route: ``xval models CASE --out DIR`` then
 ``python -m mujoco.viewer --mjcf=DIR/CASE.xml`` on a machine with one.
@@ -12,7 +12,7 @@ from __future__ import annotations
 from analytic import load_case
 from reports.cli import options as opt
 from reports.cli.plot import NoDisplay, has_display
-from sim_models.viewer_model import run_viewer, viewer_unavailable
+from sim_models.builders.viewer_model import run_viewer, viewer_unavailable
 
 
 def cmd_view(args) -> int:

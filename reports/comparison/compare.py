@@ -21,7 +21,7 @@ from analytic.sweep import nearest_event
 from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison.quantities import engine_reading, is_engine_reading, judged
 from reports.comparison.reference import MAX_CONDITION, analytic_reference
-from sim_models.sampling import near_limit
+from sim_models.runs.sampling import near_limit
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ class Comparison:
         Within the tolerance.
     floor : float
         The engine's arithmetic error floor at ``at`` (normalised like ``normalised``;
-        :meth:`sim_models.engine_settings.EngineSettings.error_floor`), 0.0 for float64.
+        :meth:`sim_models.engines.settings.EngineSettings.error_floor`), 0.0 for float64.
     precision : str
         The engine's arithmetic (``"float64"``, ``"float32"``).
     """
@@ -204,7 +204,7 @@ class NothingToCompare(LinkageError):
 
 def compare_run(run_, *, linkage: Linkage | None = None, tolerance: float | None = None,
                 max_condition: float = MAX_CONDITION) -> list[Comparison]:
-    """Every compared quantity of an :class:`sim_models.engine_base.EngineRun`.
+    """Every compared quantity of an :class:`sim_models.engines.protocol.EngineRun`.
 
     The reference is the solution of ``run_.linkage``, the compiled analytic
     :class:`Linkage` the run was made from (nothing is rebuilt); ``linkage``: another
@@ -285,7 +285,7 @@ def compare_run(run_, *, linkage: Linkage | None = None, tolerance: float | None
 def with_floors(comparisons: list[Comparison], run_, at, condition) -> list[Comparison]:
     """Each comparison with the engine's arithmetic floor at its worst sample
     (``run_.settings.error_floor(run_.steps, condition there)``: the settings say what
-    their arithmetic can reach; :mod:`sim_models.precision`) and the arithmetic's name.
+    their arithmetic can reach; :mod:`sim_models.runs.precision`) and the arithmetic's name.
     A run that stopped claims no floor (its failure is not rounding).  ``at`` and
     ``condition``: the compared samples' inputs and loop condition numbers."""
     settings = run_.settings

@@ -2,7 +2,7 @@
 the built-in cases released under gravity.
 
 A built-in case has no ``[motion]`` table (it is driven): the engines' own
-:func:`sim_models.free_cases.released` gives it one (released at rest from its driver's
+:func:`sim_models.builders.free_cases.released` gives it one (released at rest from its driver's
 reference value under 9.81 m/s^2 in -y, named ``<case>-released``), so the verdicts
 judge exactly the mechanism the engines run.
 """
@@ -21,9 +21,9 @@ from analytic.free_motion.iftomm import n_four_bar_toml
 from analytic.mechanism import Revolute
 from analytic.toml_io import mechanism_from_dict
 from reports.comparison.free_compare import compare_free, reference_samples
-from sim_models.free_cases import G, released
-from sim_models.free_engine import free_settings, run_free
-from sim_models.free_run import FreeRequest
+from sim_models.builders.free_cases import G, released
+from sim_models.runs.free import free_settings, run_free
+from sim_models.runs.free_run import FreeRequest
 
 #: Shortest free-motion duration accepted through every door (``xval simulate
 #: --duration``, baseline files), s: one microsecond (the IFToMM A03 run is 0.03 s).

@@ -57,7 +57,7 @@ ENERGY_DRIFT = 1e-2
 #: Loop-closure drift: the largest gap at the cut joints over the mechanism's size
 #: (its longest in-body point distance).  1e-3: a gap of a tenth of a percent of the
 #: size moves a joint by a tenth of the kinematic tolerance; the engines' run ends at
-#: sim_models.free_run.FreeRequest.max_gap (1e-2), ten times more.
+#: sim_models.runs.free_run.FreeRequest.max_gap (1e-2), ten times more.
 LOOP_DRIFT = 1e-3
 #: A failed verdict names a reference event within this fraction of the run's duration
 #: of the time the trust was lost (the first tolerance excess): an error that starts
@@ -379,7 +379,7 @@ def _quantities(run, ref, mech, not_read: list) -> list[FreeComparison]:
 
 
 def compare_free(run, traj, ref=None) -> FreeVerdict:
-    """Judge :class:`sim_models.free_run.FreeEngineRun` ``run`` against the exact
+    """Judge :class:`sim_models.runs.free_run.FreeEngineRun` ``run`` against the exact
     trajectory ``traj`` (:class:`analytic.free_motion.FreeTrajectory`; ``ref``: its
     :func:`reference_samples` at the run's times when already computed)."""
     mech = traj.mech

@@ -27,7 +27,7 @@ from analytic import Linkage
 from analytic.input_display import convention_of, display_input
 from analytic.mechanism import Prismatic
 from reports.comparison import quantities
-from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
+from sim_models.runs.sampling import LIMITED_RANGE_CONDITION, near_limit
 
 #: Points of the dense analytic line per plotted span (the samples are added to them).
 LINE_POINTS = 361
@@ -56,8 +56,8 @@ class Reference:
 #: from a limit position, where the exact accelerations reach ~1e9 and a sample-time
 #: offset of one ulp changes them by percent.  Every full-cycle case stays below 20.
 #: The same number at which a limited-range engine run stops
-#: (:data:`sim_models.sampling.LIMITED_RANGE_CONDITION`): one decision, in
-#: :func:`sim_models.sampling.near_limit`.
+#: (:data:`sim_models.runs.sampling.LIMITED_RANGE_CONDITION`): one decision, in
+#: :func:`sim_models.runs.sampling.near_limit`.
 MAX_CONDITION = LIMITED_RANGE_CONDITION
 
 
@@ -179,7 +179,7 @@ def line_breaks(runs, linkage, points: int = LINE_POINTS) -> np.ndarray:
 
 def engine_slider_positions(run_, tree) -> dict[str, np.ndarray]:
     """Each prismatic joint's displacement ``s`` (m, (N,)) in the engine at the run's
-    samples, from its tree coordinates (:meth:`sim_models.tree.SimTree.propagate`): the
+    samples, from its tree coordinates (:meth:`sim_models.builders.tree.SimTree.propagate`): the
     slider point's distance along the line from the guide's origin point, as
     :meth:`analytic.Kinematics.slider` measures it.  Empty when the run kept no tree
     coordinates; NaN where the engine has no sample."""

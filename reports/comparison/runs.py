@@ -5,7 +5,7 @@
 :func:`run_comparison`), ``xval plot --engine``, the baselines
 (:func:`reports.regression.baseline_record.run_and_compare`) and the pytest plugin
 (:mod:`reports.regression.pytest_plugin`) all run through it.  Engines are chosen by name from
-:mod:`sim_models.registry` and their settings built there (``--set KEY=VALUE``); the
+:mod:`sim_models.engines.registry` and their settings built there (``--set KEY=VALUE``); the
 compiled linkage (:func:`sim_models.compile_linkage`) is built once and passed down to
 the engine run, comes back up in it (``run.linkage is tree.linkage``), the comparison
 reads its reference there, and the tree comes back in the :class:`Verdict`.
@@ -23,9 +23,9 @@ from analytic.sweep import input_values
 from reports.comparison import quantities
 from reports.comparison.compare import Comparison, compare_run, near_event, verdict
 from sim_models import SimTree, compile_linkage
-from sim_models.engine_run import EngineRun, RunRequest
-from sim_models.engines import has_instantaneous, instantaneous, run
-from sim_models.registry import available_engines, get_engine, settings_from_options
+from sim_models.engines.registry import available_engines, get_engine, settings_from_options
+from sim_models.runs.driven import has_instantaneous, instantaneous, run
+from sim_models.runs.engine_run import EngineRun, RunRequest
 
 
 @dataclass(frozen=True)
@@ -103,7 +103,7 @@ def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
     ``options`` (``{"--timestep": ("timestep", 1e-4)}``, applied where the engine has the
     field), then the ``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings of ``--set``; every
     value within the settings' ranges, a flag and a ``--set`` of the same setting
-    refused (:func:`sim_models.registry.settings_from_options`)."""
+    refused (:func:`sim_models.engines.registry.settings_from_options`)."""
     return settings_from_options(engines, pairs, options)
 
 

@@ -21,8 +21,8 @@ Modules:
 * :mod:`reports.figures.poses`: What an animation shows, frame by frame: the bodies' poses
   from the analytic solution, from a free trajectory, or from an engine's run (its body
   angles and frame origins at its samples, through
-  :meth:`sim_models.tree.SimTree.propagate`), with the input, the clock and the joint forces
-  (:class:`Frames`). Drawn by :mod:`reports.figures.animation`; ``xval animate`` is
+  :meth:`sim_models.builders.tree.SimTree.propagate`), with the input, the clock and the
+  joint forces (:class:`Frames`). Drawn by :mod:`reports.figures.animation`; ``xval animate`` is
   :mod:`reports.cli.animate`.
 * :mod:`reports.figures.study_plots`: Figures of the speed/accuracy studies
   (:mod:`reports.studies.speed_accuracy`); PNG bytes out.

@@ -12,7 +12,7 @@ ground (thin grey, traced in colour up to the frame), the current input value an
 and with ``--forces`` the joint forces as arrows on a common scale with a key.
 
 With ``--engine`` the engine's poses (its body angles and frame origins at its samples,
-from the run's tree coordinates through :meth:`sim_models.tree.SimTree.propagate`) are
+from the run's tree coordinates through :meth:`sim_models.builders.tree.SimTree.propagate`) are
 drawn over the analytic ones, dashed in the engine's colour: a drifting loop shows as a
 gap.  Engine and analytic poses go through the same drawing function
 (:func:`body_outlines`), so what differs on screen differs in the numbers.

@@ -101,7 +101,7 @@ def curve_figures(label: str, runs: dict, linkage, reference=reference_of,
     (``xval plot`` without engines).  ``extra``: figures drawn on request only,
     ``"transmission"`` (transmission angles) and ``"slider_s"`` (slider positions;
     the engines' own, from their tree coordinates, as markers when ``tree``, the
-    compiled :class:`sim_models.tree.SimTree`, is given)."""
+    compiled :class:`sim_models.builders.tree.SimTree`, is given)."""
     runs = {e: r for e, r in runs.items() if r is not None}
     basis = list(runs.values()) or ([plan] if plan is not None else [])
     if not basis:

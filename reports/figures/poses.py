@@ -1,6 +1,6 @@
 """What an animation shows, frame by frame: the bodies' poses from the analytic
 solution, from a free trajectory, or from an engine's run (its body angles and frame
-origins at its samples, through :meth:`sim_models.tree.SimTree.propagate`), with the
+origins at its samples, through :meth:`sim_models.builders.tree.SimTree.propagate`), with the
 input, the clock and the joint forces (:class:`Frames`).  Drawn by
 :mod:`reports.figures.animation`; ``xval animate`` is :mod:`reports.cli.animate`."""
 
@@ -20,10 +20,10 @@ from reports.figures.free_plots import (
     sample_times,
 )
 from sim_models import compile_linkage
-from sim_models.engine_run import RunRequest
-from sim_models.engines import run
-from sim_models.registry import get_engine
-from sim_models.sampling import plan_samples, times_plan, travel_time
+from sim_models.engines.registry import get_engine
+from sim_models.runs.driven import run
+from sim_models.runs.engine_run import RunRequest
+from sim_models.runs.sampling import plan_samples, times_plan, travel_time
 
 #: Frames per cycle by default (>= 36 so a turn is drawn every 5 deg at most).
 FRAMES = 72
@@ -68,7 +68,7 @@ class Frames:
 def frame_times(linkage, frames: int = FRAMES, tree=None) -> np.ndarray:
     """Equal times (s, from t = 0) along the prescribed motion: one turn of a full-turn
     input (its first, at the accelerating rate where it accelerates), else the
-    interval the engines run (:func:`sim_models.sampling.plan_samples`: until the input
+    interval the engines run (:func:`sim_models.runs.sampling.plan_samples`: until the input
     nears a limit position, or has travelled its range).  A driver with neither rate
     nor acceleration has no motion: one line, status 2."""
     d = linkage.mech.driver
@@ -135,7 +135,7 @@ def free_frames(traj, frames: int, forces: bool = False):
 
 def engine_pose_arrays(run_, tree) -> tuple[np.ndarray, np.ndarray]:
     """``(theta (N, B), origin (N, B, 2))`` of an engine run's samples: from its tree
-    coordinates (:meth:`sim_models.tree.SimTree.propagate`) where it has them, else
+    coordinates (:meth:`sim_models.builders.tree.SimTree.propagate`) where it has them, else
     the absolute poses it recorded (an engine in absolute coordinates, Exudyn); NaN
     where it has neither."""
     N, B = np.shape(run_.theta)
@@ -187,7 +187,7 @@ def engine_poses(run_, tree, values: np.ndarray, full: bool, times=None) -> Pose
 def engine_run(mech, tree, engine: str, frames: int, times=None):
     """An engine run sampled at the frames: at their ``times`` (s, the prescribed
     motion from t = 0: one sample a frame) when given, else at the verdict's plan
-    (``frames`` samples of the last of :class:`sim_models.engine_run.RunRequest`'s
+    (``frames`` samples of the last of :class:`sim_models.runs.engine_run.RunRequest`'s
     revolutions)."""
     settings = get_engine(engine).settings({})
     if times is not None:

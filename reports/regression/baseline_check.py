@@ -33,8 +33,8 @@ from reports.regression.baseline import (
 from reports.regression.baseline_free import horizon_slack
 from reports.regression.baseline_record import Runner, run_and_compare
 from reports.regression.baseline_settings import settings_from_json, settings_line
-from sim_models.registry import get_engine
-from sim_models.tree import SimModelError
+from sim_models.builders.tree import SimModelError
+from sim_models.engines.registry import get_engine
 
 
 @dataclass(frozen=True)

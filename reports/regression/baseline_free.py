@@ -39,8 +39,8 @@ from dataclasses import replace
 
 from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
 from reports.comparison.free_cases import MIN_DURATION, release_and_judge
-from sim_models.free_cases import released
-from sim_models.free_engine import free_session_class
+from sim_models.builders.free_cases import released
+from sim_models.runs.free import free_session_class
 
 #: A baseline request's mode for a free-motion run.
 FREE_MODE = "free"

@@ -35,8 +35,8 @@ from reports.regression.baseline_free import (
     run_and_compare_free,
 )
 from reports.regression.baseline_settings import fmt_value, settings_class, settings_json
-from sim_models.engine_run import RunRequest
-from sim_models.registry import get_engine
+from sim_models.engines.registry import get_engine
+from sim_models.runs.engine_run import RunRequest
 
 #: ``runner(mechanism, engine, settings, request) -> (EngineRun, comparisons)``: how a
 #: run is made (the command line runs it; the pytest plugin caches it per session).
@@ -59,7 +59,7 @@ def request_dict(revolutions: int | None = None, samples: int | None = None,
                  max_violation: float | None = None, max_speed_error: float | None = None,
                  chords: str | None = None) -> dict:
     """A run request as a baseline records it; a value not given (None) is the default of
-    :class:`sim_models.engine_run.RunRequest`, the one holder of the run defaults."""
+    :class:`sim_models.runs.engine_run.RunRequest`, the one holder of the run defaults."""
 
     def given(value, name: str):
         return getattr(RunRequest, name) if value is None else value

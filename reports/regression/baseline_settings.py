@@ -11,9 +11,9 @@ from __future__ import annotations
 from analytic.errors import LinkageError
 from reports.regression.baseline import Baseline, BaselineError, RunRecord, json_value
 from reports.regression.baseline_free import free_settings_class, is_free
-from sim_models.engine_settings import SettingsError
-from sim_models.registry import get_engine, split_overrides
-from sim_models.tree import SimModelError
+from sim_models.builders.tree import SimModelError
+from sim_models.engines.registry import get_engine, split_overrides
+from sim_models.engines.settings import SettingsError
 
 
 def settings_json(engine: str, settings) -> dict:
@@ -64,7 +64,7 @@ def settings_from_json(rec: RunRecord, where: str, overrides: dict | None = None
 def overrides_for(pairs, engines, classes=None) -> dict:
     """``KEY=VALUE`` / ``ENGINE.KEY=VALUE`` strings (as ``xval compare --set`` takes them)
     as ``{engine: {field: value}}`` for those of ``engines`` that have a field set
-    (:func:`sim_models.registry.split_overrides`, ``classes`` its settings classes;
+    (:func:`sim_models.engines.registry.split_overrides`, ``classes`` its settings classes;
     :class:`SettingsError`: status 2)."""
     if not pairs:
         return {}

@@ -1,7 +1,7 @@
 """A baseline file read and written (:mod:`reports.regression.baseline` describes the
 format): :func:`dumps` / :func:`save` write it keys sorted, one line per quantity;
 :func:`load` reads it and checks every value against the ranges of the command line
-(the run request as :class:`sim_models.engine_run.RunRequest` checks it, the settings as
+(the run request as :class:`sim_models.runs.engine_run.RunRequest` checks it, the settings as
 the engine's settings class does, a free run's request as
 :mod:`reports.regression.baseline_free` does): :class:`BaselineError` names the file,
 the run and the key.
@@ -27,9 +27,9 @@ from reports.regression.baseline import (
 )
 from reports.regression.baseline_free import FREE_MODE, free_request_problem
 from reports.regression.baseline_settings import check_settings
-from sim_models.engine_run import RunRequest
-from sim_models.engine_settings import SettingsError
-from sim_models.registry import engine_names
+from sim_models.engines.registry import engine_names
+from sim_models.engines.settings import SettingsError
+from sim_models.runs.engine_run import RunRequest
 
 
 def dumps(baseline: Baseline) -> str:
@@ -220,7 +220,7 @@ _REQUEST_OPTIONS = {"revolutions": "--revolutions", "samples": "--samples"}
 
 
 def _request_in_range(request: dict, where: str) -> None:
-    """The request within the command line's ranges (:class:`sim_models.engine_run.
+    """The request within the command line's ranges (:class:`sim_models.runs.engine_run.
     RunRequest` checks them: one definition): e.g. revolutions 1 to 1000, samples 2 to
     3600, a finite loop-gap threshold."""
     keys = ("revolutions", "samples", "max_violation", "max_speed_error", "chords", "mode")

@@ -266,7 +266,7 @@ class Xval:
 
 def _overrides(settings, engines, classes=None) -> dict:
     """``settings`` ({key: value}, applied to every engine that has the key) as
-    per-engine overrides (:func:`sim_models.registry.split_overrides`)."""
+    per-engine overrides (:func:`sim_models.engines.registry.split_overrides`)."""
     if not settings:
         return {}
     return overrides_for([f"{k}={fmt_value(v)}" for k, v in dict(settings).items()], engines,

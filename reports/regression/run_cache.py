@@ -20,7 +20,7 @@ from reports.comparison.quantities import judged
 from reports.comparison.runs import request_of
 from reports.regression.baseline_free import is_free, run_and_compare_free
 from reports.regression.baseline_record import request_dict
-from sim_models.registry import get_engine
+from sim_models.engines.registry import get_engine
 
 
 def mech_digest(mech) -> str:
@@ -99,9 +99,9 @@ class RunCache:
     def run(self, mech, engine: str, settings=None, revolutions: int | None = None,
             samples: int | None = None, max_violation: float | None = None,
             max_speed_error: float | None = None, chords: str | None = None):
-        """:func:`sim_models.engines.run` of a Mechanism, cached (same arguments, same run
+        """:func:`sim_models.runs.driven.run` of a Mechanism, cached (same arguments, same run
         object).  ``settings``: None, overrides or a settings object; a request value left
-        None is :class:`sim_models.engine_run.RunRequest`'s default."""
+        None is :class:`sim_models.runs.engine_run.RunRequest`'s default."""
         s = settings_of(engine, settings)
         req = request_dict(revolutions, samples, max_violation, max_speed_error, chords)
         return self.entry(mech, engine, s, req)["run"]

@@ -55,8 +55,8 @@ from reports.studies.hard_cases import hard_cases
 from reports.studies.scene import scene_economy, scene_figure
 from reports.studies.scheduler import PriorityExecutor
 from sim_models import compile_linkage, make_settings
-from sim_models.engine_run import RunRequest
-from sim_models.registry import available_engines
+from sim_models.engines.registry import available_engines
+from sim_models.runs.engine_run import RunRequest
 
 #: Where a report goes without --out: under the current folder (in the checkout, the
 #: git-ignored reports/out/; never inside an installed package's folder).
@@ -65,7 +65,7 @@ DEFAULT_OUT = Path("reports") / "out"
 GRID_CASES = {True: ("seed-slider-crank",),
               False: ("seed-four-bar", "seed-slider-crank", "near-toggle-four-bar")}
 #: Samples per revolution of the verdict runs: the full report's own choice, and with
-#: ``--quick`` the run default (:class:`sim_models.engine_run.RunRequest`).
+#: ``--quick`` the run default (:class:`sim_models.runs.engine_run.RunRequest`).
 SAMPLES = {False: 72, True: RunRequest.samples}
 
 

@@ -19,7 +19,7 @@ from reports.comparison.free_compare import (
 from reports.comparison.free_limits import verdict_of
 from reports.figures.free_report_plots import work_precision_figure
 from reports.studies import free_studies as FS
-from sim_models.free_engine import free_engine_names
+from sim_models.runs.free import free_engine_names
 
 #: Queue places of the free tasks (reports.studies.scheduler: lower runs first).  A case task is
 #: one serial job of several seconds: started first, it runs beside the verdict runs

@@ -136,7 +136,7 @@ def limit_note(judged: pd.DataFrame) -> str:
     w = lim.loc[lim["normalised"].astype(float).idxmax()]
     return (f"{w['quantity']} {float(w['normalised']):.2g} of peak is over the tolerance "
             f"but within the engine's {w.get('precision', '')} floor {float(w['floor']):.2g} "
-            "(sim_models.precision): a precision limit of the engine, not a harness failure")
+            "(sim_models.runs.precision): a precision limit of the engine, not a harness failure")
 
 
 def accepted(summary: pd.DataFrame) -> pd.Series:

@@ -19,7 +19,7 @@ from analytic import Linkage, Mechanism
 from analytic.mechanism import Assembly
 from reports.studies.runs import load, make_settings, trace, trace_diagnostics
 from sim_models import compile_linkage
-from sim_models.tree import wrap as _wrap  # (-pi, pi], the engine trees' own
+from sim_models.builders.tree import wrap as _wrap  # (-pi, pi], the engine trees' own
 
 #: Loop gap (relative to the mechanism's size) that ends a change-point run: looser than
 #: the engine runs' 1e-3 so that soft (stock) constraints still show a branch.

@@ -2,7 +2,7 @@
 settings, and speed against error (a grid of integrators, steps and loop-constraint
 settings per engine), with IFToMM-style rows.
 
-Every run is :func:`sim_models.free_engine.run_free` (the one stepping loop; its
+Every run is :func:`sim_models.runs.free.run_free` (the one stepping loop; its
 ``wall`` times :meth:`FreeSession.advance` only, the same loop as the verdicts), judged
 by :func:`reports.comparison.free_compare.compare_free` against the exact trajectory, computed once
 per case.  Cost is CPU seconds of stepping per simulated second; error at the end is the
@@ -26,9 +26,9 @@ from reports.comparison.free_compare import FreeVerdict, compare_free, reference
 from reports.figures.free_report_plots import case_figures
 from reports.figures.study_plots import _frontier
 from reports.regression.baseline import versions
-from sim_models.free_base import free_start, time_free_steps
-from sim_models.free_engine import free_engine_names, free_settings, open_free_session, run_free
-from sim_models.free_run import FreeRequest
+from sim_models.engines.free_protocol import free_start, time_free_steps
+from sim_models.runs.free import free_engine_names, free_settings, open_free_session, run_free
+from sim_models.runs.free_run import FreeRequest
 
 #: The report's free-motion verdict cases, (case, duration s): quick keeps the report's
 #: 30 s budget (A01 and the seed four-bar, short); full runs the IFToMM problems whose

@@ -37,7 +37,7 @@ from reports.studies.speed_accuracy import (
     mujoco_family,
 )
 from sim_models import compile_linkage
-from sim_models.mjcf import MujocoSettings
+from sim_models.builders.mjcf import MujocoSettings
 
 
 def long_run_task(case_name: str, engine: str, settings_dict: dict, revolutions: int,

@@ -1,10 +1,10 @@
 """The studies' engine runs: the same sessions and run loop as the verdict runs.
 
 Every study measurement goes through :mod:`sim_models`: errors from
-:func:`sim_models.engines.run` (the run loop :func:`sim_models.engine_base.drive`), speed
-from :func:`sim_models.engines.time_engine` (the sessions' own ``advance``, the stepping
+:func:`sim_models.runs.driven.run` (the run loop :func:`sim_models.engines.protocol.drive`), speed
+from :func:`sim_models.runs.driven.time_engine` (the sessions' own ``advance``, the stepping
 loop of those runs, without readout), long and change-point runs from the same ``run``
-with a plan of equal times (:func:`sim_models.engine_base.periodic_plan`).  Nothing here
+with a plan of equal times (:func:`sim_models.engines.protocol.periodic_plan`).  Nothing here
 steps an engine or imports an engine library.
 """
 
@@ -20,9 +20,9 @@ from analytic import Mechanism, load_case
 from analytic.cases import HARD_CASES_DIR, hard_case_names
 from analytic.sweep import input_values
 from reports.comparison.runs import request_of
-from sim_models.engine_base import loop_gap, periodic_plan, travel_time
-from sim_models.engines import run
-from sim_models.registry import make_settings as registry_settings
+from sim_models.engines.protocol import loop_gap, periodic_plan, travel_time
+from sim_models.engines.registry import make_settings as registry_settings
+from sim_models.runs.driven import run
 
 
 def load(case: str) -> Mechanism:
@@ -45,7 +45,7 @@ def revolution_time(mech) -> float:
 @dataclass
 class Trace:
     """Raw samples of a long engine run (tree coordinates, SI), from an
-    :class:`~sim_models.engine_base.EngineRun` sampled at equal times."""
+    :class:`~sim_models.engines.protocol.EngineRun` sampled at equal times."""
 
     engine: str
     settings: str

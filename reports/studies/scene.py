@@ -15,7 +15,7 @@ from reports.figures.study_plots import pareto_plot
 from reports.studies.runs import load, make_settings
 from reports.studies.speed_accuracy import run_errors, time_engine, verdict_errors
 from sim_models import compile_linkage
-from sim_models.mjcf import MujocoSettings
+from sim_models.builders.mjcf import MujocoSettings
 
 SCENE_VARIANTS = {
     "minimal": "the project's scene: contacts off, no gravity, one capsule per link",
@@ -46,7 +46,7 @@ SCENE_PARTS = {
 def scene_task(case_name: str, variant: str, settings_dict: dict, timing_steps: int,
                repeats: int) -> dict:
     """One scene variant (:data:`SCENE_VARIANTS`; the MuJoCo scene is a setting,
-    :attr:`sim_models.mjcf.MujocoSettings.scene`): errors and speed, through the verdict
+    :attr:`sim_models.builders.mjcf.MujocoSettings.scene`): errors and speed, through the verdict
     runs' session.  Never raises."""
     try:
         scene, gravity = SCENE_PARTS[variant]

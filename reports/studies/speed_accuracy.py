@@ -29,8 +29,8 @@ through :mod:`reports.studies.runs` and :mod:`reports.studies.change_point`.
   the worst of the drive effort and every joint force (the values this project derives
   from the engine, not the engines' own defective readings); ``error`` is the larger.
 * **Speed** is timed separately, on the bare stepping loop of the same engine session
-  (:func:`sim_models.engines.time_engine`: the session's own ``advance``, which the run
-  loop :func:`sim_models.engine_base.drive` calls between samples, without readout), so
+  (:func:`sim_models.runs.driven.time_engine`: the session's own ``advance``, which the run
+  loop :func:`sim_models.engines.protocol.drive` calls between samples, without readout), so
   that the cost of the 36-72 samples and their Newton-Euler reconstruction does not
   swamp coarse steps:
   ``steps_per_second`` over up to one revolution (best of a few repeats) and
@@ -112,10 +112,10 @@ from reports.studies.runs import (  # noqa: F401 - re-exported: the studies' eng
     trace_diagnostics,
 )
 from sim_models import compile_linkage
-from sim_models.engine_run import RunRequest
-from sim_models.engines import time_engine as session_time
-from sim_models.mjcf import HARD_SOLIMP, direct_solref
-from sim_models.registry import available_engines
+from sim_models.builders.mjcf import HARD_SOLIMP, direct_solref
+from sim_models.engines.registry import available_engines
+from sim_models.runs.driven import time_engine as session_time
+from sim_models.runs.engine_run import RunRequest
 
 #: Tolerances of the cheapest-setting table (max normalised error).
 TOLERANCES = (1e-2, 1e-3, 1e-4)
@@ -127,7 +127,7 @@ FULL_CASES = ("seed-four-bar", "seed-slider-crank", "near-toggle-four-bar")
 LONG_RUN_REVOLUTIONS = {False: 1000, True: 50}
 #: Samples per revolution of the long run's trace (every revolution sampled, for the
 #: per-revolution diagnostics): the study's own choice, not the run default
-#: (:class:`sim_models.engine_run.RunRequest` samples only a run's last revolution).
+#: (:class:`sim_models.runs.engine_run.RunRequest` samples only a run's last revolution).
 LONG_RUN_SAMPLES = 36
 #: Samples per revolution of a speed/error grid run: the run default with ``--quick``,
 #: else 72 (the full report's verdict runs sample as many: ``reports.report.build.SAMPLES``).
@@ -268,7 +268,7 @@ def sample_errors(run_) -> dict[str, np.ndarray]:
 # ============================================================================ timing
 def time_engine(tree, engine: str, settings, dt: float, steps: int, repeats: int = 3) -> float:
     """Steps per second of the engine session's own stepping loop (no readout) on the
-    compiled linkage: :func:`sim_models.engines.time_engine`, best of ``repeats``."""
+    compiled linkage: :func:`sim_models.runs.driven.time_engine`, best of ``repeats``."""
     return session_time(tree, engine, settings, dt, steps, repeats)
 
 

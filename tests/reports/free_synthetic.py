@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim_models.engine_settings import EngineSettings
-from sim_models.free_run import FreeEngineRun, FreeRequest
+from sim_models.engines.settings import EngineSettings
+from sim_models.runs.free_run import FreeEngineRun, FreeRequest
 
 
 def synthetic_run(traj, duration: float, samples: int, *, engine: str = "fake",

@@ -51,12 +51,12 @@ def test_builtin_baseline_names_its_re_record_command():
 
 
 def test_builtin_baseline_covers_every_case_and_engine():
-    from sim_models.registry import engine_names
+    from sim_models.engines.registry import engine_names
     base = bs.load(BUILTIN)
     assert {(r.case, r.engine) for r in base.runs} >= \
         {(c, e) for c in case_names() for e in ("mujoco", "pybullet")}
     assert {r.engine for r in base.runs} <= set(engine_names())
-    from sim_models.registry import get_engine
+    from sim_models.engines.registry import get_engine
     for r in base.runs:
         # recorded at the recommended settings: every recorded field is still the engine's
         # default (a field added since is run at its default, and the check notes it)
@@ -517,7 +517,7 @@ def test_record_command_names_settings_that_differ_from_the_defaults(mujoco_base
     the form the command line parses back to the same settings object."""
     from dataclasses import replace
 
-    from sim_models.registry import get_engine, split_overrides
+    from sim_models.engines.registry import get_engine, split_overrides
     base = bs.load(mujoco_baseline)
     run = base.runs[0]
     fields = dict(run.settings["fields"], timestep=1e-4, solref=[-20000.0, -300.0])

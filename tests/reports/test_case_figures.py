@@ -24,8 +24,8 @@ from reports.comparison.compare import compare_run
 from reports.comparison.reference import family_of
 from reports.figures.case_figures import curve_figures, error_figure
 from sim_models import compile_linkage
-from sim_models.engines import run
-from sim_models.registry import available_engines
+from sim_models.engines.registry import available_engines
+from sim_models.runs.driven import run
 
 #: Round-off allowed on top of the verdict error: relative (the same numbers reach the
 #: plot through a second, vectorised evaluation of the same analytic solution) and

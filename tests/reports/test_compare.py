@@ -107,7 +107,7 @@ def test_nothing_to_compare_is_typed():
     from analytic import LinkageError
     from reports.comparison.compare import NothingToCompare, compare_run
     from sim_models import compile_linkage
-    from sim_models.engines import run
+    from sim_models.runs.driven import run
     pytest.importorskip("mujoco")
     tree = compile_linkage(__import__("analytic").load_case("seed-four-bar"))
     r = run(tree, "mujoco", samples=6)
@@ -182,7 +182,7 @@ def test_prismatic_normal_and_moment_are_judged():
 
     from analytic import load_case
     from reports.comparison.compare import compare_run
-    from sim_models.engines import run
+    from sim_models.runs.driven import run
     r = run(load_case("quick-return"), "mujoco", samples=12)
     names = {c.quantity: c for c in compare_run(r)}
     for q in ("slot.normal", "slot.moment", "ram.normal", "ram.moment"):
@@ -207,8 +207,8 @@ def test_a_failed_verdict_says_how_far_the_input_moves_per_step():
 
     from analytic import load_mechanism
     from reports.comparison.compare import compare_run, step_note, verdict
-    from sim_models.engines import run
-    from sim_models.registry import make_settings
+    from sim_models.engines.registry import make_settings
+    from sim_models.runs.driven import run
     mech = load_mechanism(os.path.join(BUGS, "fast-accelerating.toml"))
     r = run(mech, "mujoco", samples=12)
     assert not verdict(compare_run(r))

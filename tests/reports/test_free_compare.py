@@ -15,7 +15,7 @@ from analytic import load_case
 from analytic.free_motion import simulate
 from reports.comparison import free_compare as fc
 from reports.comparison.iftomm import grounded_point
-from sim_models.free_cases import released
+from sim_models.builders.free_cases import released
 
 from .free_synthetic import synthetic_run
 

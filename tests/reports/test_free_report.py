@@ -72,7 +72,7 @@ def test_quick_report_runs_two_short_cases_and_no_grid():
     assert max(c[2][1] for c in ex.calls) <= 2.0 and len(pending) == 2
     full = _Ex()
     report_free.submit(full, False, _Ph())
-    from sim_models.free_engine import free_engine_names
+    from sim_models.runs.free import free_engine_names
     # one grid per case and installed free-motion engine (pinocchio only with its extra)
     assert sum(c[1] == "grid_task" for c in full.calls) == 2 * len(free_engine_names())
 
@@ -116,7 +116,7 @@ def test_a_mechanism_without_a_loop_has_no_loop_drift_not_a_zero():
     from analytic.free_motion import simulate
     from reports.comparison.free_compare import compare_free, reference_samples
     from reports.studies.free_studies import _loop_drift
-    from sim_models.free_run import FreeEngineRun
+    from sim_models.runs.free_run import FreeEngineRun
 
     traj = simulate(load_case("iftomm-a01-pendulum"), duration=0.5)
     t = np.linspace(0.0, 0.5, 11)

@@ -125,7 +125,7 @@ def test_engine_failure_reason_uses_the_same_convention():
     run that stopped 390 deg along the motion said '390 deg' there and '30 deg' in the
     table."""
     from sim_models import compile_linkage
-    from sim_models.engine_run import fmt_value
+    from sim_models.runs.engine_run import fmt_value
     assert fmt_value(compile_linkage(load_case("seed-four-bar")), math.radians(390.0)) \
         == "30 deg"
     assert fmt_value(compile_linkage(load_case("hibbeler-16-30")), 0.1) == "0.1 m"

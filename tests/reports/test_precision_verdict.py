@@ -5,7 +5,7 @@ float64 engine claims no floor.
 The runs are synthetic: a MuJoCo run of the seed four-bar (float64, errors near 1e-8 of
 peak) with one body's alpha moved at one sample by a chosen multiple of the float32
 floor there, computed here from its definition (``4 u32 steps condition``,
-:mod:`sim_models.precision`) with the condition number from the analytic linkage.  The
+:mod:`sim_models.runs.precision`) with the condition number from the analytic linkage.  The
 settings are MuJoCo's, or a subclass that declares float32, so only the declared
 arithmetic differs: nothing engine-specific enters the comparison.
 """
@@ -27,8 +27,8 @@ from reports.comparison.runs import Verdict
 from reports.regression.ci_formats import from_compare, junit_xml, markdown_summary
 from reports.report.tables import accepted, summary_table, verdict_table
 from sim_models import compile_linkage, run
-from sim_models.mjcf import MujocoSettings
-from sim_models.precision import FLOAT32, FLOAT64
+from sim_models.builders.mjcf import MujocoSettings
+from sim_models.runs.precision import FLOAT32, FLOAT64
 
 #: float32's unit round-off and the floor's growth per step (the module's definition,
 #: restated: a change of either must be a deliberate one that edits this test too).

@@ -231,7 +231,7 @@ def test_a_refusal_is_cached_and_raised(xval):
     from dataclasses import replace
 
     from analytic import load_case
-    from sim_models.engine_base import EngineRefusal
+    from sim_models.engines.protocol import EngineRefusal
     mech = load_case("seed-four-bar")
     still = replace(mech, driver=replace(mech.driver, velocity=0.0, acceleration=0.0))
     for _ in range(2):

@@ -2,7 +2,7 @@
 (sim_models/ranges.py): ``--set``, the option flags, a baseline file, the pytest
 plugin's option.  Each impossible value is one line, status 2, naming what the user
 typed (the option, or the file, run and key), and no engine runs.  The table of
-impossible values is tests/sim_models/test_settings_ranges.py's; the baseline
+impossible values is tests/sim_models/engines/test_settings_ranges.py's; the baseline
 reproducers are ../shared/bugs/baseline-*.json, copied to tests/data/bugs/."""
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from pathlib import Path
 import pytest
 
 from reports.cli.xval import main
-from sim_models.registry import get_engine
+from sim_models.engines.registry import get_engine
 
-from ..sim_models.test_settings_ranges import ENGINES, IMPOSSIBLE
+from ..sim_models.engines.test_settings_ranges import ENGINES, IMPOSSIBLE
 from .test_bad_inputs import assert_one_line_error
 
 BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs"
@@ -32,7 +32,7 @@ def no_run(monkeypatch):
     import reports.comparison.runs as vr
     import reports.regression.baseline_check as bc
     import reports.regression.baseline_record as br
-    from sim_models import engines
+    from sim_models.runs import driven
 
     def ran(*a, **k):
         pytest.fail("an engine ran for an impossible setting")
@@ -41,7 +41,7 @@ def no_run(monkeypatch):
     monkeypatch.setattr(br, "run_and_compare", ran)
     monkeypatch.setattr(bc, "run_and_compare", ran)  # check's default runner
     monkeypatch.setattr(br, "record", ran)
-    monkeypatch.setattr(engines, "open_session", ran)
+    monkeypatch.setattr(driven, "open_session", ran)
 
 
 def _rows():

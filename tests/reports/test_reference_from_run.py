@@ -28,7 +28,7 @@ CASE = "seed-four-bar"
 @pytest.fixture(scope="module")
 def tree_and_run():
     from sim_models import compile_linkage
-    from sim_models.engines import run
+    from sim_models.runs.driven import run
     tree = compile_linkage(load_case(CASE))
     return tree, run(tree, "mujoco", samples=8)
 

@@ -80,7 +80,7 @@ def test_missing_engine_still_reports(tmp_path, monkeypatch):
 
     def fake(case, engine, overrides, revolutions, samples, mode="run"):
         if engine == "pybullet":
-            import sim_models.pybullet_engine as pbs
+            import sim_models.engines.pybullet.driven as pbs
             monkeypatch.setattr(pbs, "_require_pybullet", lambda: (_ for _ in ()).throw(
                 pbs.SimModelError("PyBullet is not installed (test)")))
         return real(case, engine, overrides, revolutions, samples, mode)

@@ -37,7 +37,7 @@ def grid():
 
 def test_quick_grid_rows_are_finite(grid):
     assert list(grid.columns[:len(S.GRID_COLUMNS)]) == S.GRID_COLUMNS
-    from sim_models.registry import available_engines
+    from sim_models.engines.registry import available_engines
     assert set(grid["engine"]) == set(available_engines())  # every installed engine's family
     assert len(grid) == len(S.grid_plan("seed-four-bar", True))
     ok = grid[grid["ok"]]
@@ -165,7 +165,7 @@ def test_change_point_engine_label(engine):
 def test_long_run_loop_short():
     from dataclasses import asdict
 
-    from sim_models.mjcf import MujocoSettings
+    from sim_models.builders.mjcf import MujocoSettings
     res = hard_cases_module.long_run_task("seed-four-bar", "mujoco", asdict(MujocoSettings()), 3)
     per = pd.DataFrame(res["per_rev"])
     assert list(per["revolution"]) == [1, 2, 3]
@@ -233,7 +233,7 @@ def test_scene_economy_rows():
 def test_studies_time_and_run_the_verdict_session(monkeypatch):
     """A grid row's errors and its timing both step the engine's protocol session (the
     verdict runs' MujocoSession.advance, through engine_base.drive / time_steps)."""
-    from sim_models.mujoco_engine import MujocoSession
+    from sim_models.engines.mujoco.driven import MujocoSession
     calls = []
     real = MujocoSession.advance
 
@@ -244,7 +244,7 @@ def test_studies_time_and_run_the_verdict_session(monkeypatch):
     monkeypatch.setattr(MujocoSession, "advance", counted)
     from dataclasses import asdict
 
-    from sim_models.mjcf import MujocoSettings
+    from sim_models.builders.mjcf import MujocoSettings
     row = S.grid_task("seed-four-bar", "mujoco", asdict(MujocoSettings()), "default",
                       samples=12, timing_steps=400, timing_repeats=1)
     assert row["ok"], row["reason"]

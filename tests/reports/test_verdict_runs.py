@@ -9,7 +9,7 @@ import pytest
 import reports.comparison.runs as vr
 from analytic import load_case
 from reports.comparison.compare import Comparison, verdict
-from sim_models.engine_run import RunRequest
+from sim_models.runs.engine_run import RunRequest
 
 
 class _Run:
@@ -73,7 +73,7 @@ def test_near_a_limit_is_one_decision():
     import numpy as np
 
     from reports.comparison.reference import MAX_CONDITION
-    from sim_models.sampling import LIMITED_RANGE_CONDITION, near_limit
+    from sim_models.runs.sampling import LIMITED_RANGE_CONDITION, near_limit
     assert MAX_CONDITION == LIMITED_RANGE_CONDITION == 100.0
     np.testing.assert_array_equal(near_limit([1.0, 99.9, 100.0, 100.1, np.inf, np.nan]),
                                   [False, False, False, True, True, True])

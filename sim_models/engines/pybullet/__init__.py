@@ -1,0 +1,1 @@
+"""PyBullet: the driven session (:mod:`.driven`) and the released one (:mod:`.free`)."""
