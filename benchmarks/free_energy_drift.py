@@ -21,7 +21,7 @@ Columns: ``drift_max`` = max |E(t) - E(0)| over the samples, relative to the ene
 (max KE + range of PE of the exact trajectory); ``drift_end`` signed, at t = 20 s
 (negative: energy lost); ``gap`` = largest loop gap over the size; ``cpu`` = stepping
 seconds per simulated second (``FreeEngineRun.wall``).  E is the harness's one energy
-function for every engine (``sim_models/free_base.py``), so a drift is the engine's.
+function for every engine (``sim_models/engines/free_protocol.py``), so a drift is the engine's.
 References: DOP853 at rtol 1e-13, computed once per case.  Prints the machine's load.
 """
 

@@ -6,9 +6,11 @@ Front door::
     tree = compile_linkage(mech)                  # the analytic solution, compiled once
     r = run(tree, "mujoco", make_settings("mujoco", {"integrator": "Euler"}))
 
-The protocol is :mod:`sim_models.engine_base`, the registry :mod:`sim_models.registry`,
-one module per engine (:mod:`sim_models.mujoco_engine`, :mod:`sim_models.pybullet_engine`,
-...).  No engine library is imported until an engine is asked for.
+The rooms, along the data flow: :mod:`sim_models.builders` (the compiled linkage and the
+engine models built from it), :mod:`sim_models.engines` (the protocol, the registry, one
+folder per engine), :mod:`sim_models.runs` (a run of any engine by name, its plan and its
+records), :mod:`sim_models.own` (models that users bring) and ``models/`` (the generated
+model files).  No engine library is imported until an engine is asked for.
 """
 
 from .builders.mjcf import EngineVersionError, MujocoSettings, build_mjcf, compile_mjcf

@@ -122,7 +122,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
                 say(f"{w.status}: {len(lim)} quantities over the tolerance but within the "
                     f"engine's {w.precision} error floor ({w.quantity}: "
                     f"{w.normalised:.3g} of peak, floor {w.floor:.2g} from the steps taken "
-                    "and the loop condition number there, sim_models/precision.py): a "
+                    "and the loop condition number there, sim_models/runs/precision.py): a "
                     "precision limit of the engine, not a failure (status 0)")
             if any(not c.measured for c in comps):
                 first = min(c.at for c in comps if not c.measured)

@@ -144,7 +144,7 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
               "sampled input: only MuJoCo's constraint regularisation separates its "
               "accelerations and forces from the exact ones. Rows: stock MuJoCo, stock with "
               "the mjENBL_DIAGEXACT flag, and this project's model (inverse weights scaled "
-              "by 1e-3 after compiling, see sim_models/mjcf.py). The floor is the largest "
+              "by 1e-3 after compiling, see sim_models/builders/mjcf.py). The floor is the largest "
               "error / peak over all judged quantities.", intro=True)
         doc.table(floors, "instantaneous_floors", "regularisation floor per case and variant")
     _run_section(doc, meta, ph)

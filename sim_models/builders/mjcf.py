@@ -6,7 +6,7 @@ No XML is written or parsed: every element comes from ``add_body`` /
 
 Model
 -----
-* Kinematic tree = :class:`sim_models.tree.SimTree` (the analytic spanning tree with
+* Kinematic tree = :class:`sim_models.builders.tree.SimTree` (the analytic spanning tree with
   prismatic joints preferred); each body frame at its reference pose, so
   ``qpos = 0`` is the assembled reference state; hinges about z at the joint
   point, slides along the line direction.  Names: bodies and joints keep the
@@ -19,7 +19,7 @@ Model
   only ``Izz`` acts in a planar motion; the in-plane values are 20% above the
   lamina's ``I/2`` so that MuJoCo's triangle inequality ``A + B >= C`` still holds
   after ``to_xml`` prints them to 6 digits); massless bodies get
-  :data:`sim_models.tree.MASS_FLOOR` of the largest mass (see that module).
+  :data:`sim_models.builders.tree.MASS_FLOOR` of the largest mass (see that module).
 * Contacts disabled (flag and ``contype = conaffinity = 0``), gravity
   ``mech.gravity`` (0 unless the description asks), no limits, no actuators.
   Visual capsules join each body's consecutive points (massless: the compiler
@@ -28,7 +28,7 @@ Model
   ``(M + A) qacc = ... + qfrc_applied`` makes the driver follow
   ``qacc = qfrc_applied / A`` to O(1/A), and the effort the driver exerts on
   the mechanism is ``A (a_prescribed - qacc)`` (``qfrc_applied = A a_prescribed``
-  is set by :mod:`sim_models.engines`).  Auto-reset on bad accelerations is
+  is set by :mod:`sim_models.runs.driven`).  Auto-reset on bad accelerations is
   disabled so a divergence shows as non-finite state and can be reported.
 """
 
@@ -94,7 +94,7 @@ HARD_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 #: impedance is dmin + y (dmax - dmin), y from 0 to 1 over the width).
 _IMPEDANCE = dict(lo=1e-4, hi=0.9999, why="MuJoCo clamps the impedance to [0.0001, 0.9999]")
 
-#: Scene variants of :attr:`MujocoSettings.scene` (built by :mod:`sim_models.mujoco_scene`).
+#: Scene variants of :attr:`MujocoSettings.scene` (built by :mod:`sim_models.engines.mujoco.scene`).
 SCENES = ("minimal", "contacts", "contacts-same-plane", "contacts-no-excludes",
           "extra-visual", "extra-collision")
 
@@ -106,7 +106,7 @@ class MujocoSettings(EngineSettings):
     Parameters
     ----------
     timestep
-        Largest step, s.  :func:`sim_models.engines.run` shortens it so that a
+        Largest step, s.  :func:`sim_models.runs.driven.run` shortens it so that a
         revolution is a whole number of steps and every sample falls on a step.
     integrator
         ``"RK4"``, ``"implicitfast"``, ``"implicit"`` or ``"Euler"``.
@@ -150,7 +150,7 @@ class MujocoSettings(EngineSettings):
     scene
         ``"minimal"`` (the project's scene: contacts off, one capsule per link) or a
         variant of the scene-economy study with unneeded parts added (:data:`SCENES`,
-        :mod:`sim_models.mujoco_scene`).
+        :mod:`sim_models.engines.mujoco.scene`).
     """
 
     timestep: float = 2.5e-4
@@ -234,7 +234,7 @@ def build_mjcf(mech: Mechanism, settings: MujocoSettings | None = None,
     """The MuJoCo model of ``mech`` as a :class:`mujoco.MjSpec` (not compiled).
 
     Raises :class:`EngineVersionError` for MuJoCo < 3.7 and
-    :class:`~sim_models.tree.UnsupportedClosureError` when a loop cannot be
+    :class:`~sim_models.builders.tree.UnsupportedClosureError` when a loop cannot be
     closed at a revolute joint.
     """
     mujoco = require_mujoco()

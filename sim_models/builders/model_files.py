@@ -1,9 +1,9 @@
 """The generated model files of the built-in cases (``sim_models/models/``).
 
 For each case ``<case>.xml`` (MJCF written by ``MjSpec.to_xml`` from
-:func:`sim_models.viewer_model.viewer_spec`: :func:`sim_models.mjcf.build_mjcf` plus the
-drive as an actuator and the assembled state as a keyframe, so a viewer shows it
-turning), ``<case>.urdf`` and ``<case>.closures.json``
+:func:`sim_models.builders.viewer_model.viewer_spec`:
+:func:`sim_models.builders.mjcf.build_mjcf` plus the drive as an actuator and the assembled
+state as a keyframe, so a viewer shows it turning), ``<case>.urdf`` and ``<case>.closures.json``
 (the loop-closing point-to-point constraints PyBullet needs; pivots in the links'
 centre-of-mass frames).  The files are generated, never edited: ``xval models``
 rewrites them and a test fails when the committed ones are stale.
@@ -33,7 +33,7 @@ MODELS_DIR = Path(__file__).parents[1] / "models"
 def model_texts(case: str) -> dict[str, str]:
     """File name -> text of the generated models of one built-in case or TOML file (the
     files of a TOML file are named after it).  The MJCF is the viewer model
-    (:func:`sim_models.viewer_model.viewer_xml`): the harness's model with its drive as
+    (:func:`sim_models.builders.viewer_model.viewer_xml`): the harness's model with its drive as
     an actuator and the assembled state as keyframe ``assembled``."""
     mech = load_case(case)
     name = case if case in case_names() else Path(case).stem

@@ -1,7 +1,7 @@
 """URDF (for PyBullet) of a :class:`~analytic.mechanism.Mechanism`, written with ``xml.etree``.
 
 URDF describes trees only, so the model is the simulation tree of
-:class:`sim_models.tree.SimTree` (the analytic spanning tree with prismatic
+:class:`sim_models.builders.tree.SimTree` (the analytic spanning tree with prismatic
 joints preferred) plus a list of :class:`Closure` records, one per
 loop-closing revolute joint, to be added at run time as PyBullet
 ``JOINT_POINT2POINT`` constraints.
@@ -12,7 +12,7 @@ loop-closing revolute joint, to be added at run time as PyBullet
   frame of a moving body sits at the point of its tree joint (the pin, the
   slider point, or the guide's line origin), with the body's orientation; at
   ``q = 0`` every body is at its reference pose (tree joint coordinates as in
-  :mod:`sim_models.tree`).
+  :mod:`sim_models.builders.tree`).
 * ``continuous`` joints about z, ``prismatic`` joints along the line.  URDF
   requires a ``<limit>`` on a prismatic joint; it is written with
   ``lower="1" upper="-1"``, which PyBullet reads as "no limit" (checked: the
@@ -20,7 +20,7 @@ loop-closing revolute joint, to be added at run time as PyBullet
   accelerations).
 * ``<inertial>`` blocks (load with ``URDF_USE_INERTIA_FROM_FILE``) with
   ``ixx = iyy = I/2, izz = I`` (a plane lamina); massless bodies get the
-  mass floor of :mod:`sim_models.tree`.  No ``<collision>``; thin ``box``
+  mass floor of :mod:`sim_models.builders.tree`.  No ``<collision>``; thin ``box``
   visuals along the bodies for the GUI.
 * Closure pivots are given in each link's **centre-of-mass frame** (what
   ``createConstraint`` expects for multibody links): ``point - com`` in body

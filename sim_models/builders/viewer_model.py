@@ -1,12 +1,12 @@
 """A MuJoCo model that moves on its own in a viewer: the harness's model plus its drive
 as an actuator and the assembled state as a keyframe.
 
-:func:`viewer_spec` takes :func:`sim_models.mjcf.build_mjcf` (unchanged: the verdict runs
+:func:`viewer_spec` takes :func:`sim_models.builders.mjcf.build_mjcf` (unchanged: the verdict runs
 use it as it is) and adds to the ``MjSpec``:
 
 * **the drive** as one ``general`` actuator ``drive`` on the driven joint.  The harness
   drives through the joint's huge armature A with ``qfrc_applied = A a`` (the prescribed
-  acceleration; :mod:`sim_models.mujoco_engine`); a file cannot set ``qfrc_applied``, so
+  acceleration; :mod:`sim_models.engines.mujoco.driven`); a file cannot set ``qfrc_applied``, so
   the actuator's bias applies that force, ``A a``.  For a constant-rate driver it also
   holds the prescribed rate w: force ``A a + k (w - qvel) + k ctrl`` with
   ``k = A / SPIN_UP`` (s), so a model started at rest (``MjData``'s default, as
@@ -28,7 +28,7 @@ constraint closes that in its time constant); the driven joint's rate is exact.
 
 Loads (``[[loads]]``) are applied by the harness through ``xfrc_applied`` each step and
 cannot be written into MJCF: a model file shows the motion, not the loads.  Neither can
-``invweight_scale`` (see :mod:`sim_models.models`): the file's loop constraints are
+``invweight_scale`` (see :mod:`sim_models.builders.model_files`): the file's loop constraints are
 MuJoCo's stock, softer ones.  Neither changes the driven joint's motion.
 """
 
@@ -160,7 +160,7 @@ def viewer_unavailable() -> str | None:
 def run_viewer(mech: Mechanism, settings: MujocoSettings | None = None,
                seconds: float | None = None, launch=None) -> str:
     """Open MuJoCo's viewer on the harness's own session of ``mech``
-    (:class:`sim_models.mujoco_engine.MujocoSession`: the drive through the armature and
+    (:class:`sim_models.engines.mujoco.driven.MujocoSession`: the drive through the armature and
     ``qfrc_applied``, loads through ``xfrc_applied``) and step it in real time from the
     assembled state; a limited input restarts from there at the end of its run.  Returns
     why it stopped.  ``launch``: the viewer's ``launch_passive`` (a test passes a stub);

@@ -1,10 +1,10 @@
 """Free motion in the engines: the released start, the harness's force elements, the
 one readout and energy function, and the run loop every engine's free session shares
-(issue 21; the result is :class:`sim_models.free_run.FreeEngineRun`).
+(issue 21; the result is :class:`sim_models.runs.free_run.FreeEngineRun`).
 
-A free session (:class:`FreeSession`, one per engine: :mod:`sim_models.mujoco_free`,
-:mod:`sim_models.pybullet_free`, :mod:`sim_models.exudyn_free`) is built from the
-compiled linkage (:class:`sim_models.tree.SimTree`) with no drive: no armature, no
+A free session (:class:`FreeSession`, one per engine: :mod:`sim_models.engines.mujoco.free`,
+:mod:`sim_models.engines.pybullet.free`, :mod:`sim_models.engines.exudyn.free`) is built from the
+compiled linkage (:class:`sim_models.builders.tree.SimTree`) with no drive: no armature, no
 prescribed motor, no drive constraint.  :func:`drive_free` releases it from the
 reference's exact state at t = 0 (:func:`free_start`: every body's pose and rate,
 mapped to the tree coordinates), steps it between the request's sample times
@@ -13,7 +13,7 @@ each sample (:meth:`FreeSession.read`: absolute body states, joint forces, the
 engine's motor effort).  Joint coordinates, energies and loop gap then come from
 :func:`free_readout`, the same function for every engine.
 
-Conventions: those of :mod:`sim_models.free_run` (SI, world axes; a joint coordinate
+Conventions: those of :mod:`sim_models.runs.free_run` (SI, world axes; a joint coordinate
 is ``theta_b - theta_a`` continuous over turns, or the slider's displacement along
 its line).
 """

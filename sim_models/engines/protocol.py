@@ -1,11 +1,11 @@
 """The engine protocol: settings, session, sampling plan, step schedule, recorder, run loop.
 
 Everything an engine author needs is importable from this module (the settings base and
-errors live in :mod:`sim_models.engine_settings`, the sampling plan and step schedule in
-:mod:`sim_models.sampling`, the recorder and :class:`EngineRun` in
-:mod:`sim_models.engine_run`; all re-exported here); an engine is one module
+errors live in :mod:`sim_models.engines.settings`, the sampling plan and step schedule in
+:mod:`sim_models.runs.sampling`, the recorder and :class:`EngineRun` in
+:mod:`sim_models.runs.engine_run`; all re-exported here); an engine is one module
 (``sim_models/<name>_engine.py``) with a settings class and a session class, plus one
-line in :mod:`sim_models.registry`.  Nothing here imports an engine library.
+line in :mod:`sim_models.engines.registry`.  Nothing here imports an engine library.
 
 Data flow (one compiled object passed down)::
 
@@ -21,7 +21,7 @@ Writing an engine
    speed-against-error grid, the worst error).  Field types are ``float``, ``int``,
    ``bool``, ``str`` or ``tuple[float, ...]`` so :meth:`EngineSettings.from_overrides`
    can build it from ``key=value`` strings (``xval compare --set steps_per_rev=1008``).
-   Give every field its accepted range in ``RANGES`` (:mod:`sim_models.ranges`): the
+   Give every field its accepted range in ``RANGES`` (:mod:`sim_models.engines.ranges`): the
    dataclass checks it on construction, for every door (``--set``, flags, baselines).
    Override :meth:`EngineSettings.max_step` when the step is not given as ``timestep``
    (e.g. by steps per revolution).
@@ -64,7 +64,7 @@ Writing an engine
    * class attributes ``name`` (registry name), ``settings_class`` and
      ``engine_readings`` (True when ``sample`` also fills the engine's own, unjudged
      readings ``rec.force_engine`` / ``rec.effort_engine``).
-3. **Registry**: one ``EngineEntry`` line in :data:`sim_models.registry.BUILTIN`.
+3. **Registry**: one ``EngineEntry`` line in :data:`sim_models.engines.registry.BUILTIN`.
 4. **Refusals**: raise :class:`EngineRefusal` (from ``__init__`` or ``reset``) when the
    engine cannot run this mechanism or motion, with one line saying why; never let an
    engine exception escape for a diverging simulation (return a reason instead).

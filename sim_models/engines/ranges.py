@@ -1,9 +1,9 @@
 """The accepted range of every engine setting and run-request value, defined once.
 
 Every door checks these: the settings dataclasses (``__post_init__`` of
-:class:`sim_models.engine_settings.EngineSettings`, so defaults, ``--set KEY=VALUE``,
+:class:`sim_models.engines.settings.EngineSettings`, so defaults, ``--set KEY=VALUE``,
 option flags such as ``--timestep`` and a baseline file's ``settings.fields`` all pass
-through it), :class:`sim_models.engine_run.RunRequest` (``--revolutions``,
+through it), :class:`sim_models.runs.engine_run.RunRequest` (``--revolutions``,
 ``--samples`` and a baseline file's ``request``) and the command line's option types
 (:mod:`reports.cli.options`, which reads the bounds from here).  A value outside its
 range is a setting the run cannot honour (an impossible physical value, or a run of

@@ -1,4 +1,5 @@
-"""The engine registry: name -> the module holding its :class:`~sim_models.engine_base.Session`.
+"""The engine registry: name -> the module holding its
+:class:`~sim_models.engines.protocol.Session`.
 
 Engines are found by name, never by ``if``/``elif`` on strings::
 
@@ -124,7 +125,8 @@ def available_engines() -> tuple[str, ...]:
 def get_engine(name: str) -> Engine:
     """The engine called ``name`` (imports its module; a missing optional library raises
     :class:`EngineUnavailableError` saying how to install it, any other missing engine
-    library :class:`~sim_models.tree.SimModelError` from the module's own import check)."""
+    library :class:`~sim_models.builders.tree.SimModelError` from the module's own import
+    check)."""
     try:
         entry = _REGISTRY[str(name).lower()]
     except KeyError:
@@ -150,7 +152,7 @@ def split_overrides(pairs, engines, classes=None) -> dict[str, dict[str, str]]:
     known to at least one; ``ENGINE.KEY`` goes to that engine only, and wins over a plain
     ``KEY`` whatever their order.  The same key given twice with different values is
     refused.  ``classes``: engine -> settings class (default the registered ones; the
-    free-motion runs pass theirs).  Raises :class:`~sim_models.engine_base.SettingsError`
+    free-motion runs pass theirs).  Raises :class:`~sim_models.engines.protocol.SettingsError`
     naming the bad item."""
     return _split(pairs, engines, classes)[0]
 
@@ -204,11 +206,11 @@ def settings_from_options(engines, pairs=(), options: Mapping[str, tuple[str, ob
     option flags ``options`` (``{"--timestep": ("timestep", 1e-4)}``; a ``None`` value
     is an option not given; applied where the engine has the field) and the ``--set``
     items ``pairs``.  One door for every source: each value passes the settings
-    class's ranges (:mod:`sim_models.ranges`), and the error names what the user typed
+    class's ranges (:mod:`sim_models.engines.ranges`), and the error names what the user typed
     (``--set mujoco.iterations=-5: ...``, ``argument --timestep: ...``).  A flag and a
     ``--set`` item for the same setting are refused (no silent precedence).
     ``classes``: engine -> settings class where it is not the registered one (the
-    free-motion settings, :func:`sim_models.free_engine.free_session_class`)."""
+    free-motion settings, :func:`sim_models.runs.free.free_session_class`)."""
     from .protocol import SettingsError
     classes = dict(classes or {e: get_engine(e).settings_class for e in engines})
     per, origin = _split(pairs, engines, classes)

@@ -1,5 +1,5 @@
 """Engine settings (the base every engine's settings dataclass subclasses) and the typed
-errors of the engine layer.  See :mod:`sim_models.engine_base` for the protocol."""
+errors of the engine layer.  See :mod:`sim_models.engines.protocol` for the protocol."""
 
 from __future__ import annotations
 
@@ -46,15 +46,16 @@ class EngineSettings:
 
     timestep: float = 1e-3
 
-    #: The accepted range of each field (:mod:`sim_models.ranges`): a
-    #: :class:`~sim_models.ranges.Range`, a :class:`~sim_models.ranges.Choice`, or a
+    #: The accepted range of each field (:mod:`sim_models.engines.ranges`): a
+    #: :class:`~sim_models.engines.ranges.Range`, a :class:`~sim_models.engines.ranges.Choice`, or a
     #: tuple of ranges for a tuple field.  Subclasses extend it (``{**EngineSettings.
     #: RANGES, ...}``); every field must have one (:meth:`validate`).
     RANGES: ClassVar[Mapping[str, object]] = {"timestep": ranges.TIMESTEP}
     #: The registry name, for messages (``engine 'mujoco' setting ...``).
     engine_name: ClassVar[str] = ""
-    #: The arithmetic the engine's solver computes in (:mod:`sim_models.precision`):
-    #: float64 claims no error floor; a float32 engine sets :data:`~sim_models.precision.FLOAT32`.
+    #: The arithmetic the engine's solver computes in (:mod:`sim_models.runs.precision`):
+    #: float64 claims no error floor; a float32 engine sets
+    #: :data:`~sim_models.runs.precision.FLOAT32`.
     arithmetic: ClassVar[Arithmetic] = FLOAT64
 
     def __post_init__(self):
@@ -127,14 +128,14 @@ class EngineSettings:
 
     # -- use --------------------------------------------------------------------
     def max_step(self, plan) -> float:
-        """Largest step (s) for ``plan`` (a :class:`sim_models.sampling.Plan`: e.g.
+        """Largest step (s) for ``plan`` (a :class:`sim_models.runs.sampling.Plan`: e.g.
         ``plan.rev_time / steps_per_rev``); default :attr:`timestep`."""
         return float(self.timestep)
 
     def error_floor(self, steps: int, condition: float) -> float:
         """The error (normalised by the quantity's peak) this engine's arithmetic cannot
         go below in a run of ``steps`` steps (0: one solve) at a sample of loop
-        condition number ``condition`` (:meth:`sim_models.precision.Arithmetic.floor`;
+        condition number ``condition`` (:meth:`sim_models.runs.precision.Arithmetic.floor`;
         0.0 for float64).  The comparison reads an error above the tolerance but within
         this floor as a precision limit, not a failure."""
         return self.arithmetic.floor(steps, condition)

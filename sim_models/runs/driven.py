@@ -9,9 +9,9 @@
     r2 = rerun(r)                                       # the same run again, exactly
     f = instantaneous(tree, "mujoco", values=[0.5, 1.0])
 
-Every run goes through :func:`sim_models.engine_base.drive` (the one run loop) with the
-engine's :class:`~sim_models.engine_base.Session` from :mod:`sim_models.registry`; the
-sampling conventions are in :mod:`sim_models.engine_base`.
+Every run goes through :func:`sim_models.engines.protocol.drive` (the one run loop) with the
+engine's :class:`~sim_models.engines.protocol.Session` from :mod:`sim_models.engines.registry`; the
+sampling conventions are in :mod:`sim_models.engines.protocol`.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         max_violation: float = RunRequest.max_violation,
         max_speed_error: float = RunRequest.max_speed_error, chords: str = RunRequest.chords,
         plan: Plan | None = None) -> EngineRun:
-    """Simulate the linkage in ``engine`` and sample it (see :mod:`sim_models.engine_base`).
+    """Simulate the linkage in ``engine`` and sample it (see :mod:`sim_models.engines.protocol`).
 
     Parameters
     ----------
@@ -65,7 +65,7 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         The compiled linkage (:class:`SimTree`, from :func:`compile_linkage`) or a
         description (compiled here, with ``chords``).
     engine
-        A registered engine name (:func:`sim_models.registry.engine_names`).
+        A registered engine name (:func:`sim_models.engines.registry.engine_names`).
     settings
         The engine's settings object (default: its recommended settings).
     revolutions, samples
@@ -79,7 +79,7 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         :func:`plan_samples`.
 
     Raises :class:`EngineRefusal` when the engine cannot run this motion and
-    :class:`SettingsError` for a request outside :mod:`sim_models.ranges`; a diverging
+    :class:`SettingsError` for a request outside :mod:`sim_models.engines.ranges`; a diverging
     simulation is a run with ``ok = False``, never an exception.
     """
     # the request first: a value out of range is refused before anything is built
@@ -137,8 +137,8 @@ def instantaneous(mech: Mechanism | SimTree, engine: str,
 def time_engine(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None,
                 h: float, n: int, repeats: int = 3) -> float:
     """Steps per second of ``n`` bare steps of ``h`` s (the session's own
-    :meth:`~sim_models.engine_base.Session.advance`, the loop the runs use, without
-    readout), best of ``repeats``: :func:`sim_models.engine_base.time_steps`."""
+    :meth:`~sim_models.engines.protocol.Session.advance`, the loop the runs use, without
+    readout), best of ``repeats``: :func:`sim_models.engines.protocol.time_steps`."""
     with open_session(mech, engine, settings) as session:
         return time_steps(session, h, n, repeats)
 

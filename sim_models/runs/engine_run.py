@@ -1,5 +1,5 @@
 """The results of an engine run: the :class:`Recorder` sessions fill and the
-:class:`EngineRun` it becomes (analytic conventions; see :mod:`sim_models.engine_base`)."""
+:class:`EngineRun` it becomes (analytic conventions; see :mod:`sim_models.engines.protocol`)."""
 
 from __future__ import annotations
 
@@ -235,8 +235,8 @@ class RunRequest:
     mode: str = "run"               # "run" or "instantaneous"
 
     def __post_init__(self):
-        """Every value within :mod:`sim_models.ranges` (the command line's ranges):
-        :class:`~sim_models.engine_settings.SettingsError` naming the key otherwise."""
+        """Every value within :mod:`sim_models.engines.ranges` (the command line's ranges):
+        :class:`~sim_models.engines.settings.SettingsError` naming the key otherwise."""
         for key, rng in self.ranges().items():
             value = getattr(self, key)
             problem = rng.problem(value)
@@ -261,7 +261,7 @@ class EngineRun:
     ``mechanism``, ``settings`` (the settings object) and ``request`` re-run it exactly:
     :func:`rerun`.  ``settings_text`` is ``settings.describe()``.  ``linkage`` is the
     compiled analytic :class:`~analytic.Linkage` the run was made from (the
-    :class:`~sim_models.tree.SimTree`'s own object, ``linkage.mech is mechanism``): the
+    :class:`~sim_models.builders.tree.SimTree`'s own object, ``linkage.mech is mechanism``): the
     comparison reads its reference from it and never builds another.
     """
 

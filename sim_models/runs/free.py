@@ -7,7 +7,7 @@ engine from the exact reference state and returns its :class:`FreeEngineRun`.
     r = run_free(load_case("iftomm-a01-pendulum"), "mujoco", request=FreeRequest(2.0))
 
 Each engine's free session lives beside its prescribed one (:data:`FREE_SESSIONS`);
-the run loop, readout and energy are :mod:`sim_models.free_base` (one for all).
+the run loop, readout and energy are :mod:`sim_models.engines.free_protocol` (one for all).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ FREE_SESSIONS: dict[str, tuple[str, str]] = {
 
 def free_engine_names() -> tuple[str, ...]:
     """The engines with a free-motion run (an optional engine whose library is not
-    installed is left out: :func:`sim_models.registry.skipped_engines`)."""
+    installed is left out: :func:`sim_models.engines.registry.skipped_engines`)."""
     return tuple(n for n in FREE_SESSIONS if n not in skipped_engines())
 
 

@@ -9,7 +9,7 @@ energy, loop gap beyond ``max_gap`` of the size, wall-clock limit) the run ends 
 ``ok = False``, ``t_fail`` and ``reason``, and every later sample row is NaN ("not
 measured from t on").  Nothing raises for a diverging simulation.
 
-Conventions (as :class:`analytic.free_motion.FreeSamples` and :mod:`sim_models.engine_base`;
+Conventions (as :class:`analytic.free_motion.FreeSamples` and :mod:`sim_models.engines.protocol`;
 SI, world axes):
 
 * ``x, xd`` (N, J): every joint's coordinate and rate, in the order of
@@ -25,13 +25,13 @@ SI, world axes):
   for every engine), so energy drift is the engine's, not a convention's;
 * ``motor_effort_engine`` (N,) or None: the engine's own effort on the motor joint
   (N m or N), unjudged where the engine applies the harness's value;
-* ``extra`` (filled by :func:`sim_models.free_base.drive_free`): ``native`` (which force
+* ``extra`` (filled by :func:`sim_models.engines.free_protocol.drive_free`): ``native`` (which force
   elements are the engine's own, which the harness applies), ``energy_scale`` and
   ``E0`` (J: the reference's scale and initial energy, the drift's yardstick),
   ``motor_effort_source`` (``"engine"``: an actuator's own reading; ``"harness"``: the
   value applied), ``start_q``/``start_qd`` (the released state in tree coordinates).
 
-Runs come from :func:`sim_models.free_engine.run_free`.
+Runs come from :func:`sim_models.runs.free.run_free`.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ class FreeRequest:
     wall_limit: float = 120.0
 
     def __post_init__(self):
-        """``wall_limit`` within :data:`sim_models.ranges.WALL_LIMIT` (the command
+        """``wall_limit`` within :data:`sim_models.engines.ranges.WALL_LIMIT` (the command
         line's ``--wall-limit`` range): :class:`SettingsError` naming it otherwise."""
         problem = WALL_LIMIT.problem(self.wall_limit)
         if problem:

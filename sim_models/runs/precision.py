@@ -1,7 +1,7 @@
 """An engine's arithmetic and the error floor it sets (:class:`Arithmetic`).
 
 An engine's settings declare the arithmetic its solver computes in
-(:attr:`sim_models.engine_settings.EngineSettings.arithmetic`).  A float64 engine claims
+(:attr:`sim_models.engines.settings.EngineSettings.arithmetic`).  A float64 engine claims
 no floor: its round-off (``u64 = 1.1e-16`` per operation) lies ten orders of magnitude
 below any tolerance this harness applies, so its verdict is pass or FAIL.  A float32
 engine (MuJoCo Warp) has a floor that can reach a tolerance: the verdict reads

@@ -1,5 +1,5 @@
 """The sampling plan and step schedule shared by every engine (see
-:mod:`sim_models.engine_base`): when a run is sampled, and the steps that land on every
+:mod:`sim_models.engines.protocol`): when a run is sampled, and the steps that land on every
 sample time."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Every door of an engine setting or run request goes through the same ranges
-(sim_models/ranges.py): ``--set``, the option flags, a baseline file, the pytest
+(sim_models/engines/ranges.py): ``--set``, the option flags, a baseline file, the pytest
 plugin's option.  Each impossible value is one line, status 2, naming what the user
 typed (the option, or the file, run and key), and no engine runs.  The table of
 impossible values is tests/sim_models/engines/test_settings_ranges.py's; the baseline

@@ -1,6 +1,6 @@
 """Exudyn backend: the linkage as an index-3 DAE, joint reactions from its multipliers.
 
-Model (built from the compiled linkage, :class:`sim_models.tree.SimTree`)
+Model (built from the compiled linkage, :class:`sim_models.builders.tree.SimTree`)
 -------------------------------------------------------------------------
 * one ``NodeRigidBody2D`` + ``ObjectRigidBody2D`` per moving body, the node at the
   body's centre of mass and turned with the body frame (coordinates ``[x_G, y_G,
@@ -33,7 +33,7 @@ Model (built from the compiled linkage, :class:`sim_models.tree.SimTree`)
 
 Solver: ``MainSolverImplicitSecondOrder`` (generalized-alpha, index 3), full Newton
 with a 1e-10 tolerance, dense linear solver, stepped interval by interval with
-``SolveSteps`` (the step schedule of :func:`sim_models.engine_base.drive`).
+``SolveSteps`` (the step schedule of :func:`sim_models.engines.protocol.drive`).
 The initial state (reset, and the instantaneous mode's ``forward_at``) takes positions
 and velocities from the analytic solution and the accelerations and multipliers from
 Exudyn's own initial-value solve of its equations.  That solve omits the second
@@ -43,7 +43,7 @@ solved with Exudyn's own mass matrix and constraint Jacobian at that state (see
 ``_with_drive_acceleration``).  At the exact state this agrees with the analytic
 solution to 1e-8..1.2e-6 of peak for every built-in case (the instantaneous mode).
 
-Readout (conventions of :mod:`sim_models.engine_base`), from the multipliers
+Readout (conventions of :mod:`sim_models.engines.protocol`), from the multipliers
 ``lambda`` (``GetAECoordinates``) with the signs measured against the analytic
 solution (``/work/notes/exudyn_scratch``; an error of the wrong sign would be of
 the order of the peak, the measured ones are 1e-5):

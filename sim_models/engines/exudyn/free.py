@@ -1,6 +1,6 @@
 """Exudyn released (free motion): :class:`ExudynFreeSession`, :class:`ExudynFreeSettings`.
 
-The prescribed model (:mod:`sim_models.exudyn_engine`: one ``ObjectRigidBody2D`` per
+The prescribed model (:mod:`sim_models.engines.exudyn.driven`: one ``ObjectRigidBody2D`` per
 moving body, every joint a constraint, index-3 generalized-alpha) without the drive
 constraint, and the description's force elements as Exudyn's own items:
 
@@ -43,7 +43,7 @@ from .driven import ExudynSession, ExudynSettings, _perp, _rot, require_exudyn
 class ExudynFreeSettings(EngineSettings):
     """Exudyn's recommended free-motion settings (generalized-alpha, index 3, full
     Newton).  ``timestep`` s; ``spectral_radius`` rho_inf; ``newton_tolerance``
-    relative and absolute (as :class:`sim_models.exudyn_engine.ExudynSettings`).
+    relative and absolute (as :class:`sim_models.engines.exudyn.driven.ExudynSettings`).
 
     Evidence (``benchmarks/free_engine_grid.py grid``; worst joint-coordinate error
     relative to its range, energy drift relative to the energy scale, stepping CPU s

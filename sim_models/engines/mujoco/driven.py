@@ -1,7 +1,7 @@
 """MuJoCo behind the engine protocol (:class:`MujocoSession`, :class:`MujocoSettings`).
 
-Model: :func:`sim_models.mjcf.build_mjcf` (typed ``MjSpec`` calls), the scene variant of
-``settings.scene`` (:mod:`sim_models.mujoco_scene`), compiled with the inverse weights
+Model: :func:`sim_models.builders.mjcf.build_mjcf` (typed ``MjSpec`` calls), the scene variant of
+``settings.scene`` (:mod:`sim_models.engines.mujoco.scene`), compiled with the inverse weights
 scaled by ``settings.invweight_scale``.
 
 Quirks kept here

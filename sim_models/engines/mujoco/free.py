@@ -1,6 +1,6 @@
 """MuJoCo released (free motion): :class:`MujocoFreeSession`, :class:`MujocoFreeSettings`.
 
-The prescribed model (:func:`sim_models.mjcf.build_mjcf`: the spanning tree, loops
+The prescribed model (:func:`sim_models.builders.mjcf.build_mjcf`: the spanning tree, loops
 closed by ``connect`` equalities) with the drive taken out (the driven joint's
 armature 0, no ``qfrc_applied``), and the description's force elements built as
 MuJoCo's own:
@@ -55,7 +55,7 @@ from .driven import MujocoSession
 @dataclass(frozen=True)
 class MujocoFreeSettings(EngineSettings):
     """MuJoCo's recommended free-motion settings (the fields of
-    :class:`sim_models.mjcf.MujocoSettings` that a released model uses).
+    :class:`sim_models.builders.mjcf.MujocoSettings` that a released model uses).
 
     Evidence (``benchmarks/free_engine_grid.py grid``; worst joint-coordinate error
     over the run relative to its range, energy drift relative to the energy scale,

@@ -1,7 +1,7 @@
 """MuJoCo Warp behind the engine protocol (:class:`MujocoWarpSession`, :class:`MujocoWarpSettings`).
 
-The project's MuJoCo model (:func:`sim_models.mjcf.build_mjcf`, compiled by
-:func:`sim_models.mjcf.compile_spec`: the very ``MjModel`` the ``mujoco`` engine steps,
+The project's MuJoCo model (:func:`sim_models.builders.mjcf.build_mjcf`, compiled by
+:func:`sim_models.builders.mjcf.compile_spec`: the very ``MjModel`` the ``mujoco`` engine steps,
 inverse weights scaled by ``invweight_scale``) is put on a Warp device with
 ``mujoco_warp.put_model`` / ``put_data`` (one world) and stepped by ``mujoco_warp.step``
 in Warp's kernels: **float32** (MuJoCo Warp has no float64 mode: its kernels are
@@ -131,7 +131,7 @@ def constraint_rows(mujoco, m) -> int:
     silently** (``d.overflow`` flagged, a printf only when ``warn_overflow`` asks);
     its default ``njmax`` is sized for contacts (64 for these models whatever their
     loops), so without this A02 at N >= 22 (66 loop rows) lost loop rows.  Contacts
-    are off in the project's models (:func:`sim_models.mjcf.compile_spec`); a model
+    are off in the project's models (:func:`sim_models.builders.mjcf.compile_spec`); a model
     with contacts on is refused rather than guessed at."""
     if not m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):
         raise EngineRefusal("MuJoCo Warp: contacts are on in this model; the harness sizes "
@@ -169,7 +169,7 @@ class MujocoWarpSettings(EngineSettings):
       seed-four-bar 3.8e-4 / 2.8e-4 / 2.6e-4, inverted-slider-crank 4.8e-4 / 4.4e-4 /
       5.3e-4, seed-slider-crank 8.4e-5 / 8.9e-5 / 2.8e-4.  At 576 (and the 2.5 ms cap)
       every built-in case is within 1e-3 (README, "MuJoCo Warp"); at 2304 the float32
-      rounding dominates (error / (u32 steps condition) 0.6-3.0: :mod:`sim_models.precision`).
+      rounding dominates (error / (u32 steps condition) 0.6-3.0: :mod:`sim_models.runs.precision`).
     * **RK4** (with ``fresh_jdotv``): Euler at dt 2.5e-4 left 1.7e-3 on the seed
       four-bar (MuJoCo's Euler 1.4e-3 there); stock RK4 lost the 200 rad/s slider-crank's
       loop.
@@ -186,7 +186,7 @@ class MujocoWarpSettings(EngineSettings):
     steps_per_rev
         The step is the smaller of ``timestep`` and one revolution / ``steps_per_rev``.
     timestep, integrator, solref, solimp, iterations, armature, invweight_scale
-        As :class:`sim_models.mjcf.MujocoSettings` (the same model is built).
+        As :class:`sim_models.builders.mjcf.MujocoSettings` (the same model is built).
     tolerance
         Constraint solver tolerance (MuJoCo Warp raises its default to >= 1e-6 for
         float32; the session writes this value back).
@@ -220,7 +220,7 @@ class MujocoWarpSettings(EngineSettings):
     device: str = "auto"
 
     engine_name: ClassVar[str] = "mujoco_warp"
-    #: float32 kernels: the error floor of :mod:`sim_models.precision`
+    #: float32 kernels: the error floor of :mod:`sim_models.runs.precision`
     arithmetic: ClassVar = FLOAT32
     RANGES: ClassVar[Mapping[str, object]] = {
         **{k: MujocoSettings.RANGES[k] for k in ("timestep", "solref", "solimp", "iterations",
@@ -278,7 +278,7 @@ class WarpStepping:
     ``self.data``, ``self.mj``) put on a Warp device and stepped there: the device, the
     captured step and sample graphs, the stale-``Jdot v`` and stale-force workarounds.
     Shared by the prescribed (:class:`MujocoWarpSession`) and the released
-    (:class:`sim_models.mujoco_warp_free.MujocoWarpFreeSession`) sessions; the settings
+    (:class:`sim_models.engines.mujoco_warp.free.MujocoWarpFreeSession`) sessions; the settings
     carry ``solver``, ``tolerance``, ``fresh_jdotv`` and ``device``."""
 
     def _put_warp(self) -> None:

@@ -1,10 +1,10 @@
 """MuJoCo Warp released (free motion): :class:`MujocoWarpFreeSession`,
 :class:`MujocoWarpFreeSettings`.
 
-The released MuJoCo model of :mod:`sim_models.mujoco_free` (the same build: no drive,
+The released MuJoCo model of :mod:`sim_models.engines.mujoco.free` (the same build: no drive,
 the description's springs, dampers and motors as MuJoCo's tendons and actuators,
 gravity MuJoCo's, constant loads harness-applied each step) put on a Warp device and
-stepped by MuJoCo Warp in **float32** (:class:`sim_models.mujoco_warp_engine.
+stepped by MuJoCo Warp in **float32** (:class:`sim_models.engines.mujoco_warp.driven.
 WarpStepping`: the step captured as a Warp graph, ``Jdot v`` refreshed before each RK4
 stage).  Motor controls and moving loads are written to Warp's data before each step
 (harness side, as in MuJoCo's free session).
@@ -36,8 +36,8 @@ from .driven import WarpStepping, require_warp
 @dataclass(frozen=True)
 class MujocoWarpFreeSettings(MujocoFreeSettings):
     """MuJoCo Warp's free-motion settings: MuJoCo's released model
-    (:class:`sim_models.mujoco_free.MujocoFreeSettings`) and Warp's own fields (as
-    :class:`sim_models.mujoco_warp_engine.MujocoWarpSettings`).
+    (:class:`sim_models.engines.mujoco.free.MujocoFreeSettings`) and Warp's own fields (as
+    :class:`sim_models.engines.mujoco_warp.driven.MujocoWarpSettings`).
 
     Evidence (seed four-bar released under gravity for 2 s, 200 samples; worst error of
     range, CPU s per simulated s on the shared 2-core machine):

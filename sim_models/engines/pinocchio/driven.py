@@ -1,6 +1,6 @@
 """Pinocchio behind the engine protocol: rigid loop constraints, reactions from multipliers.
 
-Model (built through Pinocchio's API from :class:`sim_models.tree.SimTree`)
+Model (built through Pinocchio's API from :class:`sim_models.builders.tree.SimTree`)
 --------------------------------------------------------------------------
 * one Pinocchio joint per tree joint, added **depth first** (every subtree's joints
   contiguous, which ``crba`` and the Cholesky of ``constraintDynamics`` assume; see
@@ -50,7 +50,7 @@ semi-implicit Euler (``v += h a; q += h v``).  Drift of the loop closures is hel
 Pinocchio's Baumgarte corrector on each constraint (``Kp = omega^2``, ``Kd = 2 omega``,
 ``omega = baumgarte / h``: critically damped, a fixed fraction of the step).
 
-Readout (conventions of :mod:`sim_models.engine_base`), sampled by state: at each
+Readout (conventions of :mod:`sim_models.engines.protocol`), sampled by state: at each
 stop the accelerations and multipliers of ``constraintDynamics`` at the integrated
 ``q, v``, with the Baumgarte corrector off (the dynamics at the state, as MuJoCo
 samples by ``mj_forward`` and Exudyn by state; with it on the seed four-bar's samples

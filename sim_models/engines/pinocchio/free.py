@@ -1,13 +1,13 @@
 """Pinocchio released (free motion): :class:`PinocchioFreeSession`, :class:`PinocchioFreeSettings`.
 
-The prescribed model (:class:`sim_models.pinocchio_engine.PinocchioSession`: the tree of
+The prescribed model (:class:`sim_models.engines.pinocchio.driven.PinocchioSession`: the tree of
 ``JointModelRZ`` / ``JointModelPrismaticUnaligned`` joints added depth first, the loops
 closed by ``CONTACT_3D`` rigid constraints, ``constraintDynamics`` with the proximal
 solver) with no drive: every evaluation is one ``constraintDynamics`` call with the
 joint forces ``tau`` of the loads and force elements.  Gravity is ``model.gravity``.
 Pinocchio has no spring, damper or motor element, and ``constraintDynamics`` takes no
 external forces, so the harness applies the description's springs, dampers and motors
-(:class:`sim_models.free_base.ElementLoads`, world wrenches about each centre of mass
+(:class:`sim_models.engines.free_protocol.ElementLoads`, world wrenches about each centre of mass
 from the bodies' state) as joint forces ``J^T f`` (two RNEA calls) at **every dynamics
 evaluation**, i.e. at each RK4 stage with the stage's state and time: the elements are
 integrated to the scheme's own order.
@@ -39,7 +39,7 @@ from .driven import PinocchioSession, PinocchioSettings, _couple, _v3
 @dataclass(frozen=True)
 class PinocchioFreeSettings(EngineSettings):
     """Pinocchio's recommended free-motion settings (fields as
-    :class:`sim_models.pinocchio_engine.PinocchioSettings`, without ``steps_per_rev``:
+    :class:`sim_models.engines.pinocchio.driven.PinocchioSettings`, without ``steps_per_rev``:
     a free run has no revolution).
 
     Evidence: ``tests/sim_models/engines/test_free_engines.py`` and the README "Pinocchio"

@@ -1,6 +1,6 @@
 """PyBullet behind the engine protocol (:class:`PybulletSession`, :class:`PybulletSettings`).
 
-Model: the URDF of :func:`sim_models.urdf.build_urdf` loaded with a fixed base
+Model: the URDF of :func:`sim_models.builders.urdf.build_urdf` loaded with a fixed base
 and ``URDF_USE_INERTIA_FROM_FILE``; loops closed with ``JOINT_POINT2POINT``
 constraints (parent = body_a's link, child = body_b's link, pivots in the
 centre-of-mass frames), ``maxForce`` large.  Per ENGINE_NOTES.md: default
@@ -26,7 +26,7 @@ the motor torque are impulses / dt of a step, i.e. averages over it; by
 default (``average_impulses``) the mean of the readings of steps n-1 and n
 is taken as the value at the start of step n (second order in dt instead of
 first).  Tree-joint forces and the drive effort are **reconstructed by
-Newton-Euler** (:mod:`sim_models.newton_euler`) from those accelerations and
+Newton-Euler** (:mod:`sim_models.runs.newton_euler`) from those accelerations and
 loop forces, because PyBullet's ``jointReactionForces`` is wrong for joints
 whose parent moves (off by up to 0.94 of peak, ENGINE_NOTES.md); the
 engine's own readings are kept in ``joint_force_engine`` (jointFeedbackMode

@@ -1,11 +1,11 @@
 """PyBullet released (free motion): :class:`PybulletFreeSession`, :class:`PybulletFreeSettings`.
 
-The prescribed model (:class:`sim_models.pybullet_engine.PybulletSim`: the URDF tree,
+The prescribed model (:class:`sim_models.engines.pybullet.driven.PybulletSim`: the URDF tree,
 loops closed by ``JOINT_POINT2POINT`` constraints, ERP-stabilised) with every joint's
 motor switched off (``VELOCITY_CONTROL`` with force 0, as loaded) and no drive.
 Gravity is PyBullet's.  PyBullet has no spring, damper or motor element between two
 bodies, so the harness applies them **every step**: from the joint states (tree
-coordinates) it computes each element's force (:class:`sim_models.free_base.
+coordinates) it computes each element's force (:class:`sim_models.engines.free_protocol.
 ElementLoads`) and applies it with ``applyExternalForce`` at the body's centre of
 mass and ``applyExternalTorque`` (world frame); constant loads as in the prescribed
 runs.  PyBullet clears external forces after each step, and the element forces are
@@ -16,9 +16,9 @@ about half a step behind them, so the velocity is ``v_n + (v_n - v_{n-1}) / 2`` 
 the acceleration ``2 a_{n-1/2} - a_{n-3/2}`` from the last three velocities (both
 second order; the prescribed runs step once more instead, which a free run cannot
 undo).  Tree-joint forces by Newton-Euler from these accelerations and the loops'
-constraint forces (:func:`sim_models.newton_euler.reconstruct`), with the
+constraint forces (:func:`sim_models.runs.newton_euler.reconstruct`), with the
 harness-applied element forces taken out of each subtree
-(:func:`sim_models.free_base.subtree_correction`).  At t = 0, before any step, PyBullet
+(:func:`sim_models.engines.free_protocol.subtree_correction`).  At t = 0, before any step, PyBullet
 has no acceleration and no constraint force (it reads 0): alpha and the joint forces of
 that sample are NaN (not measured).
 
@@ -64,7 +64,7 @@ class PybulletFreeSettings(EngineSettings):
     timestep
         Step, s (shortened so samples fall on steps).  Semi-implicit Euler: first order.
     solver_iterations, residual_threshold, erp
-        As :class:`sim_models.pybullet_engine.PybulletSettings` (the loop constraints'
+        As :class:`sim_models.engines.pybullet.driven.PybulletSettings` (the loop constraints'
         solver sweeps, early stop, error-reduction parameter).
     max_joint_velocity
         PyBullet's speed clamp of every joint, rad/s or m/s.

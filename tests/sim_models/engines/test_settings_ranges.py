@@ -1,4 +1,4 @@
-"""One range per setting (sim_models/ranges.py), checked by the settings dataclasses and
+"""One range per setting (sim_models/engines/ranges.py), checked by the settings dataclasses and
 RunRequest themselves: every field of every engine's settings has an impossible value
 here that is refused, the ends of each range are accepted, and the settings the studies
 use are inside.  The command-line and baseline doors are in

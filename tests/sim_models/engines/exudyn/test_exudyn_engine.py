@@ -268,7 +268,7 @@ def test_prismatic_driver_on_a_moving_guide_is_refused():
 
 def test_failed_newton_is_a_failed_run_not_an_exception():
     """A Newton tolerance at round-off cannot be met: the run ends with a reason.  1e-15
-    is the smallest the settings accept (1e-30 is refused, sim_models/ranges.py); the
+    is the smallest the settings accept (1e-30 is refused, sim_models/engines/ranges.py); the
     seed four-bar's Newton fails there at 120 deg (measured; 1e-14 passes)."""
     s = get_engine("exudyn").settings({"newton_tolerance": "1e-15"})
     r = run(load_case("seed-four-bar"), "exudyn", s, revolutions=1, samples=6)
