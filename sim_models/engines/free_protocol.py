@@ -35,6 +35,7 @@ from analytic.motion_spec import JointSpring, PointDamper, PointSpring
 from ..builders.tree import SimTree, wrap
 from ..runs.engine_run import loop_gaps
 from ..runs.free_run import FreeEngineRun, FreeRequest
+from .protocol import best_step_rate
 from .settings import EngineRefusal, EngineSettings
 
 
@@ -503,22 +504,7 @@ def time_free_steps(session: FreeSession, s0: FreeStart, h: float, n: int,
                     repeats: int = 3) -> float:
     """Steps per second of ``n`` bare :meth:`FreeSession.advance` steps from the
     released state (no readout), best of ``repeats``: what the speed study times."""
-    best = 0.0
-    chunk = max(1, min(n, 200))
-    for _ in range(max(1, repeats)):
-        session.start(s0, h)
-        done, t = 0, 0.0
-        t0 = time.perf_counter()
-        while done < n:
-            k = min(chunk, n - done)
-            why = session.advance(t, h, k)
-            done, t = done + k, t + k * h
-            if why is not None:
-                break
-        el = time.perf_counter() - t0
-        if el > 0:
-            best = max(best, done / el)
-    return best
+    return best_step_rate(lambda: session.start(s0, h), session.advance, h, n, repeats)
 
 
 def subtree_correction(tree: SimTree, force: np.ndarray, F: np.ndarray) -> np.ndarray:

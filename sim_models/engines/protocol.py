@@ -483,15 +483,22 @@ def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
     """Steps per second of ``n`` bare steps (:meth:`Session.advance`, no readout) from
     the analytic reference state, best of ``repeats``: what the speed studies time.  A
     loop that diverges is timed up to that point."""
+    return best_step_rate(lambda: session.reset(0.0, h), session.advance, h, n, repeats)
+
+
+def best_step_rate(start, advance, h: float, n: int, repeats: int = 3) -> float:
+    """Steps per second of ``n`` bare steps ``advance(t, h, k)`` (in chunks of at most
+    200, stopping where it returns a reason) after ``start()``, best of ``repeats``: the
+    one timing loop of the driven (:func:`time_steps`) and the released runs."""
     best = 0.0
     chunk = max(1, min(n, 200))
     for _ in range(max(1, repeats)):
-        session.reset(0.0, h)
+        start()
         done, t = 0, 0.0
         t0 = time.perf_counter()
         while done < n:
             k = min(chunk, n - done)
-            why = session.advance(t, h, k)
+            why = advance(t, h, k)
             done += k
             t += k * h
             if why is not None:
@@ -504,7 +511,8 @@ def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
 
 __all__ = ["HUGE", "LIMITED_RANGE_CONDITION", "EngineRefusal", "EngineRun", "EngineSettings",
            "Plan", "Recorder", "RunRequest", "Session", "SettingsError", "check_motion",
-           "RAW_BLOCK", "check_raw_state", "check_state", "compile_linkage", "drive", "finish",
+           "RAW_BLOCK", "best_step_rate", "check_raw_state", "check_state", "compile_linkage",
+           "drive", "finish",
            "first_divergence", "fmt_value", "loop_gap", "loop_gaps", "periodic_plan",
            "plan_samples", "reversal_time", "step_schedule", "steps_to", "time_of",
            "time_steps", "times_plan", "travel_time"]

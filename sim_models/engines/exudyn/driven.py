@@ -311,26 +311,36 @@ class ExudynSession(Session):
 
     # ------------------------------------------------------------------ model
     def _build(self):
+        self._add_drive(self._new_system())
+        self._add_loads()
+        self._assemble()
+        self.drive_ae = int(self.mbs.systemData.GetObjectLTGAE(self.drive_obj)[0])
+
+    def _new_system(self):
+        """A new Exudyn system holding the ground, the bodies in the reference pose and the
+        joints: what the driven and the released sessions share.  Returns the ground
+        node (the drive's, or the released run's rotation markers')."""
         exu, st = self.exu, self.tree
         from exudyn import itemInterface as ii
-        mech = st.mech
         self.SC = exu.SystemContainer()
         mbs = self.mbs = self.SC.AddSystem()
         self.g = st.ground
         self.ground_obj = mbs.AddObject(ii.ObjectGround())
         ground_node = mbs.AddNode(ii.NodePointGround())
-        kin = st.kin_ref
-        self._add_bodies(mbs, kin)
-        self.joint_obj = [self._add_joint(jt) for jt in mech.joints]
-        self._add_drive(ground_node)
-        self._add_loads()
+        self._add_bodies(mbs, st.kin_ref)
+        self.joint_obj = [self._add_joint(jt) for jt in st.mech.joints]
+        return ground_node
+
+    def _assemble(self) -> None:
+        """Assemble the system and index it: each body's ODE2 coordinates and reference
+        coordinates, each joint's multipliers, the ODE2 size."""
+        mbs = self.mbs
         mbs.Assemble()
         sd = mbs.systemData
         self.ltg = {b: np.array(sd.GetNodeLTGODE2(n)) for b, n in self.node.items()}
         self.ref = {b: np.array(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
                     for b, n in self.node.items()}
         self.joint_ae = [np.array(sd.GetObjectLTGAE(o)) for o in self.joint_obj]
-        self.drive_ae = int(sd.GetObjectLTGAE(self.drive_obj)[0])
         self.n_ode2 = sd.ODE2Size()
 
     def _body_mass(self, b: int, body) -> tuple[float, float]:

@@ -113,26 +113,10 @@ class ExudynFreeSession(ExudynSession, FreeSession):
         return float(body.mass), float(body.inertia)
 
     def _build(self):
-        exu, st = self.exu, self.tree
-        from exudyn import itemInterface as ii
-        mech = st.mech
-        self.SC = exu.SystemContainer()
-        mbs = self.mbs = self.SC.AddSystem()
-        self.g = st.ground
-        self.ground_obj = mbs.AddObject(ii.ObjectGround())
-        self.ground_node = mbs.AddNode(ii.NodePointGround())
-        kin = st.kin_ref
-        self._add_bodies(mbs, kin)
-        self.joint_obj = [self._add_joint(jt) for jt in mech.joints]
+        self.ground_node = self._new_system()
         self._add_loads()
         self._coordinate_springs = self._add_elements()
-        mbs.Assemble()
-        sd = mbs.systemData
-        self.ltg = {b: np.array(sd.GetNodeLTGODE2(n)) for b, n in self.node.items()}
-        self.ref = {b: np.array(mbs.GetNodeParameter(n, "referenceCoordinates"), float)
-                    for b, n in self.node.items()}
-        self.joint_ae = [np.array(sd.GetObjectLTGAE(o)) for o in self.joint_obj]
-        self.n_ode2 = sd.ODE2Size()
+        self._assemble()
 
     def _rotation_marker(self, b: int):
         from exudyn import itemInterface as ii

@@ -57,9 +57,19 @@ class MujocoSession(Session):
         self.notes.append(f"MuJoCo warning: {msg.strip()}")
 
     def _build(self) -> None:
-        mujoco, st, s = self.mj, self.tree, self.mujoco_settings()
+        st, s = self.tree, self.mujoco_settings()
         spec = build_mjcf(st.mech, s, tree=st)
         apply_scene(spec, st, s.scene)
+        # the prescribed driver acceleration is constant (SimTree.driver_path)
+        self._compile(spec, s, acc=float(st.mech.driver.acceleration), armature=float(s.armature))
+
+    def _compile(self, spec, s: MujocoSettings, acc: float, armature: float) -> None:
+        """Compile ``spec`` and index the model in the compiled linkage's terms (the tree
+        joints' addresses, the bodies, the loop equalities, each tree joint's child and
+        its subtree's root, the loads): what the driven and the released sessions share.
+        ``acc``: the driver's prescribed acceleration; ``armature``: the drive's (both 0
+        when released: :meth:`convert`'s drive effort is then 0)."""
+        mujoco, st = self.mj, self.tree
         # a model MuJoCo's compiler rejects: EngineRefusal, one line (mjcf.compile_refusal)
         self.model, warnings = compile_spec(spec, s, st.mech)
         self.notes.extend(warnings)
@@ -74,12 +84,11 @@ class MujocoSession(Session):
         # each tree joint's child body and the root of its kinematic subtree (readout)
         self.child_bid = np.array([self.bid[tj.child] for tj in st.joints], dtype=int)
         self.child_root = np.array([m.body_rootid[b] for b in self.child_bid], dtype=int)
-        # the prescribed driver acceleration is constant (SimTree.driver_path)
-        self.acc = float(st.mech.driver.acceleration)
+        self.acc = acc
         # enum values as ints: comparing an array with the enum object costs 35 us
         self._equality = int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
         self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-        self.A = float(s.armature)
+        self.A = armature
         self.loads = [(self.bid[st.body_names.index(ld.body)], ld) for ld in st.mech.loads]
         self.moving_loads = self._loads_move()
         self.max_contacts = 0  # most contacts seen at a sample (scene-economy study)

@@ -39,7 +39,7 @@ import numpy as np
 from analytic import Revolute
 from analytic.motion_spec import JointDamper, JointSpring, PointDamper, PointSpring
 
-from ...builders.mjcf import HARD_SOLIMP, MujocoSettings, build_mjcf, compile_spec, direct_solref
+from ...builders.mjcf import HARD_SOLIMP, MujocoSettings, build_mjcf, direct_solref
 from ...builders.tree import SimTree
 from ...runs.engine_run import Recorder
 from ...runs.sampling import times_plan
@@ -121,29 +121,12 @@ class MujocoFreeSession(MujocoSession, FreeSession):
         MujocoSession.__init__(self, tree, self.settings)
 
     def _build(self) -> None:
-        mj, st, s = self.mj, self.tree, self.settings
+        st, s = self.tree, self.settings
         spec = build_mjcf(st.mech, s.prescribed(), tree=st)
         spec.joint(st.joints[st.driver_tree].name).armature = 0.0
         self._joint_tendons = self._add_elements(spec)
-        self.model, warnings = compile_spec(spec, s.prescribed(), st.mech)
-        self.notes.extend(warnings)
+        self._compile(spec, s.prescribed(), acc=0.0, armature=0.0)  # no drive
         m = self.model
-        self.data = mj.MjData(m)
-        self.qadr = np.array([m.joint(tj.name).qposadr[0] for tj in st.joints])
-        self.dadr = np.array([m.joint(tj.name).dofadr[0] for tj in st.joints])
-        self.bid = {b: (0 if b == st.ground else m.body(name).id)
-                    for b, name in enumerate(st.body_names)}
-        self.eq = [m.equality(ch.name).id for ch in st.chords]
-        self.drive_dof = int(self.dadr[st.driver_tree])
-        self.child_bid = np.array([self.bid[tj.child] for tj in st.joints], dtype=int)
-        self.child_root = np.array([m.body_rootid[b] for b in self.child_bid], dtype=int)
-        self.acc = 0.0
-        self._equality = int(mj.mjtConstraint.mjCNSTR_EQUALITY)
-        self._badqacc = int(mj.mjtWarning.mjWARN_BADQACC)
-        self.A = 0.0  # no drive: convert()'s drive effort is 0
-        self.loads = [(self.bid[st.body_names.index(ld.body)], ld) for ld in st.mech.loads]
-        self.moving_loads = self._loads_move()
-        self.max_contacts = 0
         fm = st.mech.motion
         self.motors = list(fm.motors) if fm else []
         self.motor_act = [m.actuator(f"motor:{i}").id for i in range(len(self.motors))]

@@ -254,7 +254,25 @@ class PybulletSim:
         self.p.stepSimulation(physicsClientId=self.cid)
 
 
-class PybulletSession(Session):
+class PybulletModel:
+    """What the driven and the released PyBullet sessions share: the loaded model
+    :attr:`sim` (a :class:`PybulletSim`), the step ``h`` it is set to, and closing it."""
+
+    sim: PybulletSim | None
+    h: float | None
+
+    def close(self) -> None:
+        if getattr(self, "sim", None) is not None:
+            self.sim.close()
+            self.sim = None
+
+    def _set_step(self, h: float) -> None:
+        if h != self.h:
+            self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
+            self.h = h
+
+
+class PybulletSession(PybulletModel, Session):
     """A loaded PyBullet model of one linkage, driven by a velocity motor."""
 
     name = "pybullet"
@@ -272,16 +290,6 @@ class PybulletSession(Session):
             "tree-joint forces and drive effort reconstructed by Newton-Euler from PyBullet's "
             "accelerations and loop forces; PyBullet's own readings in joint_force_engine "
             "(jointReactionForces) and drive_effort_engine (motor torque)")
-
-    def close(self) -> None:
-        if getattr(self, "sim", None) is not None:
-            self.sim.close()
-            self.sim = None
-
-    def _set_step(self, h: float) -> None:
-        if h != self.h:
-            self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
-            self.h = h
 
     def _one_step(self, h: float, t_now: float) -> None:
         sim = self.sim

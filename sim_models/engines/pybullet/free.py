@@ -52,7 +52,7 @@ from ..free_protocol import (
     subtree_correction,
 )
 from ..protocol import EngineSettings
-from .driven import PybulletSettings, PybulletSim
+from .driven import PybulletModel, PybulletSettings, PybulletSim
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ class PybulletFreeSettings(EngineSettings):
                                 max_joint_velocity=self.max_joint_velocity, preroll_steps=0)
 
 
-class PybulletFreeSession(FreeSession):
+class PybulletFreeSession(PybulletModel, FreeSession):
     """A released PyBullet model (see the module docstring)."""
 
     name = "pybullet"
@@ -132,16 +132,6 @@ class PybulletFreeSession(FreeSession):
         self.link = [self.sim.link[n] for n in tree.body_names]
         fm = tree.mech.motion
         self.motors = list(fm.motors) if fm else []
-
-    def close(self) -> None:
-        if getattr(self, "sim", None) is not None:
-            self.sim.close()
-            self.sim = None
-
-    def _set_step(self, h: float) -> None:
-        if h != self.h:
-            self.sim.p.setPhysicsEngineParameter(fixedTimeStep=h, physicsClientId=self.sim.cid)
-            self.h = h
 
     def _apply_elements(self, t: float) -> None:
         sim, p = self.sim, self.sim.p
