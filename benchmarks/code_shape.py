@@ -1,11 +1,16 @@
 """The shape of the code, as DEVELOPERS.md and issue 19 measure it (read with :mod:`ast`).
 
-* the tree of ``reports/``: each folder and module with its line count and the first
-  line of its docstring;
-* the longest modules of ``reports/`` (house target: at most 500 lines);
+* the tree of ``reports/`` and of ``sim_models/``: each folder and module with its line
+  count and the first line of its docstring;
+* per package, the longest module (house target: at most 500 lines) and every module
+  over it;
+* per package, the longest class (a class's lines run from its ``class`` line to its
+  last statement, docstring and methods included; target at most 300 lines) and every
+  class over it;
 * every function over 80 lines in ``analytic``, ``sim_models``, ``reports`` and the
-  pytest entry point (a function's lines run from its ``def`` to its last statement,
-  docstring and nested functions included);
+  pytest entry point, and in ``tests``, ``benchmarks`` and ``scripts`` (a function's
+  lines run from its ``def`` to its last statement, docstring and nested functions
+  included);
 * the share of ``import`` statements in ``reports/`` that sit inside a function or
   class body (target under 5%).  ``xval``'s lazy command loading is a table of module
   names handed to ``importlib``, not an import statement, so it is not counted either way.
@@ -22,6 +27,7 @@ from pathlib import Path
 PACKAGES = ("analytic", "sim_models", "reports")
 TOP_MODULES = ("xval_pytest_plugin.py",)
 MAX_MODULE = 500
+MAX_CLASS = 300
 MAX_FUNCTION = 80
 
 
@@ -35,10 +41,15 @@ def _lines(path: Path) -> int:
     return len(path.read_text(encoding="utf-8").splitlines())
 
 
-def long_functions(root: Path, limit: int = MAX_FUNCTION) -> list[tuple[int, str]]:
+#: Code outside the installed packages that the function rule covers too.
+OTHER_CODE = ("tests", "benchmarks", "scripts")
+
+
+def long_functions(root: Path, limit: int = MAX_FUNCTION,
+                   packages=PACKAGES) -> list[tuple[int, str]]:
     """(lines, 'file:line name') of every function longer than ``limit`` lines."""
     out = []
-    for path in _files(root):
+    for path in _files(root, packages):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
@@ -46,6 +57,35 @@ def long_functions(root: Path, limit: int = MAX_FUNCTION) -> list[tuple[int, str
                 if n > limit:
                     out.append((n, f"{path.relative_to(root)}:{node.lineno} {node.name}"))
     return sorted(out, reverse=True)
+
+
+def classes(root: Path, package: str) -> list[tuple[int, str]]:
+    """(lines, 'file:line name') of every class in ``package``, longest first."""
+    out = []
+    for path in _files(root, (package,)):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef):
+                n = node.end_lineno - node.lineno + 1
+                out.append((n, f"{path.relative_to(root)}:{node.lineno} {node.name}"))
+    return sorted(out, reverse=True)
+
+
+def package_lines(root: Path, package: str) -> list[str]:
+    """Per package: its modules and lines, the longest module and those over
+    :data:`MAX_MODULE`, the longest class and those over :data:`MAX_CLASS`."""
+    mods = sorted(((_lines(f), str(f.relative_to(root))) for f in _files(root, (package,))),
+                  reverse=True)
+    over = [m for m in mods if m[0] > MAX_MODULE]
+    out = [f"{package}/: {len(mods)} modules, {sum(n for n, _ in mods)} lines; longest "
+           f"{mods[0][1]} ({mods[0][0]} lines); {len(over)} over {MAX_MODULE}"
+           + (": " + ", ".join(f"{f} ({n})" for n, f in over) if over else "")]
+    cls = classes(root, package)
+    if cls:
+        big = [c for c in cls if c[0] > MAX_CLASS]
+        out.append(f"{package}/ classes: {len(cls)}; longest {cls[0][1]} ({cls[0][0]} lines); "
+                   f"{len(big)} over {MAX_CLASS}"
+                   + (": " + ", ".join(f"{w} ({n})" for n, w in big) if big else ""))
+    return out
 
 
 def import_share(root: Path, package: str = "reports") -> tuple[int, int, dict[str, int]]:
@@ -74,10 +114,10 @@ def _first_line(path: Path) -> str:
     return " ".join(doc.split("\n\n")[0].split())
 
 
-def tree(root: Path, width: int = 100) -> list[str]:
-    """``reports/`` as folders and modules, lines and first docstring line."""
+def tree(root: Path, width: int = 100, package: str = "reports") -> list[str]:
+    """``package`` as folders and modules, lines and first docstring line."""
     out = []
-    base = root / "reports"
+    base = root / package
     for folder in [base] + sorted(p for p in base.rglob("*") if p.is_dir()
                                   and (p / "__init__.py").is_file()):
         rel = folder.relative_to(root)
@@ -93,19 +133,21 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1],
                    help="the checkout to measure (default: this one)")
-    p.add_argument("--tree", action="store_true", help="also print reports/ as a tree")
+    p.add_argument("--tree", action="store_true",
+                   help="also print reports/ and sim_models/ as trees")
     args = p.parse_args(argv)
     root = args.root.resolve()
     if args.tree:
-        print("\n".join(tree(root)), end="\n\n")
-    mods = sorted(((_lines(f), str(f.relative_to(root))) for f in _files(root, ("reports",))),
-                  reverse=True)
-    over = [m for m in mods if m[0] > MAX_MODULE]
-    print(f"reports/: {len(mods)} modules, {sum(n for n, _ in mods)} lines; longest "
-          f"{mods[0][1]} ({mods[0][0]} lines); {len(over)} over {MAX_MODULE}"
-          + (": " + ", ".join(f"{f} ({n})" for n, f in over) if over else ""))
+        for pkg in ("reports", "sim_models"):
+            print("\n".join(tree(root, package=pkg)), end="\n\n")
+    for pkg in PACKAGES:
+        print("\n".join(package_lines(root, pkg)))
     funcs = long_functions(root)
     print(f"functions over {MAX_FUNCTION} lines (analytic, sim_models, reports): {len(funcs)}")
+    for n, where in funcs:
+        print(f"  {n:4d}  {where}")
+    funcs = long_functions(root, packages=OTHER_CODE)
+    print(f"functions over {MAX_FUNCTION} lines ({', '.join(OTHER_CODE)}): {len(funcs)}")
     for n, where in funcs:
         print(f"  {n:4d}  {where}")
     nested, total, per = import_share(root)
