@@ -36,7 +36,9 @@ from analytic.motion_spec import JointSpring, PointDamper, PointSpring
 from ...builders.tree import SimTree
 from ..free_protocol import FreeRead, FreeSession, FreeStart
 from ..settings import EngineRefusal, EngineSettings
-from .driven import ExudynSession, ExudynSettings, _perp, _rot, require_exudyn
+from .driven import ExudynSession
+from .planar import _perp, _rot
+from .settings import ExudynSettings, require_exudyn
 
 
 @dataclass(frozen=True)
