@@ -33,7 +33,9 @@ import numpy as np
 from ...builders.tree import SimTree
 from ..free_protocol import ElementLoads, FreeRead, FreeSession, FreeStart
 from ..protocol import EngineSettings, check_raw_state
-from .driven import PinocchioSession, PinocchioSettings, _couple, _v3
+from .driven import PinocchioSession
+from .model import _couple, _v3
+from .settings import PinocchioSettings
 
 
 @dataclass(frozen=True)
