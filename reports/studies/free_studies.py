@@ -26,9 +26,10 @@ from reports.comparison.free_compare import FreeVerdict, compare_free, reference
 from reports.figures.free_report_plots import case_figures
 from reports.figures.study_plots import _frontier
 from reports.regression.baseline import versions
-from sim_models.engines.free_protocol import free_start, time_free_steps
+from sim_models.engines.free_protocol import free_start
 from sim_models.runs.free import free_engine_names, free_settings, open_free_session, run_free
 from sim_models.runs.free_run import FreeRequest
+from sim_models.runs.timing import time_free_steps
 
 #: The report's free-motion verdict cases, (case, duration s): quick keeps the report's
 #: 30 s budget (A01 and the seed four-bar, short); full runs the IFToMM problems whose

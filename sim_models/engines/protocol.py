@@ -38,7 +38,7 @@ Writing an engine
      seconds from time ``t``, the drive following the prescribed motion
      (:meth:`SimTree.driver_path`); return a reason string when the state diverged
      (non-finite, huge), else ``None``.  Do no readout here: this loop is what the
-     speed studies time (:func:`time_steps`);
+     speed studies time (:func:`sim_models.runs.timing.time_steps`);
    * the readout, preferably **deferred** (what the MuJoCo and PyBullet sessions do):
      ``record(self, t: float) -> (raw, ahead, reason)`` copies the engine's own state
      at time ``t`` (no conversion; ``ahead`` = time stepped past ``t`` while reading,
@@ -479,40 +479,10 @@ def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
     return None, None, nsteps
 
 
-def time_steps(session: Session, h: float, n: int, repeats: int = 3) -> float:
-    """Steps per second of ``n`` bare steps (:meth:`Session.advance`, no readout) from
-    the analytic reference state, best of ``repeats``: what the speed studies time.  A
-    loop that diverges is timed up to that point."""
-    return best_step_rate(lambda: session.reset(0.0, h), session.advance, h, n, repeats)
-
-
-def best_step_rate(start, advance, h: float, n: int, repeats: int = 3) -> float:
-    """Steps per second of ``n`` bare steps ``advance(t, h, k)`` (in chunks of at most
-    200, stopping where it returns a reason) after ``start()``, best of ``repeats``: the
-    one timing loop of the driven (:func:`time_steps`) and the released runs."""
-    best = 0.0
-    chunk = max(1, min(n, 200))
-    for _ in range(max(1, repeats)):
-        start()
-        done, t = 0, 0.0
-        t0 = time.perf_counter()
-        while done < n:
-            k = min(chunk, n - done)
-            why = advance(t, h, k)
-            done += k
-            t += k * h
-            if why is not None:
-                break
-        el = time.perf_counter() - t0
-        if el > 0:
-            best = max(best, done / el)
-    return best
-
-
 __all__ = ["HUGE", "LIMITED_RANGE_CONDITION", "EngineRefusal", "EngineRun", "EngineSettings",
            "Plan", "Recorder", "RunRequest", "Session", "SettingsError", "check_motion",
-           "RAW_BLOCK", "best_step_rate", "check_raw_state", "check_state", "compile_linkage",
+           "RAW_BLOCK", "check_raw_state", "check_state", "compile_linkage",
            "drive", "finish",
            "first_divergence", "fmt_value", "loop_gap", "loop_gaps", "periodic_plan",
            "plan_samples", "reversal_time", "step_schedule", "steps_to", "time_of",
-           "time_steps", "times_plan", "travel_time"]
+           "times_plan", "travel_time"]

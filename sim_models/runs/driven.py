@@ -35,9 +35,9 @@ from ..engines.protocol import (
     drive,
     finish,
     plan_samples,
-    time_steps,
 )
 from ..engines.registry import engine_names, get_engine
+from .timing import time_steps
 
 
 def open_session(tree: Mechanism | SimTree, engine: str,
@@ -138,7 +138,7 @@ def time_engine(mech: Mechanism | SimTree, engine: str, settings: EngineSettings
                 h: float, n: int, repeats: int = 3) -> float:
     """Steps per second of ``n`` bare steps of ``h`` s (the session's own
     :meth:`~sim_models.engines.protocol.Session.advance`, the loop the runs use, without
-    readout), best of ``repeats``: :func:`sim_models.engines.protocol.time_steps`."""
+    readout), best of ``repeats``: :func:`sim_models.runs.timing.time_steps`."""
     with open_session(mech, engine, settings) as session:
         return time_steps(session, h, n, repeats)
 

@@ -7,7 +7,7 @@ solver) with no drive: every evaluation is one ``constraintDynamics`` call with 
 joint forces ``tau`` of the loads and force elements.  Gravity is ``model.gravity``.
 Pinocchio has no spring, damper or motor element, and ``constraintDynamics`` takes no
 external forces, so the harness applies the description's springs, dampers and motors
-(:class:`sim_models.engines.free_protocol.ElementLoads`, world wrenches about each centre of mass
+(:class:`sim_models.engines.free_elements.ElementLoads`, world wrenches about each centre of mass
 from the bodies' state) as joint forces ``J^T f`` (two RNEA calls) at **every dynamics
 evaluation**, i.e. at each RK4 stage with the stage's state and time: the elements are
 integrated to the scheme's own order.
@@ -31,7 +31,8 @@ from typing import ClassVar
 import numpy as np
 
 from ...builders.tree import SimTree
-from ..free_protocol import ElementLoads, FreeRead, FreeSession, FreeStart
+from ..free_elements import ElementLoads
+from ..free_protocol import FreeRead, FreeSession, FreeStart
 from ..protocol import EngineSettings, check_raw_state
 from .driven import PinocchioSession
 from .model import _couple, _v3

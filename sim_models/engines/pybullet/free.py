@@ -5,7 +5,7 @@ loops closed by ``JOINT_POINT2POINT`` constraints, ERP-stabilised) with every jo
 motor switched off (``VELOCITY_CONTROL`` with force 0, as loaded) and no drive.
 Gravity is PyBullet's.  PyBullet has no spring, damper or motor element between two
 bodies, so the harness applies them **every step**: from the joint states (tree
-coordinates) it computes each element's force (:class:`sim_models.engines.free_protocol.
+coordinates) it computes each element's force (:class:`sim_models.engines.free_elements.
 ElementLoads`) and applies it with ``applyExternalForce`` at the body's centre of
 mass and ``applyExternalTorque`` (world frame); constant loads as in the prescribed
 runs.  PyBullet clears external forces after each step, and the element forces are
@@ -43,8 +43,8 @@ import numpy as np
 from ...builders.tree import SimTree
 from ...runs.newton_euler import reconstruct
 from .. import ranges
+from ..free_elements import ElementLoads
 from ..free_protocol import (
-    ElementLoads,
     FreeRead,
     FreeSession,
     FreeStart,

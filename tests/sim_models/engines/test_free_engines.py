@@ -209,7 +209,7 @@ def test_scalar_body_states_equal_propagate(name):
 
 def test_bare_stepping_loop_is_timed(seed):
     """The speed study's loop: steps per second of advance() alone, from the start."""
-    from sim_models.engines.free_protocol import time_free_steps
+    from sim_models.runs.timing import time_free_steps
     mech, ref = seed
     sess = open_free_session(mech, "mujoco")
     try:
