@@ -4,6 +4,8 @@
   one above it, and no module imports itself back through others: an import cycle is
   a failure whether the imports sit at module level or inside functions (a function-level
   import hides a cycle from the interpreter, not from the design).
+* Inside ``sim_models/engines/`` each engine is one folder, and no engine's folder imports
+  another's (:data:`ENGINE_BASES` names the one engine built on another's model).
 * Only the command line reads command-line arguments: ``argparse`` is imported by the
   command-line modules alone (:data:`COMMAND_LINE`), and no library module imports one
   of them.
@@ -50,6 +52,12 @@ COMMAND_LINE_CORE = frozenset({"reports.cli.xval", "reports.cli.options", "repor
 #: scripts in ``scripts/``, ``readme_figures.py`` among them, are not in the installed
 #: packages, so not in this check.)
 ARGV_READERS = frozenset({"analytic.kernels.background"})
+
+#: The engine folders of ``sim_models/engines/`` that may import another engine's folder:
+#: MuJoCo Warp runs MuJoCo's own model (built by ``builders/mjcf.py``) on another stepper,
+#: and its sessions subclass MuJoCo's, so the model's indexing, loads and readout are
+#: written once.  Any other engine-to-engine import is a failure.
+ENGINE_BASES: dict[str, frozenset[str]] = {"mujoco_warp": frozenset({"mujoco"})}
 
 
 @dataclass(frozen=True)
@@ -243,6 +251,33 @@ def upward_imports(files, imports: list[Import]) -> list[str]:
             "a package above it" for i in imports if _layer(i.target) > _layer(i.source)]
 
 
+def engine_folders(root: Path | None = None) -> frozenset[str]:
+    """The engines' folders in ``sim_models/engines/`` (each a package)."""
+    base = (root or ROOT) / "sim_models" / "engines"
+    return frozenset(p.parent.name for p in base.glob("*/__init__.py"))
+
+
+def _engine_of(module: str, engines) -> str | None:
+    """The engine whose folder holds ``module`` (``sim_models.engines.NAME...``), or None."""
+    parts = module.split(".")
+    if parts[:2] == ["sim_models", "engines"] and len(parts) > 2 and parts[2] in engines:
+        return parts[2]
+    return None
+
+
+def cross_engine_imports(files, imports: list[Import], engines,
+                         bases=ENGINE_BASES) -> list[str]:
+    """One line per import from one engine's folder into another's (not its declared
+    base, :data:`ENGINE_BASES`)."""
+    out = []
+    for i in imports:
+        a, b = _engine_of(i.source, engines), _engine_of(i.target, engines)
+        if a and b and a != b and b not in bases.get(a, ()):
+            out.append(f"{_where(files[i.source])}:{i.line}: {i.source} imports {i.target} "
+                       f"(engine {a!r} from engine {b!r}'s folder{_how(i)})")
+    return out
+
+
 def command_line_modules() -> frozenset[str]:
     """:data:`COMMAND_LINE_CORE`, every module of ``reports/cli/`` (and any ``reports``
     module named ``*_cmd``/``*_cli``), and
@@ -327,6 +362,45 @@ def test_no_package_imports_one_above_it():
     files, imports = project_imports()
     bad = upward_imports(files, imports)
     assert not bad, "\n".join(bad)
+
+
+def test_analytic_imports_nothing_of_sim_models_or_reports():
+    """The product stands alone: no ``analytic`` module imports ``sim_models`` or
+    ``reports``, at module level, inside a function or by name."""
+    files, imports = project_imports()
+    bad = [f"{_where(files[i.source])}:{i.line}: {i.source} imports {i.target}{_how(i)}"
+           for i in imports if i.source.split(".")[0] == "analytic"
+           and i.target.split(".")[0] in ("sim_models", "reports")]
+    assert not bad, "\n".join(bad)
+
+
+def test_no_engine_folder_imports_another():
+    """Each engine's folder (``sim_models/engines/NAME/``) imports the protocol, the
+    builders and the runs' records, never another engine's folder (function-level and
+    by-name imports counted), but for :data:`ENGINE_BASES`."""
+    engines = engine_folders()
+    assert {"mujoco", "pybullet", "exudyn", "pinocchio", "mujoco_warp"} <= engines
+    files, imports = project_imports()
+    bad = cross_engine_imports(files, imports, engines)
+    assert not bad, "imports between engine folders:\n" + "\n".join(bad)
+    # the rule's reach: a released PyBullet session importing MuJoCo's would be named,
+    # and MuJoCo Warp's import of MuJoCo is there and allowed only by ENGINE_BASES
+    fake = [Import("sim_models.engines.pybullet.free", "sim_models.engines.mujoco.driven",
+                   7, True)]
+    assert "engine 'pybullet' from engine 'mujoco'" in cross_engine_imports(
+        files, fake, engines)[0]
+    warp = [i for i in imports if _engine_of(i.source, engines) == "mujoco_warp"
+            and _engine_of(i.target, engines) == "mujoco"]
+    assert warp and cross_engine_imports(files, warp, engines, bases={})
+
+
+def test_no_cycle_with_the_tests():
+    """No import cycle in the packages and ``tests/`` together (the tests import the
+    packages and each other's helpers; function-level imports counted)."""
+    files = dict(project_files())
+    files.update({module_name(p): p for p in sorted((ROOT / "tests").rglob("*.py"))})
+    cycles = import_cycles(files, edges_of(files))
+    assert not cycles, "import cycles:\n" + "\n".join(cycles)
 
 
 def _reads_argv(path: Path) -> list[int]:

@@ -103,6 +103,22 @@ def test_no_circular_imports(package):
             visit(m, [])
 
 
+def test_every_engine_is_one_folder_and_one_registry_line():
+    """A registered engine's driven session is ``sim_models/engines/NAME/driven.py`` and
+    its released one (where it has one) ``NAME/free.py``; every engine folder there is
+    registered (README, "Adding an engine")."""
+    from sim_models.engines.registry import BUILTIN
+    from sim_models.runs.free import FREE_SESSIONS
+    folders = {p.parent.name for p in (ROOT / "sim_models" / "engines").glob("*/__init__.py")}
+    for e in BUILTIN:
+        assert e.module == f"sim_models.engines.{e.name}.driven", e
+        assert (ROOT / "sim_models" / "engines" / e.name / "driven.py").is_file(), e.name
+    for name, (module, _) in FREE_SESSIONS.items():
+        assert module == f"sim_models.engines.{name}.free", (name, module)
+    assert folders == {e.name for e in BUILTIN}, folders ^ {e.name for e in BUILTIN}
+    assert set(FREE_SESSIONS) <= folders
+
+
 def test_registry_names_and_unknown():
     assert {"mujoco", "pybullet"} <= set(engine_names())
     with pytest.raises(UnknownEngineError, match="engines: mujoco"):
