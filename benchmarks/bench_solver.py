@@ -380,7 +380,7 @@ def cli_sweep(points: int) -> dict:
             if p.returncode else []}
 
 
-def main(argv=None):
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default=",".join(map(str, SIZES)))
     ap.add_argument("--json", help="write the figures to this JSON file")
@@ -393,7 +393,11 @@ def main(argv=None):
     ap.add_argument("--cli-points", type=int, default=0,
                     help="also run xval sweep seed-four-bar --points N --csv under "
                          "/usr/bin/time -v")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None):
+    args = _parser().parse_args(argv)
     tune_allocator()  # as the xval command does
     # the front door as a user meets it: the kernel at every size once in the process
     os.environ.pop("XVAL_FUSED", None)
