@@ -5,6 +5,7 @@ Front door::
     from sim_models import compile_linkage, run, make_settings
     tree = compile_linkage(mech)                  # the analytic solution, compiled once
     r = run(tree, "mujoco", make_settings("mujoco", {"integrator": "Euler"}))
+    f = run_free(released_mech, "mujoco", request=FreeRequest(duration=1.0))  # released
 
 The rooms, along the data flow: :mod:`sim_models.builders` (the compiled linkage and the
 engine models built from it), :mod:`sim_models.engines` (the protocol, the registry, one
@@ -28,15 +29,22 @@ from .engines.registry import engine_names, get_engine, make_settings, register_
 from .runs.driven import instantaneous, mujoco_instantaneous, open_session, rerun, run
 
 
-def __getattr__(name):  # PybulletSettings without importing pybullet eagerly
+def __getattr__(name):  # without importing pybullet, or the free motion, eagerly
     if name == "PybulletSettings":
         from .engines.pybullet.driven import PybulletSettings
         return PybulletSettings
+    if name == "run_free":
+        from .runs.free import run_free
+        return run_free
+    if name in ("FreeRequest", "FreeEngineRun"):
+        from .runs import free_run
+        return getattr(free_run, name)
     raise AttributeError(name)
 
 
 __all__ = ["Closure", "EngineRefusal", "EngineRun", "EngineSettings", "EngineVersionError",
-           "MujocoSettings", "PybulletSettings", "Session", "SettingsError", "SimModelError",
-           "SimTree", "UnsupportedClosureError", "build_mjcf", "build_urdf", "compile_linkage",
-           "compile_mjcf", "engine_names", "get_engine", "instantaneous", "make_settings",
-           "mujoco_instantaneous", "open_session", "register_engine", "rerun", "run"]
+           "FreeEngineRun", "FreeRequest", "MujocoSettings", "PybulletSettings", "Session",
+           "SettingsError", "SimModelError", "SimTree", "UnsupportedClosureError", "build_mjcf",
+           "build_urdf", "compile_linkage", "compile_mjcf", "engine_names", "get_engine",
+           "instantaneous", "make_settings", "mujoco_instantaneous", "open_session",
+           "register_engine", "rerun", "run", "run_free"]

@@ -119,6 +119,19 @@ def test_every_engine_is_one_folder_and_one_registry_line():
     assert set(FREE_SESSIONS) <= folders
 
 
+def test_the_front_door_names_the_runs():
+    """``sim_models`` hands out the driven and the released run by name (the released one
+    loaded on first use), the same objects as their rooms'."""
+    import sim_models
+    from sim_models.runs import driven, free, free_run
+    assert sim_models.run is driven.run and sim_models.run_free is free.run_free
+    assert sim_models.FreeRequest is free_run.FreeRequest
+    assert sim_models.FreeEngineRun is free_run.FreeEngineRun
+    assert set(sim_models.__all__) >= {"run", "run_free", "rerun", "compile_linkage"}
+    with pytest.raises(AttributeError):
+        sim_models.no_such_name  # noqa: B018
+
+
 def test_registry_names_and_unknown():
     assert {"mujoco", "pybullet"} <= set(engine_names())
     with pytest.raises(UnknownEngineError, match="engines: mujoco"):
