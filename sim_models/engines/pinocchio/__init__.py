@@ -1,1 +1,2 @@
-"""Pinocchio: the driven session (:mod:`.driven`) and the released one (:mod:`.free`)."""
+"""Pinocchio: the driven session (:mod:`.driven`) over its model (:mod:`.model`), its
+settings (:mod:`.settings`) and the released session (:mod:`.free`)."""
