@@ -120,6 +120,25 @@ sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_PO
                          "with --csv, written block by block")
 
 
+#: MuJoCo's integrators (``--integrator`` of ``xval compare`` and ``xval simulate``: the same
+#: as ``--set mujoco.integrator=...``; any letter case, as every word setting).
+MUJOCO_INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
+
+
+def word_choice(values: tuple[str, ...]):
+    """An argparse type: one of the words ``values`` in any letter case, returned in its
+    listed spelling (:class:`sim_models.ranges.Choice`, the settings' own check; imported
+    when the option is given)."""
+    def parse(text: str) -> str:
+        from sim_models.ranges import Choice
+        choice = Choice(tuple(values))
+        problem = choice.problem(text)
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return choice.canonical(text)
+    return parse
+
+
 def sim_range(name: str, whole: bool = False):
     """An argparse type checked against ``sim_models.ranges.<name>`` (the range the
     settings and run requests check too; imported when the option is given)."""
