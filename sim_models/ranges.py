@@ -16,6 +16,7 @@ This module imports nothing but the standard library.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 
@@ -167,10 +168,15 @@ def free_interval_problem(duration: float, intervals: int) -> str | None:
     where its readings are not what it was measured at (51 samples over 1e-6 s step
     Exudyn at 2e-8 s: its accelerations 255 of their scale off; MuJoCo, Pinocchio and
     MuJoCo Warp pass there); the exact trajectory alone (no engine) has no such floor."""
+    if isinstance(intervals, bool) or not isinstance(intervals, numbers.Integral) or \
+            intervals < 1:
+        return None  # not a count of intervals: for the request's own checks to name
     try:
         dt = float(duration) / int(intervals)
-    except (TypeError, ValueError, ZeroDivisionError):
-        return None  # the request's own checks name a bad duration or count
+    except (TypeError, ValueError):
+        return None
+    if not (math.isfinite(dt) and dt > 0):
+        return None  # a duration that is not a positive number: named where it is read
     if not dt >= MIN_TIMESTEP * (1 - 1e-9):
         most = max(1, int(float(duration) / MIN_TIMESTEP * (1 + 1e-9))) + 1
         return (f"{int(intervals) + 1} sample times over {float(duration):g} s are "

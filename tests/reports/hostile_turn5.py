@@ -460,3 +460,40 @@ def classify(argv: list[str], folder: Path) -> tuple[str, str, str]:
     if code in (0, 1) and (o.strip() or written):
         return "result", o, e
     return ("silent" if code in (0, 1, None) else f"status {code}"), o, e
+
+
+#: The Python API's free door (:func:`reports.comparison.free_cases.release_and_judge`,
+#: what ``xval simulate --engine`` and the plugin's ``assert_free_agrees`` run): (id,
+#: keyword arguments, expected kind), the seed four-bar released in MuJoCo.
+API_CASES: list[tuple[str, dict, str]] = [
+    ("api-ok", dict(duration=0.02, samples=4), "result"),
+    ("api-samples-0", dict(duration=0.02, samples=0), "error"),
+    ("api-samples-neg", dict(duration=0.02, samples=-3), "error"),
+    ("api-samples-float", dict(duration=0.02, samples=2.5), "error"),
+    ("api-duration-nan", dict(duration=float("nan"), samples=4), "error"),
+    ("api-duration-neg", dict(duration=-1.0, samples=4), "error"),
+    ("api-samples-closer-than-a-step", dict(duration=1e-6, samples=200), "error"),
+    ("api-settings-lower-case", dict(duration=0.02, samples=4,
+                                     settings={"integrator": "rk4"}), "result"),
+    ("api-settings-bogus", dict(duration=0.02, samples=4, settings={"integrator": "bogus"}),
+     "error"),
+    ("api-settings-timestep-0", dict(duration=0.02, samples=4, settings={"timestep": 0}),
+     "error"),
+    ("api-settings-unknown", dict(duration=0.02, samples=4, settings={"warp": 1}), "error"),
+]
+
+
+def classify_api(kwargs: dict) -> tuple[str, str]:
+    """``(kind, message)`` of one API call: ``error`` a typed one-line
+    :class:`analytic.errors.LinkageError`, ``result`` a verdict judged at more than one
+    sample, ``silent`` a verdict judged at t = 0 only, ``traceback`` anything else."""
+    from analytic import load_case
+    from analytic.errors import LinkageError
+    from reports.comparison.free_cases import release_and_judge
+    try:
+        _, v = release_and_judge(load_case("seed-four-bar"), "mujoco", **kwargs)
+    except LinkageError as e:
+        return ("error" if "\n" not in str(e) else "bad-error"), str(e)
+    except Exception as e:  # noqa: BLE001 - a traceback is what is counted
+        return "traceback", f"{type(e).__name__}: {e}"
+    return ("result" if len(v.times) > 1 else "silent"), f"passed={v.passed}"
