@@ -121,6 +121,7 @@ def _command(argv: list[str]) -> str | None:
 
 def main(argv: list[str] | None = None) -> int:
     _setup_once()
+    opt.forget_created_folders()
     try:
         argv = sys.argv[1:] if argv is None else list(argv)
         args = _parser(_command(argv)).parse_args(argv)
@@ -135,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout.flush()  # a closed pipe shows here, inside the handler
         return code
     except LinkageError as e:  # every user error: one line, status 2
+        opt.remove_created_folders()  # a refused command leaves no folder behind
         print(f"xval: error: {one_line(str(e))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped reading (| head): end quietly

@@ -127,6 +127,19 @@ def test_shown_input_is_wrapped_to_the_table_and_rounded_to_the_solver():
     assert Summary("m", 0.0, 0.1, False, 0.0).shown_input(1e-30) == 1e-30
 
 
+@pytest.mark.parametrize("argv", [
+    ["sweep", "seed-four-bar", "--parquet", "never/a/x.parquet", "--range", "20", "10"],
+    ["sweep", "no-such-case", "--csv", "never/x.csv"],
+    ["simulate", "seed-four-bar", "--csv", "never/x.csv", "--duration", "1e-7"],
+    ["plot", "hibbeler-16-30", "--free", "--out", "never/x.png"]])
+def test_a_refused_command_leaves_no_folder(tmp_path, argv):
+    """A refused 'sweep --parquet never/x.parquet' left the empty folder 'never'."""
+    (tmp_path / "kept").mkdir()
+    code, _, err = xval(*argv, cwd=tmp_path)
+    assert code == 2 and err.startswith("xval: error: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept"]
+
+
 # ============================================================================ plot --free
 @pytest.mark.parametrize("command", [["plot", "--samples", "3", "--out", "f.png"],
                                      ["animate", "--frames", "36", "--out", "f.gif"]])
