@@ -25,12 +25,21 @@ the summary and the table beside it are the same computation.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .refine import peak, unit_rate_kinematics
 from .sweep_facts import ArrayFacts
+from .tolerances import LIMIT_BISECTION
+
+#: An extremum's position (the peak drive effort, the least transmission angle) is
+#: determined only to ~sqrt(2 eps) rad of its curvature: the value is flat there, so a
+#: rounding of eps in the value moves the located maximum by sqrt(2 eps) = 2.1e-8 rad
+#: (1.2e-6 deg).  Closer to 0 than that, a position is shown as 0 (a peak located at
+#: 1e-26 deg, or at 360 deg - 6e-7 deg on a full turn, is at 0 deg).
+EXTREMUM_RESOLUTION = math.sqrt(2 * sys.float_info.epsilon)
 
 #: The peak drive effort is said to sit at an event (singular position, change point,
 #: input limit) when within this fraction of the swept range: 5 deg of a turn.
@@ -92,6 +101,27 @@ class Summary:
     #: terms (the peak of each body's m |v| |a| + I |omega alpha|, or of the drive and load powers)
     power_balance: float | None = None
 
+    def shown_input(self, x: float, resolution: float = LIMIT_BISECTION) -> float:
+        """An input position ``x`` (frame units) as the text shows it, known to
+        ``resolution`` rad (a limit or singular position located by bisection:
+        :data:`analytic.tolerances.LIMIT_BISECTION`; an extremum:
+        :data:`EXTREMUM_RESOLUTION`): a revolute input of a full cycle wrapped to the
+        table's range ``[first, first + 360)`` deg, and a position within the resolution
+        of 0 (or of ``first + 360``) shown as 0 (or ``first``): a 1e-26 deg is round-off,
+        not a position."""
+        if self.unit != "deg" or x is None or not math.isfinite(x):
+            return x
+        res = math.degrees(resolution)
+        if self.full_cycle and math.isfinite(self.first):
+            x = self.first + (x - self.first) % 360.0
+            if x - self.first >= 360.0 - res or f"{x:.6g}" == f"{self.first + 360.0:.6g}":
+                x = self.first  # the same position on the circle, in the table's range
+        return 0.0 if abs(x) < res else float(x)
+
+    def input_text(self, x: float, resolution: float = LIMIT_BISECTION) -> str:
+        """:meth:`shown_input` to 6 significant digits, with the unit."""
+        return f"{self.shown_input(x, resolution):.6g} {self.unit}"
+
     def lines(self) -> list[str]:
         """Plain-text lines for the command line."""
         u = self.unit
@@ -115,16 +145,17 @@ class Summary:
             out.append(line)
         for t in self.transmission:
             out.append(f"transmission angle at {t.joint}: least {t.least_deg:.3f} deg at "
-                       f"{t.at:.6g} {u}, largest deviation from 90 deg "
+                       f"{self.input_text(t.at, EXTREMUM_RESOLUTION)}, largest deviation "
+                       "from 90 deg "
                        f"{t.largest_deviation_deg:.3f} deg")
         if self.peak_effort is not None:
             line = (f"peak |{self.effort_name}| {self.peak_effort:.6g} {self.effort_unit} at "
-                    f"{self.peak_effort_at:.6g} {u}")
+                    f"{self.input_text(self.peak_effort_at, EXTREMUM_RESOLUTION)}")
             ev = self.peak_event
             if ev is not None:
                 what = "input limit" if ev.kind == "limit" else ev.kind.replace("_", " ")
                 line += (f", {ev.distance:.3g} {u} from the {what} position ({ev.where}) at "
-                         f"{ev.input:.6g} {u}")
+                         f"{self.input_text(ev.input)}")
             out.append(line)
         if self.singular_samples:
             out.append(f"{self.singular_samples} sample(s) at singular positions: left out "

@@ -9,12 +9,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib import animation
 
-from analytic import load_case
 from analytic.errors import OutputError
 from analytic.motion_spec import MAX_DURATION
 from reports.cli import options as opt
 from reports.cli.paths import check_outputs
-from reports.cli.plot import check_out
+from reports.cli.plot import check_out, load_for_figure
 from reports.cli.simulate import MIN_DURATION
 from reports.comparison.progress import engine_progress
 from reports.comparison.runs import engine_list
@@ -46,8 +45,10 @@ def cmd_animate(args) -> int:
         if not animation.writers.is_available("ffmpeg"):
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "
                               "write .gif or .html instead (or install ffmpeg)")
-    mech = load_case(args.case)
+    mech, release = load_for_figure(args)  # --free: what xval simulate releases
     if is_free(mech, args.free, args.driven):
+        if release is not None:
+            print(release.text)
         return _animate_free(args, mech)
     if args.duration is not None:
         raise FreeOptionError("option --duration is for free motion (a description with "

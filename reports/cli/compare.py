@@ -157,7 +157,8 @@ def register(sub) -> None:
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (repeatable; ENGINE.KEY=VALUE for one engine "
                         "only), e.g. --set integrator=Euler --set pybullet.erp=0.2")
-    s.add_argument("--integrator", choices=["RK4", "implicitfast", "implicit", "Euler"],
+    s.add_argument("--integrator", type=opt.word_choice(opt.MUJOCO_INTEGRATORS),
+                   metavar="{" + ",".join(opt.MUJOCO_INTEGRATORS) + "}",
                    help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
     s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")

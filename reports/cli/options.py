@@ -11,6 +11,7 @@ exactly when it would be accepted in a file.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import re
@@ -120,6 +121,25 @@ sweep_points = int_range(2, MAX_STREAMED_SWEEP_POINTS, f"more than {MAX_SWEEP_PO
                          "with --csv, written block by block")
 
 
+#: MuJoCo's integrators (``--integrator`` of ``xval compare`` and ``xval simulate``: the same
+#: as ``--set mujoco.integrator=...``; any letter case, as every word setting).
+MUJOCO_INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
+
+
+def word_choice(values: tuple[str, ...]):
+    """An argparse type: one of the words ``values`` in any letter case, returned in its
+    listed spelling (:class:`sim_models.engines.ranges.Choice`, the settings' own check; imported
+    when the option is given)."""
+    def parse(text: str) -> str:
+        from sim_models.engines.ranges import Choice
+        choice = Choice(tuple(values))
+        problem = choice.problem(text)
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return choice.canonical(text)
+    return parse
+
+
 def sim_range(name: str, whole: bool = False):
     """An argparse type checked against ``sim_models.engines.ranges.<name>`` (the range the
     settings and run requests check too; imported when the option is given)."""
@@ -198,6 +218,33 @@ def _probe_dir(d: Path, what: str) -> None:
                                          f"{e.strerror}") from None
 
 
+#: Folders the output options of the running command created (deepest last): removed again,
+#: when still empty, if the command is refused (:func:`remove_created_folders`), so that a
+#: refused command leaves nothing behind.
+_CREATED: list[Path] = []
+
+
+def _make_folder(folder: Path) -> None:
+    """``folder.mkdir(parents=True)``, each folder it creates noted in :data:`_CREATED`."""
+    missing = [d for d in (folder, *folder.parents) if not d.exists()]
+    folder.mkdir(parents=True, exist_ok=True)
+    _CREATED.extend(reversed(missing))
+
+
+def remove_created_folders() -> None:
+    """Remove the folders :data:`_CREATED` lists that are still empty (deepest first):
+    ``xval`` calls it when a command is refused, after its options made them."""
+    while _CREATED:
+        d = _CREATED.pop()
+        with contextlib.suppress(OSError):  # not empty (a file written), or gone
+            d.rmdir()
+
+
+def forget_created_folders() -> None:
+    """Start a command with no folder noted (``main`` may run many times in one process)."""
+    _CREATED.clear()
+
+
 def output_file(text: str) -> str:
     """An argparse type: a file to (over)write, or ``-`` for standard output.  The
     folders it is in are created when missing (the README's ``--out ci/base.json``)."""
@@ -209,7 +256,7 @@ def output_file(text: str) -> str:
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         try:
-            parent.mkdir(parents=True, exist_ok=True)
+            _make_folder(parent)
         except OSError as e:
             raise argparse.ArgumentTypeError(f"cannot create folder {str(parent)!r}: "
                                              f"{e.strerror}") from None
@@ -225,7 +272,7 @@ def output_dir(text: str) -> str:
     if p.exists() and not p.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} exists and is not a folder")
     try:
-        p.mkdir(parents=True, exist_ok=True)
+        _make_folder(p)
     except OSError as e:
         raise argparse.ArgumentTypeError(f"cannot create folder {text!r}: "
                                          f"{e.strerror}") from None

@@ -39,6 +39,7 @@ from reports.cli.options import UsageError
 from reports.cli.paths import check_outputs, safe_stem
 from reports.cli.simulate import MIN_DURATION
 from reports.comparison import runs as verdict_runs
+from reports.comparison.free_cases import command_case
 from reports.comparison.progress import engine_progress
 from reports.comparison.runs import engine_list, settings_for
 from reports.figures import free_plots, plots
@@ -201,7 +202,7 @@ def cmd_plot(args) -> int:
         ok, why = has_display()
         if not ok and not args.out:
             raise NoDisplay(f"--show: {why}; write the figure with --out F.png|svg|pdf")
-    mech = load_case(args.case)
+    mech, release = load_for_figure(args)
     free = free_plots.is_free(mech, args.free, args.driven)
     # the default name is made safe from the description's (never '../x' or '/x')
     stem = f"{safe_stem(mech.name)}-{'free-' if free else ''}plot.png"
@@ -219,6 +220,8 @@ def cmd_plot(args) -> int:
         except NoDisplay as e:
             cannot_show = e
     fig = make()
+    if release is not None:
+        print(release.text)
     for n in notes:
         print("note:", n)
     if out:
@@ -233,6 +236,17 @@ def cmd_plot(args) -> int:
         import matplotlib.pyplot as plt
         plt.show()  # pragma: no cover - needs a display
     return 0
+
+
+def load_for_figure(args):
+    """``(mech, release)``: the case of ``xval plot``/``xval animate``; with ``--free``, a
+    built-in case without ``[motion]`` released exactly as ``xval simulate`` releases it
+    (:func:`reports.comparison.free_cases.command_case`: the same case, the same
+    refusals), with the :class:`~reports.comparison.free_cases.Release` to state
+    (``None`` otherwise)."""
+    if getattr(args, "free", False):
+        return command_case(args.case, args.duration)
+    return load_case(args.case), None
 
 
 def _option_range(option: str, parse, value) -> None:

@@ -32,7 +32,7 @@ from sim_models.runs.free import free_engine_names, free_session_class, run_free
 from sim_models.runs.free_run import FreeRequest
 
 #: MuJoCo's integrators (``--integrator``: the same as ``--set mujoco.integrator=...``).
-INTEGRATORS = ("RK4", "implicitfast", "implicit", "Euler")
+INTEGRATORS = opt.MUJOCO_INTEGRATORS
 
 
 def add_options(s) -> None:
@@ -43,7 +43,8 @@ def add_options(s) -> None:
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (repeatable; ENGINE.KEY=VALUE for one engine "
                         "only), e.g. --set mujoco.solref=-1e4,-200 (needs --engine)")
-    s.add_argument("--integrator", choices=INTEGRATORS,
+    s.add_argument("--integrator", type=opt.word_choice(INTEGRATORS),
+                   metavar="{" + ",".join(INTEGRATORS) + "}",
                    help="MuJoCo's integrator (same as --set mujoco.integrator=...; needs "
                         "--engine)")
     s.add_argument("--timestep", type=opt.timestep,

@@ -213,18 +213,14 @@ def cmd_sweep(args) -> int:
     say = _paragraph_printer()
     if args.csv or parquet:
         say(f"table {units.header()}; the events and summary below in SI, angles in deg")
-    elif getattr(args, "units", None):
-        say("--units applies to the --csv table; the events and summary below are in SI, "
-            "angles in deg")
+    else:
+        say(f"no table written: --csv FILE writes the {r.kinematics.n}-point table (--csv - "
+            "to standard output), --parquet FILE as Parquet"
+            + ("; --units applies to that table" if getattr(args, "units", None) else "")
+            + "; the events and summary below are in SI, angles in deg")
     for n in r.notes:
         say(f"note: {n}")
-    if len(r.events):
-        # left-aligned, one event a line, its detail wrapped under it (pandas' right-aligned
-        # table ran to 130+ columns)
-        w = max(len(str(k)) for k in r.events["kind"])
-        ww = max(len(str(x)) for x in r.events["where"])
-        for e in r.events.itertuples(index=False):
-            say(f"{e.kind:<{w}} {e.where:<{ww}} {e.input:11.6f}  {e.detail}")
+    _print_events(r, say)
     for line in r.summary.lines():
         say(line)
     if r.summary.power_balance is not None:  # over the regular samples
@@ -233,6 +229,24 @@ def cmd_sweep(args) -> int:
         if written and written != "-":
             print(f"wrote {written}")
     return 0
+
+
+def _print_events(r, say) -> None:
+    """The sweep's events under a header with the input's unit, one event a line, its
+    detail wrapped under it (left-aligned: pandas' right-aligned table ran to 130+
+    columns); each input as the summary shows positions
+    (:meth:`analytic.summary.Summary.shown_input`: on the table's range, round-off as 0)."""
+    if not len(r.events):
+        return
+    u = r.summary.unit
+    heads = ("kind", "where", f"input ({u})")
+    w = max(len(heads[0]), *(len(str(k)) for k in r.events["kind"]))
+    ww = max(len(heads[1]), *(len(str(x)) for x in r.events["where"]))
+    print(f"events ({len(r.events)}):")
+    print(f"{heads[0]:<{w}} {heads[1]:<{ww}} {heads[2]:>11}  detail")
+    for e in r.events.itertuples(index=False):
+        x = r.summary.shown_input(float(e.input))
+        say(f"{e.kind:<{w}} {e.where:<{ww}} {x:11.6f}  {e.detail}")
 
 
 def _paragraph_printer():

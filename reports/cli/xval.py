@@ -20,6 +20,7 @@ import functools
 import importlib
 import os
 import sys
+import unicodedata
 
 from analytic.errors import LinkageError
 from analytic.perf import tune_allocator
@@ -27,8 +28,8 @@ from reports.cli import options as opt
 
 COMMANDS = {
     "cases": ("reports.cli.cases", "list the built-in cases"),
-    "solve": ("reports.cli.solve", "solve one configuration"),
-    "sweep": ("reports.cli.solve", "full-cycle table"),
+    "solve": ("reports.cli.solve", "solve one configuration (positions, rates, forces)"),
+    "sweep": ("reports.cli.solve", "the full-cycle table (--csv or --parquet) and its events"),
     "explain": ("reports.cli.explain",
                 "worked solution of one configuration, in the notes' method"),
     "models": ("reports.cli.models", "write the MJCF/URDF files of one case, or of all"),
@@ -36,13 +37,47 @@ COMMANDS = {
     "baseline": ("reports.cli.baseline", "record engine errors, later check them for drift"),
     "report": ("reports.cli.report", "the validation report (HTML, Markdown, CSV)"),
     "plot": ("reports.cli.plot", "full-cycle curves of one linkage (engines optional), or "
-             "its free motion against time"),
-    "animate": ("reports.cli.animate", "the linkage moving through a cycle, or its free motion "
-                "(GIF, MP4, HTML)"),
+             "its free motion"),
+    "animate": ("reports.cli.animate", "the linkage moving through a cycle, or in free "
+                "motion (GIF, MP4, HTML)"),
     "view": ("reports.cli.view", "MuJoCo's viewer on the linkage (needs a display)"),
-    "simulate": ("reports.cli.simulate", "free motion: the exact released trajectory"),
+    "simulate": ("reports.cli.simulate", "the exact trajectory of a released linkage, "
+                 "optionally judged in the engines"),
 }
 
+#: ``xval --help``'s groups of commands, in the order listed; every command of
+#: :data:`COMMANDS` is in exactly one (tests/reports/test_hostile_turn5.py checks it).
+GROUPS = (
+    ("the analytic solver", ("cases", "solve", "sweep", "explain")),
+    ("free motion", ("simulate",)),
+    ("the engines against the solver", ("compare", "baseline", "report", "models")),
+    ("figures and viewing", ("plot", "animate", "view")),
+)
+
+#: ``xval --help``'s text before the command list (plain text: no markup).
+ABOUT = ("xval: cross-validation of planar linkage dynamics: the analytic vector-loop\n"
+         "solver and the exact free motion, and the physics engines judged against them.")
+
+#: ``xval --help``'s text after the command list.
+EXIT_STATUS = (
+    "Run 'xval COMMAND --help' for a command's options.\n\n"
+    "Exit status: 0 done; 1 a failed verdict; 2 a user error (a bad file, case, option or\n"
+    "input value, an angle where the loops cannot close, a singular position, an output\n"
+    "file that cannot be written), reported as one line on standard error that names the\n"
+    "problem and where it is; 141 when the reader of the output stops reading\n"
+    "(xval sweep ... | head).  Any other failure is a bug in xval.")
+
+
+def commands_text() -> str:
+    """The command list of ``xval --help``: each group of :data:`GROUPS`, one plain line
+    per command (its name and its line of :data:`COMMANDS`)."""
+    width = max(len(n) for n in COMMANDS) + 2
+    lines = []
+    for title, names in GROUPS:
+        lines.append(f"{title}:")
+        lines += [f"  {n:<{width}}{COMMANDS[n][1]}" for n in names]
+        lines.append("")
+    return "\n".join(lines)
 
 
 class _OnlyOne:
@@ -59,14 +94,19 @@ class _OnlyOne:
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """``xval``'s parser: every command listed with its help line (:data:`COMMANDS`);
+    """``xval``'s parser: every command listed with its help line (:data:`COMMANDS`, in the
+    groups of :data:`GROUPS`);
     ``command``'s own options added by its module, the only one imported."""
-    p = opt.OneLineParser(prog="xval", description=__doc__,
+    p = opt.OneLineParser(prog="xval", usage="xval [-h] COMMAND ...",
+                          description=f"{ABOUT}\n\n{commands_text()}", epilog=EXIT_STATUS,
                           formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = p.add_subparsers(dest="cmd", required=True)
-    for name, (module, help_) in COMMANDS.items():
+    # the commands are listed in the description, grouped (commands_text); argparse's own
+    # list of them (a brace of every name, then each again) is left out
+    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND", prog="xval",
+                           help=argparse.SUPPRESS)
+    for name, (module, _help) in COMMANDS.items():
         if name != command:
-            sub.add_parser(name, help=help_, add_help=False)
+            sub.add_parser(name, add_help=False)
             continue
         importlib.import_module(module).register(_OnlyOne(sub, name))
     return p
@@ -81,6 +121,7 @@ def _command(argv: list[str]) -> str | None:
 
 def main(argv: list[str] | None = None) -> int:
     _setup_once()
+    opt.forget_created_folders()
     try:
         argv = sys.argv[1:] if argv is None else list(argv)
         args = _parser(_command(argv)).parse_args(argv)
@@ -95,11 +136,22 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout.flush()  # a closed pipe shows here, inside the handler
         return code
     except LinkageError as e:  # every user error: one line, status 2
-        print(f"xval: error: {e}", file=sys.stderr)
+        opt.remove_created_folders()  # a refused command leaves no folder behind
+        print(f"xval: error: {one_line(str(e))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped reading (| head): end quietly
         _stdout_to_devnull()
         return 141
+
+
+def one_line(text: str) -> str:
+    """``text`` with every control character (a newline, a tab, an escape sequence in a
+    file name or ``--set`` value the user typed) written as its Python escape (``\\n``,
+    ``\\x1b``): an error message stays one line on any terminal, and shows what was typed.
+    The one place every message of ``xval`` passes through before it is printed."""
+    return "".join(ch.encode("unicode_escape").decode("ascii")
+                   if unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp") else ch
+                   for ch in text)
 
 
 def _quiet_numpy():

@@ -9,7 +9,15 @@ time (phase error) for any integrator; a verdict on free motion says what it jud
   the norm of the per-component ranges), with the time of its maximum; a quantity whose
   range is below :data:`reports.comparison.compare.ZERO_PEAK` of its family's scale (a reaction
   that stays constant, a body that does not turn) is judged on the family's scale
-  instead, and says so in ``normalisation``;
+  instead, and says so in ``normalisation``; a rate, acceleration or reaction is never
+  judged on less than its family's **floor** (:func:`family_floor`): the family's peak
+  magnitude times :data:`analytic.tolerances.ENGINE_RELATIVE` over the tolerance (an error
+  within the prescribed runs' pointwise 1e-3 of the peak always passes: over a run of
+  1e-6 s every range is ~1e-10 of the value, and dividing by it judges round-off), or,
+  for a family that is identically zero over the run (a release at rest with nothing to
+  move it), the scale its coordinates' family implies over the run's duration T (the
+  angles' scale / T for a rate, / T^2 for an acceleration, times the moving mass and the
+  size for a reaction), never 0;
 * the **trusted horizon**: the first time each quantity's normalised error exceeds its
   tolerance (linear between samples; ``inf`` when it never does);
 * the energy drift (engine total energy minus the reference's, over the energy scale
@@ -33,6 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from analytic.mechanism import Revolute, mechanism_size
+from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison.compare import ZERO_PEAK, json_safe
 from reports.comparison.iftomm import IftommAccuracy, iftomm_accuracy
 
@@ -165,12 +174,14 @@ def _range(ref: np.ndarray) -> float:
 
 def judge(quantity: str, family: str, unit: str, times, reference, test, tolerance: float,
           family_scale: float, scale: float | None = None,
-          normalisation: str = "range over the run") -> FreeComparison:
+          normalisation: str = "range over the run",
+          floor: tuple[float, str] | None = None) -> FreeComparison:
     """Compare ``test`` with ``reference`` at ``times`` (arrays ``(N,)`` or ``(N, k)``).
 
     The scale is ``scale`` when given (named by ``normalisation``), else the reference's
     range over the run, or ``family_scale`` when that range is at most
-    :data:`reports.comparison.compare.ZERO_PEAK` of it (a quantity that does not change)."""
+    :data:`reports.comparison.compare.ZERO_PEAK` of it (a quantity that does not change);
+    never less than ``floor`` (``(value, its name)``: :func:`family_floor`)."""
     t = np.asarray(times, float)
     ref = np.asarray(reference, float)
     tst = np.asarray(test, float)
@@ -184,6 +195,8 @@ def judge(quantity: str, family: str, unit: str, times, reference, test, toleran
             scale = own
         else:
             scale, normalisation = family_scale, f"{family} scale (own range {own:.3g})"
+        if floor is not None and floor[0] > scale:
+            scale, normalisation = floor[0], f"{floor[1]} (own range {own:.3g})"
     finite = np.isfinite(err)
     # trailing NaN rows: the run stopped (not measured from there on); a NaN before the
     # last finite sample is a value the engine does not read there (PyBullet's
@@ -302,23 +315,42 @@ def _unwrap(a: np.ndarray) -> np.ndarray:
 
 
 def _family(out: list, family: str, unit: str, t, pairs, tol: float,
-            not_read: list | None = None) -> None:
+            not_read: list | None = None, still: float | None = None) -> float:
     """Append the comparisons of one family ``(name, ref, test)``; its scale is its
     largest range (for a family that does not change at all: the largest magnitude).
     With ``not_read`` (a run that did not stop): a quantity with no engine value at any
     sample is one the engine does not read (Exudyn's prismatic joint forces): named
-    there, not judged."""
+    there, not judged.  ``still``: a family of physical magnitudes (rates,
+    accelerations, reactions), judged on no less than :func:`family_floor`, ``still``
+    being its scale when the whole family is identically zero.  Returns the family's
+    scale (the floor where that is larger)."""
     if not_read is not None:
         gone = [n for n, _, x in pairs if not np.isfinite(x).any()]
         not_read += gone
         pairs = [p for p in pairs if p[0] not in gone]
     ranges = [_range(r) for _, r, _ in pairs]
     fam = max(ranges, default=0.0)
+    peak = max((float(np.nanmax(np.abs(r))) for _, r, _ in pairs
+                if np.isfinite(r).any()), default=0.0)
     if fam == 0.0:
-        fam = max((float(np.nanmax(np.abs(r))) for _, r, _ in pairs
-                   if np.isfinite(r).any()), default=0.0)
+        fam = peak
+    floor = None if still is None else family_floor(family, peak, tol, still)
     for name, r, x in pairs:
-        out.append(judge(name, family, unit, t, r, x, tol, fam))
+        out.append(judge(name, family, unit, t, r, x, tol, fam, floor=floor))
+    return max(fam, floor[0] if floor else 0.0)
+
+
+def family_floor(family: str, peak: float, tol: float, still: float) -> tuple[float, str]:
+    """The least scale a family of physical magnitudes (a rate, an acceleration, a
+    reaction) is judged on, and its name: its largest magnitude over the run ``peak``
+    times :data:`analytic.tolerances.ENGINE_RELATIVE` / ``tol`` (so that an error within
+    the prescribed runs' pointwise tolerance of the peak passes whatever the run's
+    length), or ``still`` (the scale the coordinates imply over the run, see
+    :func:`_quantities`) when the family is identically zero."""
+    if peak > 0 and math.isfinite(peak):
+        k = ENGINE_RELATIVE / tol
+        return peak * k, f"{family} floor ({k:g} of its peak {peak:.4g})"
+    return still, f"at-rest {family} scale"
 
 
 def reference_samples(traj, times, forces: bool = True):
@@ -352,29 +384,33 @@ def _quantities(run, ref, mech, not_read: list) -> list[FreeComparison]:
             xe = _align_turns(xr, xe)
         by_kind[rev[name]][0].append((f"{name}.x", xr, xe))
         by_kind[rev[name]][1].append((f"{name}.xd", ref.xd[:, i], run.xd[:, k]))
+    T = float(t[-1] - t[0]) if len(t) > 1 and t[-1] > t[0] else 1.0  # s
+    size = mechanism_size(mech.bodies) or 1.0
     for revolute, (xs, xds) in by_kind.items():
         u = ("rad", "rad/s") if revolute else ("m", "m/s")
         fam = ("joint angle", "joint rate") if revolute else ("slider", "slider rate")
         if xs:
-            _family(out, fam[0], u[0], t, xs, FREE_KINEMATIC)
-            _family(out, fam[1], u[1], t, xds, FREE_KINEMATIC)
+            x_scale = _family(out, fam[0], u[0], t, xs, FREE_KINEMATIC)
+            _family(out, fam[1], u[1], t, xds, FREE_KINEMATIC, still=x_scale / T)
     names = [b.name for b in mech.bodies]
     moving = [(k, b, names.index(b)) for k, b in enumerate(run.body_names) if b != mech.ground]
-    _family(out, "angle", "rad", t,
-            [(f"{b}.theta", _unwrap(ref.theta[:, i]),
-              _align_turns(_unwrap(ref.theta[:, i]), run.theta[:, k])) for k, b, i in moving],
-            FREE_KINEMATIC)
+    a_scale = _family(out, "angle", "rad", t,
+                      [(f"{b}.theta", _unwrap(ref.theta[:, i]),
+                        _align_turns(_unwrap(ref.theta[:, i]), run.theta[:, k]))
+                       for k, b, i in moving], FREE_KINEMATIC)
     _family(out, "angular rate", "rad/s", t,
             [(f"{b}.omega", ref.omega[:, i], run.omega[:, k]) for k, b, i in moving],
-            FREE_KINEMATIC)
-    _family(out, "angular acceleration", "rad/s^2", t,
-            [(f"{b}.alpha", ref.alpha[:, i], run.alpha[:, k]) for k, b, i in moving],
-            FREE_DYNAMIC, nr)
+            FREE_KINEMATIC, still=a_scale / T)
+    alpha_scale = _family(out, "angular acceleration", "rad/s^2", t,
+                          [(f"{b}.alpha", ref.alpha[:, i], run.alpha[:, k])
+                           for k, b, i in moving], FREE_DYNAMIC, nr, still=a_scale / T ** 2)
     if ref.reactions:
+        # the force that gives the moving mass the angular acceleration scale at the size
+        mass = sum(b.mass or 0.0 for b in mech.moving_bodies) or 1.0
         _family(out, "reaction", "N", t,
                 [(f"{n}.force", ref.reactions[n], run.joint_force[:, k])
                  for k, n in enumerate(run.joint_names) if n in ref.reactions],
-                FREE_DYNAMIC, nr)
+                FREE_DYNAMIC, nr, still=mass * size * alpha_scale)
     return out
 
 
@@ -459,5 +495,5 @@ def free_step_note(run, ref, mech) -> str | None:
 
 
 __all__ = ["ENERGY_DRIFT", "FREE_DYNAMIC", "FREE_KINEMATIC", "LOOP_DRIFT", "FreeComparison",
-           "FreeVerdict", "compare_free", "energy_scale", "horizon_of", "judge",
-           "reference_samples"]
+           "FreeVerdict", "compare_free", "energy_scale", "family_floor", "horizon_of",
+           "judge", "reference_samples"]

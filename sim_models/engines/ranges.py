@@ -16,6 +16,7 @@ This module imports nothing but the standard library.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 
@@ -77,19 +78,28 @@ class Range:
 
 @dataclass(frozen=True)
 class Choice:
-    """One of a few words (case-sensitive unless ``fold``)."""
+    """One of a few words, in any letter case (``RK4``, ``rk4`` and ``Rk4`` are one
+    integrator for every engine); :meth:`canonical` gives the listed spelling, which the
+    settings keep.  ``fold`` is kept for the callers that name it: every choice folds."""
 
     values: tuple[str, ...]
-    fold: bool = False
+    fold: bool = True
 
     def text(self) -> str:
-        return "one of " + ", ".join(self.values)
+        return "one of " + ", ".join(self.values) + " (any letter case)"
+
+    def canonical(self, value):
+        """``value``'s listed spelling when it is one of :attr:`values` in another letter
+        case; anything else unchanged (for :meth:`problem` to refuse)."""
+        if isinstance(value, str):
+            for v in self.values:
+                if v.lower() == value.lower():
+                    return v
+        return value
 
     def problem(self, value) -> str | None:
-        if isinstance(value, str):
-            v = value.lower() if self.fold else value
-            if v in ((x.lower() for x in self.values) if self.fold else self.values):
-                return None
+        if isinstance(value, str) and self.canonical(value) in self.values:
+            return None
         return f"{value!r} is not accepted: use {self.text()}"
 
 
@@ -148,6 +158,33 @@ STATES = Range(1, 100 * MAX_SAMPLES, whole=True, why="states evaluated one by on
 #: 20 s takes PyBullet about 30 min on a shared 2-core machine.
 WALL_LIMIT = Range(0, 86400, lo_open=True, unit="s",
                    why="at most one day of stepping per engine run")
+
+
+def free_interval_problem(duration: float, intervals: int) -> str | None:
+    """Why a free run of ``duration`` s read at ``intervals + 1`` evenly spaced times
+    cannot be asked of an engine, or None.  An engine steps at most one sample interval
+    (the step is shortened so that every sample falls on one), so samples closer than
+    :data:`MIN_TIMESTEP` would run every engine below the smallest step it accepts,
+    where its readings are not what it was measured at (51 samples over 1e-6 s step
+    Exudyn at 2e-8 s: its accelerations 255 of their scale off; MuJoCo, Pinocchio and
+    MuJoCo Warp pass there); the exact trajectory alone (no engine) has no such floor."""
+    if isinstance(intervals, bool) or not isinstance(intervals, numbers.Integral) or \
+            intervals < 1:
+        return None  # not a count of intervals: for the request's own checks to name
+    try:
+        dt = float(duration) / int(intervals)
+    except (TypeError, ValueError):
+        return None
+    if not (math.isfinite(dt) and dt > 0):
+        return None  # a duration that is not a positive number: named where it is read
+    if not dt >= MIN_TIMESTEP * (1 - 1e-9):
+        most = max(1, int(float(duration) / MIN_TIMESTEP * (1 + 1e-9))) + 1
+        return (f"{int(intervals) + 1} sample times over {float(duration):g} s are "
+                f"{dt:.3g} s apart, below the engines' smallest step {MIN_TIMESTEP:g} s: "
+                f"ask for at most {most} samples over {float(duration):g} s, or a duration "
+                f"of at least {MIN_TIMESTEP * int(intervals):.3g} s")
+    return None
+
 
 MAX_REVOLUTIONS = 1000
 REVOLUTIONS = Range(1, MAX_REVOLUTIONS, whole=True, why="the last revolution is compared")

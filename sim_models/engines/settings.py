@@ -59,6 +59,12 @@ class EngineSettings:
     arithmetic: ClassVar[Arithmetic] = FLOAT64
 
     def __post_init__(self):
+        # a word setting in any letter case is kept in its listed spelling (ranges.Choice),
+        # so that the engines compare it with one spelling
+        for f in dataclasses.fields(self):
+            rng = self.RANGES.get(f.name)
+            if isinstance(rng, ranges.Choice):
+                object.__setattr__(self, f.name, rng.canonical(getattr(self, f.name)))
         self.validate()
 
     def validate(self) -> None:

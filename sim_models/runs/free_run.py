@@ -42,7 +42,7 @@ import numpy as np
 
 from analytic import Mechanism
 
-from ..engines.ranges import WALL_LIMIT
+from ..engines.ranges import WALL_LIMIT, free_interval_problem
 from ..engines.settings import EngineSettings, SettingsError
 
 
@@ -63,11 +63,18 @@ class FreeRequest:
 
     def __post_init__(self):
         """``wall_limit`` within :data:`sim_models.engines.ranges.WALL_LIMIT` (the command
-        line's ``--wall-limit`` range): :class:`SettingsError` naming it otherwise."""
+        line's ``--wall-limit`` range), and samples no closer than an engine's smallest
+        step (:func:`sim_models.engines.ranges.free_interval_problem`): :class:`SettingsError`
+        naming it otherwise."""
         problem = WALL_LIMIT.problem(self.wall_limit)
         if problem:
             raise SettingsError(f"free run request wall_limit={self.wall_limit!r}: {problem}",
                                 "wall_limit", self.wall_limit, problem)
+        # every door builds this request: the same floor on the sample interval for all
+        problem = free_interval_problem(self.duration, self.samples)
+        if problem:
+            raise SettingsError(f"free run request: {problem}", "samples", self.samples,
+                                problem)
 
     def times(self) -> np.ndarray:
         """The sample times, s: ``samples + 1`` points, 0 and ``duration`` included."""

@@ -190,8 +190,8 @@ def test_bad_file(capsys, tmp_path, mutation, message):
 # (id, argv, message regex, status): command lines, in-process.  "{tmp}" is a temporary
 # folder, "{file}" a file in it, "{ro}" a folder that cannot be written.
 ARGV_ROWS = [
-    ("no-command", [], r"the following arguments are required: cmd"),
-    ("unknown-command", ["frobnicate"], r"argument cmd: invalid choice: 'frobnicate'"),
+    ("no-command", [], r"the following arguments are required: COMMAND"),
+    ("unknown-command", ["frobnicate"], r"argument COMMAND: invalid choice: 'frobnicate'"),
     ("solve-no-case", ["solve"], r"the following arguments are required: case"),
     ("unknown-case", ["solve", "no-such-case"], r"no built-in case 'no-such-case'"),
     ("missing-file", ["solve", "{tmp}/nope.toml"], r"nope\.toml: cannot read file: No such file"),
