@@ -11,6 +11,7 @@ exactly when it would be accepted in a file.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import re
@@ -198,6 +199,28 @@ def _probe_dir(d: Path, what: str) -> None:
                                          f"{e.strerror}") from None
 
 
+#: Folders the output options created in this command (deepest last): a command
+#: refused afterwards removes those still empty (:func:`remove_created_folders`), so a
+#: refusal leaves no folder the user did not get a file in.
+CREATED_FOLDERS: list[Path] = []
+
+
+def _make_folder(d: Path) -> None:
+    """``mkdir -p d``, remembering each folder it creates (:data:`CREATED_FOLDERS`)."""
+    missing = [q for q in (d, *d.parents) if not q.exists()][::-1]
+    d.mkdir(parents=True, exist_ok=True)
+    CREATED_FOLDERS.extend(missing)
+
+
+def remove_created_folders() -> None:
+    """Remove the folders this command's output options created that are still empty
+    (deepest first); called when the command is refused."""
+    while CREATED_FOLDERS:
+        d = CREATED_FOLDERS.pop()
+        with contextlib.suppress(OSError):  # not empty (a file was written), or gone
+            d.rmdir()
+
+
 def output_file(text: str) -> str:
     """An argparse type: a file to (over)write, or ``-`` for standard output.  The
     folders it is in are created when missing (the README's ``--out ci/base.json``)."""
@@ -209,7 +232,7 @@ def output_file(text: str) -> str:
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         try:
-            parent.mkdir(parents=True, exist_ok=True)
+            _make_folder(parent)
         except OSError as e:
             raise argparse.ArgumentTypeError(f"cannot create folder {str(parent)!r}: "
                                              f"{e.strerror}") from None
@@ -225,7 +248,7 @@ def output_dir(text: str) -> str:
     if p.exists() and not p.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} exists and is not a folder")
     try:
-        p.mkdir(parents=True, exist_ok=True)
+        _make_folder(p)
     except OSError as e:
         raise argparse.ArgumentTypeError(f"cannot create folder {text!r}: "
                                          f"{e.strerror}") from None

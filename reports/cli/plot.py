@@ -278,6 +278,23 @@ def _driven_plot(args, mech, units):
         summary, notes
 
 
+#: Most samples a free-motion figure draws: its panels are 9 in wide at ``DPI`` (1350
+#: pixels at 150 dpi), so 10001 samples already put about 7 in every pixel column and
+#: more draw nothing the eye can see, while each costs about 0.75 ms of CPU with the
+#: forces (measured: 20001 samples 18 s, 1e6 samples no figure in minutes).  Every
+#: sample is in ``xval simulate --csv`` (to 1e6).
+MAX_FIGURE_SAMPLES = 10_001
+
+
+def _figure_holds(n: int, source: str) -> None:
+    """Refuse (one line) a free figure of more than :data:`MAX_FIGURE_SAMPLES` samples."""
+    if n > MAX_FIGURE_SAMPLES:
+        raise UsageError(f"{source} {n}: a figure draws at most {MAX_FIGURE_SAMPLES} samples "
+                         "(its panels are 1350 pixels wide; more draw nothing more); give "
+                         f"--samples {MAX_FIGURE_SAMPLES} or fewer, or write them all with "
+                         f"xval simulate --csv FILE --samples {n}")
+
+
 def _free_plot(args, mech, units):
     """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
     evenly spaced times (``xval simulate``'s samples)."""
@@ -288,9 +305,10 @@ def _free_plot(args, mech, units):
                 f"table), which draws no engine run; add --driven for the prescribed cycle")
     if args.samples is not None:
         _option_range("--samples", opt.int_range(2, MAX_SAMPLES), args.samples)
+    n = args.samples or mech.motion.samples
+    _figure_holds(n, "--samples" if args.samples else "the description's [motion] samples")
     what = fp.parse_free_what(args.what)
     traj = fp.trajectory(mech, args.duration)
-    n = args.samples or mech.motion.samples
     smp = traj.at(fp.sample_times(traj, n), forces="forces" in what)
     figs, notes = fp.free_figures(mech, traj, smp, what, units)
     note = fp.swing_note(traj, traj.duration / (n - 1), "samples")
@@ -345,8 +363,8 @@ def register(sub) -> None:
                         f"{RunRequest.revolutions}; not in free motion)")
     s.add_argument("--samples", type=_integer,
                    help=f"engine samples per revolution (default {RunRequest.samples}); free "
-                        "motion: samples of the trajectory, 2 to 1000000 (default the "
-                        "description's)")
+                        f"motion: samples of the trajectory, 2 to {MAX_FIGURE_SAMPLES} (what "
+                        "a figure draws; default the description's)")
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")

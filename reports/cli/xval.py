@@ -24,6 +24,7 @@ import sys
 from analytic.errors import LinkageError
 from analytic.perf import tune_allocator
 from reports.cli import options as opt
+from reports.cli.paths import check_command
 
 COMMANDS = {
     "cases": ("reports.cli.cases", "list the built-in cases"),
@@ -81,9 +82,12 @@ def _command(argv: list[str]) -> str | None:
 
 def main(argv: list[str] | None = None) -> int:
     _setup_once()
+    opt.CREATED_FOLDERS.clear()  # main may run many times in one process (the tests)
     try:
         argv = sys.argv[1:] if argv is None else list(argv)
-        args = _parser(_command(argv)).parse_args(argv)
+        parser = _parser(_command(argv))
+        args = parser.parse_args(argv)
+        check_command(parser, args)  # no output on an input or on another output
         args.stdout = sys.stdout
         # with the table on standard output, the summary goes to standard error
         to_err = getattr(args, "csv", None) == "-"
@@ -95,6 +99,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout.flush()  # a closed pipe shows here, inside the handler
         return code
     except LinkageError as e:  # every user error: one line, status 2
+        opt.remove_created_folders()  # a refusal leaves no empty folder behind
         print(f"xval: error: {e}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped reading (| head): end quietly
