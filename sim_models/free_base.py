@@ -32,7 +32,7 @@ from analytic import Revolute
 from analytic.free_motion import simulate
 from analytic.motion_spec import JointSpring, PointDamper, PointSpring
 
-from .engine_run import loop_gaps
+from .engine_run import WALL_CHUNK_STEPS, advance_bounded, loop_gaps
 from .engine_settings import EngineRefusal, EngineSettings
 from .free_run import FreeEngineRun, FreeRequest
 from .tree import SimTree, wrap
@@ -411,32 +411,6 @@ def _reference_start(mech, reference, request: FreeRequest):
     return reference, reference.at(np.array([0.0]), forces=False)
 
 
-#: Steps of the first :meth:`FreeSession.advance` call within a sample interval; later
-#: calls take as many steps as :data:`WALL_CHUNK_S` of wall time allows at the rate
-#: measured, so ``request.wall_limit`` is honoured within about that much, however many
-#: steps one sample interval holds (``--samples 2 --timestep 1e-6``: 2e8 steps).
-WALL_CHUNK_STEPS = 256
-WALL_CHUNK_S = 0.1
-
-
-def _advance_bounded(session: FreeSession, t: float, h: float, n: int, left: float,
-                     chunk: list[int]) -> tuple[str | None, float, int]:
-    """``session.advance(t, h, n)`` in calls of ``chunk[0]`` steps (adapted to take about
-    :data:`WALL_CHUNK_S` each), stopping once ``left`` s of wall time are spent:
-    ``(reason, wall, steps taken)``.  An interval within one chunk is one call, as before."""
-    done, wall = 0, 0.0
-    while done < n:
-        m = min(chunk[0], n - done)
-        t0 = time.perf_counter()
-        reason = session.advance(t + done * h, h, m)
-        dt = time.perf_counter() - t0
-        wall, done = wall + dt, done + m
-        if reason is not None or wall > left:
-            return reason, wall, done
-        chunk[0] = max(1, min(10 * chunk[0], int(m * WALL_CHUNK_S / max(dt, 1e-9))))
-    return None, wall, done
-
-
 def drive_free(session: FreeSession, request: FreeRequest, reference=None,
              case: str | None = None) -> FreeEngineRun:
     """Release ``session`` from the reference's state at t = 0 and read it at
@@ -459,11 +433,11 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
     scale = energy_scale(mech, float(s0.kinetic[0]), st.size)
     e0 = float(s0.kinetic[0] + s0.potential[0])
     reason, t_fail, wall, steps = None, None, 0.0, 0
-    chunk = [WALL_CHUNK_STEPS]
+    chunk = [WALL_CHUNK_STEPS]  # the limit acts within a sample interval, not after it
     for k, t in enumerate(times):
         if k:
             h, n = plan[k - 1]
-            reason, dt, done = _advance_bounded(session, float(times[k - 1]), h, n,
+            reason, dt, done = advance_bounded(session, float(times[k - 1]), h, n,
                                                 request.wall_limit - wall, chunk)
             wall += dt
             steps += done

@@ -50,6 +50,7 @@ from reports.figures.plots import DPI
 from sim_models import compile_linkage
 from sim_models.engine_base import plan_samples
 from sim_models.engine_run import RunRequest
+from sim_models.free_run import FreeRequest
 from sim_models.registry import engine_names
 
 #: ``--what`` words -> curve figure names of :func:`reports.figures.case_figures.curve_figures`.
@@ -106,10 +107,11 @@ def parse_what(text: str | None) -> list[str]:
 
 def case_figures(mech, what: list[str], engines: list[str], settings: dict,
                  revolutions: int | None = None, samples: int | None = None,
-                 quiet: tuple[str, ...] = ()):
+                 quiet: tuple[str, ...] = (), wall_limit: float | None = None):
     """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
     case: the report's figure code on the analytic solution and the engine runs
-    (``revolutions``/``samples`` None: :class:`sim_models.engine_run.RunRequest`'s)."""
+    (``revolutions``/``samples`` None: :class:`sim_models.engine_run.RunRequest`'s;
+    ``wall_limit``: s of stepping per engine run, None: none)."""
     revolutions = RunRequest.revolutions if revolutions is None else revolutions
     samples = RunRequest.samples if samples is None else samples
 
@@ -120,7 +122,7 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
         for e in engines:
             with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
                 r, c = verdict_runs.run_comparison(tree, e, settings[e], "run", revolutions,
-                                                   samples)
+                                                   samples, wall_limit)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
@@ -262,6 +264,8 @@ def _driven_plot(args, mech, units):
         _option_range("--samples", opt.samples, args.samples)
     if args.revolutions is not None:
         _option_range("--revolutions", opt.revolutions, args.revolutions)
+    if args.wall_limit is not None and not args.engine:
+        raise UsageError("option --wall-limit bounds an engine's run; it needs --engine")
     what = parse_what(args.what)
     engines, settings = [], {}
     if args.engine:
@@ -269,7 +273,8 @@ def _driven_plot(args, mech, units):
         settings = settings_for(engines)
     quiet = tuple(what) if args.what is None else ()  # no notes for the default
     figs, err, runs, notes = case_figures(mech, what, engines, settings,
-                                          args.revolutions, args.samples, quiet)
+                                          args.revolutions, args.samples, quiet,
+                                          args.wall_limit or DEFAULT_WALL_LIMIT)
     title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
                                 " (markers; errors in the last row)" if runs else
                                 "; no engine run (add --engine for markers)"))
@@ -278,6 +283,10 @@ def _driven_plot(args, mech, units):
         summary, notes
 
 
+#: Wall-clock seconds of stepping an engine's run for a figure may take (``--wall-limit``;
+#: the free runs' default, :class:`sim_models.free_run.FreeRequest`'s): PyBullet's 1000
+#: revolutions of the seed four-bar take about 10 minutes.
+DEFAULT_WALL_LIMIT = FreeRequest.wall_limit
 #: Most samples a free-motion figure draws: its panels are 9 in wide at ``DPI`` (1350
 #: pixels at 150 dpi), so 10001 samples already put about 7 in every pixel column and
 #: more draw nothing the eye can see, while each costs about 0.75 ms of CPU with the
@@ -298,7 +307,8 @@ def _figure_holds(n: int, source: str) -> None:
 def _free_plot(args, mech, units):
     """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
     evenly spaced times (``xval simulate``'s samples)."""
-    for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions")):
+    for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions"),
+                          (args.wall_limit, "--wall-limit")):
         if given is not None:
             raise fp.FreeOptionError(
                 f"option {option}: {mech.name!r} is plotted in free motion (its [motion] "
@@ -368,6 +378,10 @@ def register(sub) -> None:
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")
+    s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
+                   help=f"end each engine's run after this much wall-clock stepping "
+                        f"(default {DEFAULT_WALL_LIMIT:g} s, as xval simulate's; the run "
+                        "is drawn up to there and a note says so)")
     s.set_defaults(func=cmd_plot)
 
 

@@ -213,7 +213,7 @@ BAD = {
                          r"request duration: missing key"),
     "samples-one": (_set(("request", "samples"), 1),
                     r"request samples=1: 1 is out of range: the accepted range is 2 to "
-                    r"1e\+06 \(.*the range of --samples\)"),
+                    r"10001 \(.*the range of --samples with an engine\)"),
     "samples-float": (_set(("request", "samples"), 50.5), r"request samples=50\.5"),
     "samples-huge": (_set(("request", "samples"), 10 ** 7), r"request samples=10000000"),
     "request-extra-key": (_set(("request", "revolutions"), 2),

@@ -316,3 +316,25 @@ def test_plot_free_samples_beyond_a_figure_refused(tmp_path, capsys):
                                    "--what", "forces", "--out", str(tmp_path / "p.png")],
                           r"--samples 1000000: a figure draws at most 10001 samples")
     assert time.perf_counter() - t0 < 30 and not (tmp_path / "p.png").exists()
+
+
+def test_prescribed_wall_limit_within_the_first_stop():
+    """``xval plot seed-four-bar --engine pybullet --revolutions 1000``: 999 revolutions
+    before the first sample, one stop (minutes, no end seen): a wall-clock limit acts
+    within it."""
+    from sim_models.engines import run
+    r = run(load_case("seed-four-bar"), "pybullet", revolutions=1000, wall_limit=0.5)
+    assert not r.ok and "wall-clock limit 0.5 s reached" in r.reason, r.reason
+    assert r.wall < 0.5 + 1.0, r.wall
+
+
+def test_plot_prescribed_wall_limit(tmp_path, capsys):
+    from reports.cli.xval import main
+    out = tmp_path / "p.png"
+    t0 = time.perf_counter()
+    assert main(["plot", "seed-four-bar", "--engine", "pybullet", "--revolutions", "1000",
+                 "--wall-limit", "1", "--out", str(out)]) == 0
+    assert time.perf_counter() - t0 < 60 and out.is_file()
+    assert "pybullet: run failed: wall-clock limit 1 s reached" in capsys.readouterr().out
+    assert_one_line_error(capsys, ["plot", "seed-four-bar", "--wall-limit", "1"],
+                          "--wall-limit bounds an engine's run; it needs --engine")
