@@ -41,7 +41,7 @@ from reports.comparison.quantities import judged
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
 from reports.regression import baseline_store as bs
-from reports.regression.baseline import DEFAULT_FACTOR, BaselineError
+from reports.regression.baseline import DEFAULT_FACTOR, BaselineError, tolerance_problem
 from reports.regression.baseline_settings import (
     fmt_value,
     override_classes,
@@ -109,6 +109,10 @@ class Xval:
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
         ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
 
+        __tracebackhide__ = True
+        bad = None if tolerance is None else tolerance_problem(tolerance)
+        if bad:  # the range of --tolerance and of a baseline file's tolerance
+            pytest.fail(f"xval: error: tolerance={tolerance!r}: {bad}", pytrace=False)
         tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
         mech = self.mechanism(model)
         s = settings_of(engine, settings)

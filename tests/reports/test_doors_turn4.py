@@ -338,3 +338,11 @@ def test_plot_prescribed_wall_limit(tmp_path, capsys):
     assert "pybullet: run failed: wall-clock limit 1 s reached" in capsys.readouterr().out
     assert_one_line_error(capsys, ["plot", "seed-four-bar", "--wall-limit", "1"],
                           "--wall-limit bounds an engine's run; it needs --engine")
+
+
+@pytest.mark.parametrize("tolerance", [1e300, 0.0, float("nan"), 2.0])
+def test_api_tolerance_ranged(tolerance):
+    """The plugin's ``tolerance=``: the range of ``--tolerance`` (1e-15 to 1 of peak)."""
+    with pytest.raises(pytest.fail.Exception, match=r"tolerance=.*out of range: the "
+                       r"accepted range is 1e-15 to 1 of the quantity's peak"):
+        Xval(TURN4, 2.0).assert_agrees("seed-four-bar", "mujoco", tolerance=tolerance)
