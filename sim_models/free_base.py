@@ -443,6 +443,7 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
             steps += done
             if reason is None and wall > request.wall_limit:
                 reason = f"wall-clock limit {request.wall_limit:g} s reached"
+                t = float(times[k - 1]) + done * h  # where it stopped, within the interval
         r = session.read(float(t)) if reason is None else None
         if reason is None and r is None:
             reason = "non-finite state (simulation diverged)"

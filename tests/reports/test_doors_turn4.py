@@ -306,6 +306,8 @@ def test_wall_limit_within_one_sample_interval():
     assert not run.ok and "wall-clock limit 0.5 s reached" in run.reason
     assert run.wall < 0.5 + 0.5 and run.steps < 5_000_000, (run.wall, run.steps)
     assert took < 0.5 + 5.0  # the model build is outside the limit, not the stepping
+    # per simulated second stepped (steps x 1e-6 s), not per the 5 s interval asked for
+    assert abs(run.cpu_per_simulated_second / (run.wall / (run.steps * 1e-6)) - 1) < 1e-9
 
 
 # ============================================================== 7. free figure
