@@ -159,7 +159,8 @@ def check_free_request(duration, intervals, where: str = "free run") -> None:
     bad = free_request_problem(duration, intervals + 1 if whole else intervals)
     if bad:
         key, value, problem = bad
-        shown = (f"samples={intervals!r} sample intervals ({value} sample times)"
+        shown = (f"samples={intervals!r} sample intervals ({value} sample "
+                 f"time{'s' if value != 1 else ''})"
                  if key == "samples" and whole else f"{key}={value!r}")
         raise SettingsError(f"{where} {shown}: {problem}", key, value, problem)
 

@@ -261,7 +261,7 @@ def test_free_pass_line_says_drift_and_the_failed_verdict(tmp_path, capsys):
 
 # ============================================================== 5. the Python API
 @pytest.mark.parametrize("samples, words", [
-    (0, r"samples=0 sample intervals \(1 sample times\): 1 is out of range"),
+    (0, r"samples=0 sample intervals \(1 sample time\): 1 is out of range"),
     (10 ** 7, r"samples=10000000 sample intervals .* is out of range"),
     (2.5, r"samples=2\.5: 2\.5 is not a whole number"),
 ])
