@@ -12,7 +12,6 @@ from matplotlib import animation
 from analytic.errors import OutputError
 from analytic.motion_spec import MAX_DURATION
 from reports.cli import options as opt
-from reports.cli.paths import check_outputs
 from reports.cli.plot import check_out, load_for_figure
 from reports.cli.simulate import MIN_DURATION
 from reports.comparison.progress import engine_progress
@@ -40,7 +39,6 @@ def cmd_animate(args) -> int:
     if args.out is None:
         raise OutputError("option --out is required: F.gif, F.mp4 or F.html")
     check_out(args.out, FORMATS)
-    check_outputs([("--out", args.out)], [("the case file", args.case)])
     if Path(args.out).suffix.lower() == ".mp4":
         if not animation.writers.is_available("ffmpeg"):
             raise OutputError(f"--out {args.out!r}: MP4 needs ffmpeg, which is not on PATH; "

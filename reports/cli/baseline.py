@@ -15,12 +15,15 @@ import math
 import os
 
 from analytic.cases import case_names, free_case_names
-from analytic.errors import DescriptionError
 from analytic.input_display import format_input
-from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+from analytic.motion_spec import MAX_DURATION
 from reports.cli import options as opt
-from reports.cli.paths import check_outputs
-from reports.comparison.free_cases import MIN_DURATION, RELEASE_DURATION, command_case
+from reports.comparison.free_cases import (
+    FREE_SAMPLES,
+    MIN_DURATION,
+    RELEASE_DURATION,
+    command_case,
+)
 from reports.regression import baseline as bl
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
@@ -36,7 +39,6 @@ from sim_models.runs.free import free_engine_names, free_session_class
 
 # ============================================================================ record
 def cmd_record(args) -> int:
-    check_outputs([("--out", args.out)], [("the case file", m) for m in args.models])
     free = bool(getattr(args, "free", False))
     _free_options(args, free)
     engines = _engines(args.engine, free)
@@ -49,10 +51,7 @@ def cmd_record(args) -> int:
             classes={e: free_session_class(e).settings_class for e in engines})
         req = free_request(args.duration or RELEASE_DURATION, args.samples)
         for m in dict.fromkeys(models):  # one line, status 2, before any run
-            mech, _ = command_case(m, req["duration"])
-            if mech.motion is None:  # a user's file is not guessed at (as xval simulate)
-                raise DescriptionError(f"{m}: no [motion] table: free motion needs the "
-                                       "initial joint, value, rate and duration")
+            mech, _ = command_case(m, req["duration"])  # a file without [motion]: refused
             free_mechanism(mech, req)
     else:
         settings = settings_from_options(engines, args.set or ())
@@ -113,12 +112,25 @@ def _free_options(args, free: bool) -> None:
             raise opt.UsageError(f"{bad[0]} does not apply to --free (a free run is read "
                                  "over --duration at --samples times; its tolerances are "
                                  "the named ones of reports/comparison/free_compare.py)")
-        args.samples = _checked_samples(args.samples, opt.int_range(2, MAX_SAMPLES))
+        args.samples = _checked_samples(args.samples, _judged_samples)
     elif args.duration is not None:
         raise opt.UsageError("--duration needs --free (a prescribed run is read over "
                              "--revolutions)")
     else:
         args.samples = _checked_samples(args.samples, opt.samples)
+
+
+def _judged_samples(text: str) -> int:
+    """``--samples`` with ``--free``: sample times of a judged free run
+    (:data:`reports.comparison.free_cases.FREE_SAMPLES`, every door's range)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    problem = FREE_SAMPLES.problem(v)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return v
 
 
 def _checked_samples(text, typ):
@@ -133,8 +145,6 @@ def _checked_samples(text, typ):
 
 # ============================================================================ check
 def cmd_check(args) -> int:
-    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
-                  [("the baseline", args.baseline)])
     base = bs.load(args.baseline)
     overrides = _check_overrides(args.set, base)
     keep = None
@@ -178,7 +188,7 @@ def _override_props(overrides: dict) -> dict:
 
 
 # ============================================================================ parser
-_tolerance = opt.finite_float(1.0, "of peak", lo=1e-15,
+_tolerance = opt.finite_float(bl.MAX_TOLERANCE, "of peak", lo=bl.MIN_TOLERANCE,
                               why="an error relative to the quantity's peak")
 
 
@@ -204,7 +214,7 @@ def register(sub) -> None:
     r.add_argument("--samples", default=None,  # its range depends on --free: _free_options
                    help=f"samples per revolution, 2 to {opt.MAX_SAMPLES} (default "
                         f"{RunRequest.samples}); with --free, sample times over the run, "
-                        f"2 to {MAX_SAMPLES} (default {DEFAULT_SAMPLES})")
+                        f"{FREE_SAMPLES.text()} (default {DEFAULT_SAMPLES})")
     r.add_argument("--free", action="store_true",
                    help="record free-motion runs: each case released from the exact "
                         "state (a built-in case without [motion] released at rest under "

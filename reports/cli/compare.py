@@ -14,7 +14,6 @@ import pandas as pd
 from analytic import load_case
 from analytic.input_display import format_input, input_number
 from reports.cli import options as opt
-from reports.cli.paths import check_outputs
 from reports.comparison import runs as verdict_runs
 from reports.comparison.compare import FAIL, PASS, json_safe, step_note, verdict_word
 from reports.comparison.progress import engine_progress
@@ -29,8 +28,6 @@ from sim_models.runs.engine_run import RunRequest
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     mech = load_case(args.case)
-    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
-                  [("the case file", args.case)])
     engines = engine_list(args.engine, args.mode)
     settings = settings_for(engines, list(args.set or ()),
                             {"--timestep": ("timestep", args.timestep),

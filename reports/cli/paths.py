@@ -9,6 +9,7 @@ symbolic link to ``F`` are one file.  A refusal is one line (``xval: error: ...`
 
 from __future__ import annotations
 
+import argparse
 import os
 import re
 from collections.abc import Iterable
@@ -57,6 +58,51 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
                                   "overwrite the other; give two file names")
 
 
+#: How a positional argument is named in a refusal (``dest`` -> words); others by dest.
+_INPUT_NAMES = {"case": "the case file", "models": "the case file",
+                "baseline": "the baseline"}
+
+
+def _chosen_actions(parser, args):
+    """Every argparse action of the (sub)command that ran: ``parser``'s own, then those
+    of the subparser chosen at each level (``xval baseline check`` is two deep)."""
+    for a in parser._actions:  # argparse keeps no public list of them
+        if isinstance(a, argparse._SubParsersAction):
+            chosen = a.choices.get(getattr(args, a.dest, None) or "")
+            if chosen is not None:
+                yield from _chosen_actions(chosen, args)
+        else:
+            yield a
+
+
+def command_paths(parser, args) -> tuple[list, list]:
+    """``(outputs, inputs)`` of a parsed command, as :func:`check_outputs` takes them:
+    every option whose type is :func:`reports.cli.options.output_file` (``--out``,
+    ``--csv``, ``--parquet``, ``--junit``, ``--summary``, ...) and every positional
+    argument (the case file, the models, the baseline).  Read from the parser, so a
+    new command or output option is checked without a line of its own."""
+    from reports.cli.options import output_file
+    outputs, inputs = [], []
+    for a in _chosen_actions(parser, args):
+        v = getattr(args, a.dest, None)
+        if v is None:
+            continue
+        if a.type is output_file:
+            outputs.append((a.option_strings[-1] if a.option_strings else a.dest, v))
+        elif not a.option_strings:
+            what = _INPUT_NAMES.get(a.dest, a.dest)
+            vals = v if isinstance(v, (list, tuple)) else [v]
+            inputs += [(what, x) for x in vals if isinstance(x, (str, os.PathLike))]
+    return outputs, inputs
+
+
+def check_command(parser, args) -> None:
+    """:func:`check_outputs` on every output and input of a parsed command: called by
+    ``xval``'s ``main`` for every command before it runs (one place, every door that
+    writes a file)."""
+    check_outputs(*command_paths(parser, args))
+
+
 def write_csv(frame, path: str, stdout) -> None:
     """Write a table as CSV to ``path``, or to ``stdout`` when ``path`` is ``-``."""
     if path == "-":
@@ -68,4 +114,4 @@ def write_csv(frame, path: str, stdout) -> None:
         raise OutputError(f"cannot write {path!r}: {e.strerror or e}") from None
 
 
-__all__ = ["check_outputs", "safe_stem", "write_csv"]
+__all__ = ["check_command", "check_outputs", "command_paths", "safe_stem", "write_csv"]

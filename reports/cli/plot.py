@@ -52,6 +52,7 @@ from sim_models import compile_linkage
 from sim_models.engines.protocol import plan_samples
 from sim_models.engines.registry import engine_names
 from sim_models.runs.engine_run import RunRequest
+from sim_models.runs.free_run import FreeRequest
 
 #: ``--what`` words -> curve figure names of :func:`reports.figures.case_figures.curve_figures`.
 WHAT = {"angle": ("angle",), "omega": ("omega",), "alpha": ("alpha",),
@@ -107,10 +108,11 @@ def parse_what(text: str | None) -> list[str]:
 
 def case_figures(mech, what: list[str], engines: list[str], settings: dict,
                  revolutions: int | None = None, samples: int | None = None,
-                 quiet: tuple[str, ...] = ()):
+                 quiet: tuple[str, ...] = (), wall_limit: float | None = None):
     """``(curve figures in the order asked, error figure or None, runs, notes)`` of one
     case: the report's figure code on the analytic solution and the engine runs
-    (``revolutions``/``samples`` None: :class:`sim_models.runs.engine_run.RunRequest`'s)."""
+    (``revolutions``/``samples`` None: :class:`sim_models.runs.engine_run.RunRequest`'s;
+    ``wall_limit``: s of stepping per engine run, None: none)."""
     revolutions = RunRequest.revolutions if revolutions is None else revolutions
     samples = RunRequest.samples if samples is None else samples
 
@@ -121,7 +123,7 @@ def case_figures(mech, what: list[str], engines: list[str], settings: dict,
         for e in engines:
             with engine_progress(f"{e}: {mech.name}, {revolutions} revolutions"):
                 r, c = verdict_runs.run_comparison(tree, e, settings[e], "run", revolutions,
-                                                   samples)
+                                                   samples, wall_limit)
             runs[e], comps[e] = r, c
             if not r.ok:
                 notes.append(f"{e}: run failed: {r.reason}")
@@ -276,6 +278,8 @@ def _driven_plot(args, mech, units):
         _option_range("--samples", opt.samples, args.samples)
     if args.revolutions is not None:
         _option_range("--revolutions", opt.revolutions, args.revolutions)
+    if args.wall_limit is not None and not args.engine:
+        raise UsageError("option --wall-limit bounds an engine's run; it needs --engine")
     what = parse_what(args.what)
     engines, settings = [], {}
     if args.engine:
@@ -283,7 +287,8 @@ def _driven_plot(args, mech, units):
         settings = settings_for(engines)
     quiet = tuple(what) if args.what is None else ()  # no notes for the default
     figs, err, runs, notes = case_figures(mech, what, engines, settings,
-                                          args.revolutions, args.samples, quiet)
+                                          args.revolutions, args.samples, quiet,
+                                          args.wall_limit or DEFAULT_WALL_LIMIT)
     title = f"{mech.name}: " + ("analytic (lines)" + (", " + ", ".join(runs) +
                                 " (markers; errors in the last row)" if runs else
                                 "; no engine run (add --engine for markers)"))
@@ -292,19 +297,42 @@ def _driven_plot(args, mech, units):
         summary, notes
 
 
+#: Wall-clock seconds of stepping an engine's run for a figure may take (``--wall-limit``;
+#: the free runs' default, :class:`sim_models.runs.free_run.FreeRequest`'s): PyBullet's 1000
+#: revolutions of the seed four-bar take about 10 minutes.
+DEFAULT_WALL_LIMIT = FreeRequest.wall_limit
+#: Most samples a free-motion figure draws: its panels are 9 in wide at ``DPI`` (1350
+#: pixels at 150 dpi), so 10001 samples already put about 7 in every pixel column and
+#: more draw nothing the eye can see, while each costs about 0.75 ms of CPU with the
+#: forces (measured: 20001 samples 18 s, 1e6 samples no figure in minutes).  Every
+#: sample is in ``xval simulate --csv`` (to 1e6).
+MAX_FIGURE_SAMPLES = 10_001
+
+
+def _figure_holds(n: int, source: str) -> None:
+    """Refuse (one line) a free figure of more than :data:`MAX_FIGURE_SAMPLES` samples."""
+    if n > MAX_FIGURE_SAMPLES:
+        raise UsageError(f"{source} {n}: a figure draws at most {MAX_FIGURE_SAMPLES} samples "
+                         "(its panels are 1350 pixels wide; more draw nothing more); give "
+                         f"--samples {MAX_FIGURE_SAMPLES} or fewer, or write them all with "
+                         f"xval simulate --csv FILE --samples {n}")
+
+
 def _free_plot(args, mech, units):
     """``(draw, summary, notes)`` of the free motion: the trajectory of ``[motion]`` at
     evenly spaced times (``xval simulate``'s samples)."""
-    for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions")):
+    for given, option in ((args.engine, "--engine"), (args.revolutions, "--revolutions"),
+                          (args.wall_limit, "--wall-limit")):
         if given is not None:
             raise fp.FreeOptionError(
                 f"option {option}: {mech.name!r} is plotted in free motion (its [motion] "
                 f"table), which draws no engine run; add --driven for the prescribed cycle")
     if args.samples is not None:
         _option_range("--samples", opt.int_range(2, MAX_SAMPLES), args.samples)
+    n = args.samples or mech.motion.samples
+    _figure_holds(n, "--samples" if args.samples else "the description's [motion] samples")
     what = fp.parse_free_what(args.what)
     traj = fp.trajectory(mech, args.duration)
-    n = args.samples or mech.motion.samples
     smp = traj.at(fp.sample_times(traj, n), forces="forces" in what)
     figs, notes = fp.free_figures(mech, traj, smp, what, units)
     note = fp.swing_note(traj, traj.duration / (n - 1), "samples")
@@ -359,11 +387,15 @@ def register(sub) -> None:
                         f"{RunRequest.revolutions}; not in free motion)")
     s.add_argument("--samples", type=_integer,
                    help=f"engine samples per revolution (default {RunRequest.samples}); free "
-                        "motion: samples of the trajectory, 2 to 1000000 (default the "
-                        "description's)")
+                        f"motion: samples of the trajectory, 2 to {MAX_FIGURE_SAMPLES} (what "
+                        "a figure draws; default the description's)")
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"free motion: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         "(default the description's)")
+    s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
+                   help=f"end each engine's run after this much wall-clock stepping "
+                        f"(default {DEFAULT_WALL_LIMIT:g} s, as xval simulate's; the run "
+                        "is drawn up to there and a note says so)")
     s.set_defaults(func=cmd_plot)
 
 

@@ -32,6 +32,7 @@ from reports.cli.simulate_engines import (
 from reports.comparison.free_cases import (
     MIN_DURATION,  # one definition for every door
     command_case,
+    free_request_problem,
 )
 
 
@@ -82,8 +83,12 @@ def cmd_simulate(args) -> int:
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
     mech, release = command_case(args.case, args.duration)
+    n = args.samples or (mech.motion.samples if mech.motion is not None else None)
+    bad = free_request_problem(None, n) if getattr(args, "engine", None) else None
+    if bad:  # judged runs: every door's range (reports.comparison.free_cases.FREE_SAMPLES)
+        raise opt.UsageError(("argument --samples: " if args.samples else
+                              f"{args.case}: [motion] samples with --engine: ") + bad[2])
     traj = simulate(mech, args.duration)
-    n = args.samples or mech.motion.samples
     if release is not None and not args.json:
         print(release.text)
     if getattr(args, "engine", None):

@@ -20,7 +20,6 @@ from pathlib import Path
 import pandas as pd
 
 from reports.cli import options as opt
-from reports.cli.paths import check_outputs
 from reports.comparison.compare import json_safe
 from reports.comparison.free_compare import compare_free, reference_samples
 from reports.comparison.progress import engine_progress
@@ -92,8 +91,6 @@ def cmd_engines(args, mech, traj, samples: int, release=None) -> int:
     """The engine part of ``xval simulate``: run, judge, print; 0 pass, 1 fail.
     ``release``: the :class:`reports.comparison.free_cases.Release` of a built-in case without
     ``[motion]`` (in the JSON as ``released``; the text output says it before)."""
-    check_outputs([("--junit", args.junit), ("--summary", args.summary)],
-                  [("the case file", args.case)])
     results = run_engines(mech, traj, args, samples)
     verdicts = [v for _, v in results]
     if args.json:

@@ -19,7 +19,7 @@ from analytic import Linkage, LinkageError, load_case
 from analytic.mechanism import Prismatic, Revolute
 from analytic.stream import STREAM_POINTS, sweep_csv
 from reports.cli import options as opt
-from reports.cli.paths import check_outputs, write_csv
+from reports.cli.paths import write_csv
 from reports.figures.display_units import DisplayUnits, convert_frame, convert_result, text
 
 CONVENTIONS = {
@@ -181,8 +181,6 @@ def cmd_sweep(args) -> int:
     if parquet == "-":
         raise opt.UsageError("argument --parquet: '-' is not accepted: a Parquet file is "
                              "written with its index at the end; give a file name")
-    check_outputs([("--csv", args.csv), ("--parquet", parquet)],
-                  [("the case file", args.case)])
     mech = load_case(args.case)
     # written block by block: a large CSV, and Parquet always
     streamed = bool(parquet) or (bool(args.csv) and args.points > STREAM_POINTS)

@@ -25,6 +25,7 @@ import unicodedata
 from analytic.errors import LinkageError
 from analytic.perf import tune_allocator
 from reports.cli import options as opt
+from reports.cli.paths import check_command
 
 COMMANDS = {
     "cases": ("reports.cli.cases", "list the built-in cases"),
@@ -124,7 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     opt.forget_created_folders()
     try:
         argv = sys.argv[1:] if argv is None else list(argv)
-        args = _parser(_command(argv)).parse_args(argv)
+        parser = _parser(_command(argv))
+        args = parser.parse_args(argv)
+        check_command(parser, args)  # no output on an input or on another output
         args.stdout = sys.stdout
         # with the table on standard output, the summary goes to standard error
         to_err = getattr(args, "csv", None) == "-"

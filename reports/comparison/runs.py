@@ -83,7 +83,8 @@ def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
         r = instantaneous(tree, engine, settings, input_values(tree.linkage, req.samples)[0])
     else:
         r = run(tree, engine, settings, revolutions=req.revolutions, samples=req.samples,
-                max_violation=req.max_violation, max_speed_error=req.max_speed_error)
+                max_violation=req.max_violation, max_speed_error=req.max_speed_error,
+                wall_limit=req.wall_limit)
     return Verdict(tree, r, tuple(compare_run(r)))  # against r.linkage, tree.linkage itself
 
 
@@ -109,10 +110,12 @@ def settings_for(engines: Sequence[str], pairs: Sequence[str] = (),
 
 def run_comparison(tree, engine: str, settings=None, mode: str = RunRequest.mode,
                    revolutions: int = RunRequest.revolutions,
-                   samples: int = RunRequest.samples):
+                   samples: int = RunRequest.samples, wall_limit: float | None = None):
     """:func:`run_verdict` on the compiled linkage ``tree`` as ``(run, comparisons)``
-    (the report's engine tasks and ``xval plot --engine``)."""
-    v = run_verdict(tree, engine, settings, RunRequest(revolutions, samples, mode=mode))
+    (the report's engine tasks and ``xval plot --engine``; ``wall_limit``: s of
+    stepping, None: none)."""
+    v = run_verdict(tree, engine, settings, RunRequest(revolutions, samples, mode=mode,
+                                                       wall_limit=wall_limit))
     return v.run, list(v.comparisons)
 
 

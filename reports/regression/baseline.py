@@ -95,6 +95,21 @@ DEFAULT_FACTOR = 10.0
 #: largest jitter of a small error, and still a thousandth of the 1e-3 tolerance.
 DRIFT_FLOOR = 1e-7
 
+#: The range of a recorded tolerance (a fraction of the quantity's peak over the run),
+#: through every door (``--tolerance``, a baseline file, the pytest plugin's
+#: ``tolerance=``): above 1 an error larger than the quantity itself passes (a
+#: hand-edited 1e300 judges nothing); below 1e-15 no float64 run can pass it.
+MIN_TOLERANCE, MAX_TOLERANCE = 1e-15, 1.0
+
+
+def tolerance_problem(value) -> str | None:
+    """Why ``value`` is not an accepted tolerance (one phrase with the range), else None."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value) and MIN_TOLERANCE <= value <= MAX_TOLERANCE
+    return None if ok else (f"{json_value(value)} is out of range: the accepted range is "
+                            f"{MIN_TOLERANCE:g} to {MAX_TOLERANCE:g} of the quantity's peak")
+
+
 #: Significant figures stored for errors (drift is judged by factors, not digits; fewer
 #: digits keep a re-recorded file's diff to the errors that really moved).
 ERROR_DIGITS = 4
@@ -263,4 +278,5 @@ def json_value(v) -> str:
 
 __all__ = ["DEFAULT_FACTOR", "DRIFT_FLOOR", "ERROR_DIGITS", "SCHEMA", "SCHEMA_VERSION",
            "Baseline", "BaselineError", "ModelSource", "QuantityRecord", "RunRecord",
-           "builtin_names", "file_sha256", "input_unit", "json_value", "versions"]
+           "builtin_names", "file_sha256", "input_unit", "json_value", "tolerance_problem",
+           "versions"]

@@ -234,6 +234,11 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
         out.wall = time.perf_counter() - t0
         return out
     out.wall = time.perf_counter() - t0
+    ran_as = getattr(r, "case", rec.case)
+    if ran_as != rec.case:  # a record renamed by hand would pass under the wrong name
+        out.problems.append(f"recorded as case {rec.case!r}, but its model "
+                            f"{rec.model.describe()} runs as {ran_as!r}: the record is "
+                            "under another case's name; re-record it")
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}

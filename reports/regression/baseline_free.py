@@ -34,11 +34,10 @@ intervals.
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
-from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
-from reports.comparison.free_cases import MIN_DURATION, release_and_judge
+from reports.comparison.free_cases import free_request_problem as ranges_problem
+from reports.comparison.free_cases import release_and_judge
 from sim_models.builders.free_cases import released
 from sim_models.runs.free import free_session_class
 
@@ -69,18 +68,14 @@ def free_request(duration: float, samples: int | None = None) -> dict:
 
 def free_request_problem(request: dict) -> tuple[str, object, str] | None:
     """``(key, value, problem)`` when a free request is outside the command line's
-    ranges (``xval simulate --duration`` and ``--samples``), else None."""
+    ranges (``xval simulate --duration`` and ``--samples``: one definition,
+    :func:`reports.comparison.free_cases.free_request_problem`), else None."""
     for key in ("duration", "samples"):
         if key not in request:
             return key, None, "missing"
-    d, n = request["duration"], request["samples"]
-    if isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d) \
-            or not MIN_DURATION <= d <= MAX_DURATION:
-        return "duration", d, (f"must be a number of seconds from {MIN_DURATION:g} to "
-                               f"{MAX_DURATION:g}; the range of --duration")
-    if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= MAX_SAMPLES:
-        return "samples", n, (f"must be a whole number from 2 to {MAX_SAMPLES}; the "
-                              "range of --samples")
+    bad = ranges_problem(request["duration"], request["samples"])
+    if bad:
+        return bad
     extra = sorted(set(request) - {"mode", "duration", "samples"})
     if extra:
         return extra[0], request[extra[0]], "is not a free-motion request key (duration, " \

@@ -24,6 +24,7 @@ from reports.regression.baseline import (
     QuantityRecord,
     RunRecord,
     json_value,
+    tolerance_problem,
 )
 from reports.regression.baseline_free import FREE_MODE, free_request_problem
 from reports.regression.baseline_settings import check_settings
@@ -81,6 +82,9 @@ def load(path: str | os.PathLike) -> Baseline:
     except json.JSONDecodeError as e:
         raise BaselineError(f"{where}: not JSON: {e.msg} at line {e.lineno} column "
                             f"{e.colno}") from None
+    except RecursionError:  # [[[[... deeper than Python's decoder recurses
+        raise BaselineError(f"{where}: not JSON: nested too deeply (a baseline is at "
+                            "most a few levels deep)") from None
     return _parse(doc, p)
 
 
@@ -155,8 +159,9 @@ def _parse_run(r, where: str) -> RunRecord:
                 or not math.isfinite(err) or err < 0:
             raise BaselineError(f"{qw}: 'error' must be a number >= 0, got {err!r}")
         tol = _get(q, "tolerance", float, qw)
-        if not tol > 0:
-            raise BaselineError(f"{qw}: 'tolerance' must be > 0, got {tol!r}")
+        bad = tolerance_problem(tol)
+        if bad:
+            raise BaselineError(f"{qw}: 'tolerance' {bad}")
         qs.append(QuantityRecord(name, float(err), _num(q.get("at")),
                                  str(q.get("at_unit", "")), tol, _num(q.get("max_abs")),
                                  _num(q.get("peak")), _horizon(q, qw, free)))

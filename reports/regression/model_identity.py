@@ -3,7 +3,8 @@
 Not the file's bytes: a comment, a reordered table, CRLF line endings or lengths given
 in mm instead of m leave the parsed :class:`analytic.Mechanism` (SI inside) unchanged,
 so they are no change.  :func:`content` flattens the mechanism into ``path -> value``
-(``bodies.coupler.mass``, ``joints.B.body_a``, ``driver.velocity``, ``gravity``, ...),
+(``bodies.coupler.mass``, ``joints.B.body_a``, ``driver.velocity``, ``gravity``,
+``motion.dampers.0.coefficient``, ``motion.motors.0.efforts``, ...),
 values in SI as the loader produced them (floats exact: JSON writes ``repr``, which
 round-trips); its ``description`` (prose) and ``source`` (where it was read from) are
 left out.  :func:`digest` is the SHA-256 of that dict as canonical JSON (keys sorted,
@@ -30,15 +31,27 @@ def _value(v):
     return v
 
 
-def _flatten(obj, path: str, out: dict) -> None:
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        if path.startswith("joints.") or path.startswith("loads."):
+def _is_record(obj) -> bool:
+    return dataclasses.is_dataclass(obj) and not isinstance(obj, type)
+
+
+def _flatten(obj, path: str, out: dict, typed: bool = False) -> None:
+    """``out[path...] = value`` for every leaf of ``obj``; ``typed``: ``obj`` is one of
+    several kinds that share a place (a joint, a load, a spring, a damper, a motor), so
+    its kind is part of its identity (``.type``)."""
+    if _is_record(obj):
+        if typed or path.startswith("joints.") or path.startswith("loads."):
             out[f"{path}.type"] = type(obj).__name__.lower()
         for f in dataclasses.fields(obj):
             if f.name in _NOT_MODEL or (path.startswith(("bodies.", "joints."))
                                         and f.name == "name"):
                 continue
             _flatten(getattr(obj, f.name), f"{path}.{f.name}" if path else f.name, out)
+    elif isinstance(obj, (tuple, list)) and any(_is_record(x) for x in obj):
+        # force elements (``motion.springs``, ``.dampers``, ``.motors``): each by its
+        # position, every field of it, so that a changed coefficient is named
+        for i, item in enumerate(obj):
+            _flatten(item, f"{path}.{i}", out, typed=True)
     elif isinstance(obj, dict) or hasattr(obj, "keys"):
         if not obj:
             out[path] = {}

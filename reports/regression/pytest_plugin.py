@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -33,13 +34,14 @@ import pytest
 
 from analytic import load_case
 from analytic.cases import case_names, free_case_names
+from analytic.errors import LinkageError
 from analytic.tolerances import ENGINE_RELATIVE
-from reports.comparison.free_cases import free_case
+from reports.comparison.free_cases import command_case, free_case
 from reports.comparison.quantities import judged
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
 from reports.regression import baseline_store as bs
-from reports.regression.baseline import DEFAULT_FACTOR, BaselineError
+from reports.regression.baseline import DEFAULT_FACTOR, BaselineError, tolerance_problem
 from reports.regression.baseline_settings import (
     fmt_value,
     override_classes,
@@ -50,6 +52,17 @@ from reports.regression.baseline_settings import (
 from reports.regression.messages import disagreement, failure_text
 from reports.regression.run_cache import SESSION, RunCache, settings_of
 from reports.studies.free_studies import free_verdict
+
+
+@contextmanager
+def one_line_errors():
+    """A user error (a bad file, a value out of the command line's range) as one line
+    failing the test that asked (``xval: error: ...``), as the command line says it."""
+    __tracebackhide__ = True
+    try:
+        yield
+    except LinkageError as e:
+        pytest.fail(f"xval: error: {e}", pytrace=False)
 
 
 class XvalLooseWarning(UserWarning):
@@ -96,6 +109,10 @@ class Xval:
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
         ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
 
+        __tracebackhide__ = True
+        bad = None if tolerance is None else tolerance_problem(tolerance)
+        if bad:  # the range of --tolerance and of a baseline file's tolerance
+            pytest.fail(f"xval: error: tolerance={tolerance!r}: {bad}", pytrace=False)
         tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
         mech = self.mechanism(model)
         s = settings_of(engine, settings)
@@ -136,13 +153,16 @@ class Xval:
         """Free motion: ``model`` (a case or file with ``[motion]``, or a driven one,
         released at rest under gravity) released in ``engine`` and judged against the
         exact trajectory (:func:`reports.comparison.free_compare.compare_free`); returns the
-        :class:`FreeVerdict`.  The failure names each failing quantity, its trusted
-        horizon, the nearest reference event and the engine's step."""
+        :class:`FreeVerdict`.  ``duration`` (s) and ``samples`` (sample intervals: one
+        fewer than ``xval simulate --samples``' sample times) in the command line's
+        ranges, and a file without ``[motion]`` refused as ``xval simulate`` refuses it
+        (only a built-in driven case is released under gravity): one line otherwise.
+        The failure names each failing quantity, its trusted horizon, the nearest
+        reference event and the engine's step."""
         __tracebackhide__ = True
-        name = os.fspath(model) if isinstance(model, (str, os.PathLike)) else None
-        mech = model if name is None else free_case(
-            name if name in free_case_names() else os.fspath(self.resolve(name)))
-        _, v = free_verdict(mech, engine, duration, samples, settings)
+        with one_line_errors():
+            mech = self._free_mechanism(model, duration)
+            _, v = free_verdict(mech, engine, duration, samples, settings)
         if v.passed:
             return v
         lines = [f"{v.case} / {engine}: free motion over {v.duration:g} s disagrees "
@@ -151,6 +171,17 @@ class Xval:
         lines += [f"  {x}" for x in (v.near_event, v.step_note) if x]
         lines.append(f"  settings: {engine} {v.settings}")
         raise AssertionError("\n".join(lines))
+
+    def _free_mechanism(self, model, duration):
+        """``model`` as ``xval simulate`` takes it (:func:`command_case`): a file as it
+        is (no ``[motion]``: refused when run), a built-in case without ``[motion]``
+        released under gravity; a Mechanism as given."""
+        if not isinstance(model, (str, os.PathLike)):
+            return model
+        name = os.fspath(model)
+        if name in free_case_names():  # the IFToMM problems (A02 written when not shipped)
+            return free_case(name, duration)
+        return command_case(os.fspath(self.resolve(name)), duration)[0]
 
     # -- baselines ------------------------------------------------------------------
     def path(self, baseline) -> Path:
@@ -195,7 +226,7 @@ class Xval:
         try:
             base, checks = self.check_baseline(baseline, case=case, engine=engine,
                                                factor=factor, settings=settings, key=key)
-        except BaselineError as e:  # an unusable file: one line, no traceback
+        except LinkageError as e:  # an unusable file or value: one line, no traceback
             pytest.fail(f"xval: error: {e}", pytrace=False)
         except KeyError as e:  # no such run recorded: as a missing file, for that run
             return self._missing(path, case, engine, settings, e.args[0])

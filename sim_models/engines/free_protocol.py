@@ -22,7 +22,6 @@ its line).
 from __future__ import annotations
 
 import math
-import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import ClassVar
@@ -34,7 +33,7 @@ from analytic.free_motion import simulate
 from analytic.motion_spec import PointSpring
 
 from ..builders.tree import SimTree, wrap
-from ..runs.engine_run import loop_gaps
+from ..runs.engine_run import WALL_CHUNK_STEPS, advance_bounded, loop_gaps
 from ..runs.free_run import FreeEngineRun, FreeRequest
 from .settings import EngineRefusal, EngineSettings
 
@@ -315,15 +314,17 @@ def drive_free(session: FreeSession, request: FreeRequest, reference=None,
     scale = energy_scale(mech, float(s0.kinetic[0]), st.size)
     e0 = float(s0.kinetic[0] + s0.potential[0])
     reason, t_fail, wall, steps = None, None, 0.0, 0
+    chunk = [WALL_CHUNK_STEPS]  # the limit acts within a sample interval, not after it
     for k, t in enumerate(times):
         if k:
             h, n = plan[k - 1]
-            t0 = time.perf_counter()
-            reason = session.advance(float(times[k - 1]), h, n)
-            wall += time.perf_counter() - t0
-            steps += n
+            reason, dt, done = advance_bounded(session, float(times[k - 1]), h, n,
+                                                request.wall_limit - wall, chunk)
+            wall += dt
+            steps += done
             if reason is None and wall > request.wall_limit:
                 reason = f"wall-clock limit {request.wall_limit:g} s reached"
+                t = float(times[k - 1]) + done * h  # where it stopped, within the interval
         r = session.read(float(t)) if reason is None else None
         if reason is None and r is None:
             reason = "non-finite state (simulation diverged)"

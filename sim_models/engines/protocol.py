@@ -115,7 +115,16 @@ import numpy as np
 from analytic import Linkage, Mechanism, Prismatic
 
 from ..builders.tree import SimTree
-from ..runs.engine_run import EngineRun, Recorder, RunRequest, fmt_value, loop_gap, loop_gaps
+from ..runs.engine_run import (
+    WALL_CHUNK_STEPS,
+    EngineRun,
+    Recorder,
+    RunRequest,
+    advance_bounded,
+    fmt_value,
+    loop_gap,
+    loop_gaps,
+)
 from ..runs.sampling import (
     LIMITED_RANGE_CONDITION,
     Plan,
@@ -385,7 +394,7 @@ def drive(session: Session, plan: Plan, request: RunRequest | None = None) -> En
     t0 = time.perf_counter()
     log = _RawLog(session, rec, request) if session.deferred else None
     reason, t_fail, nsteps = _step_through(session, steps, stops, dt_used, dt_max,
-                                           sample_at, rec, log)
+                                           sample_at, rec, log, request.wall_limit)
     if log is not None:
         earlier = log.flush()  # the records left all precede a failure seen while stepping
         if earlier is not None:
@@ -442,11 +451,14 @@ class _RawLog:
 
 
 def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
-                  sample_at: dict, rec: Recorder, log: _RawLog | None):
+                  sample_at: dict, rec: Recorder, log: _RawLog | None,
+                  wall_limit: float | None = None):
     """The stepping phase of :func:`drive`: ``(reason, t_stop, steps)`` of the first
-    failure seen while stepping (None, None, all steps when none)."""
+    failure seen while stepping (None, None, all steps when none).  ``wall_limit`` (s
+    of stepping; None: none) is a failure too, seen within a stop's steps."""
     reason = None
     nsteps = 0
+    wall, chunk = 0.0, [WALL_CHUNK_STEPS]
     session.reset(0.0, dt_used)
     t, h_prev = 0.0, dt_used
     for (h, n), t_stop in zip(steps, stops[1:], strict=True):
@@ -454,10 +466,15 @@ def _step_through(session: Session, steps, stops, dt_used: float, dt_max: float,
             h, n = h_prev, 0
         elif abs(t - (t_stop - h * n)) > 1e-12 * max(1.0, t_stop):
             h, n = steps_to(t, t_stop, h_prev, dt_max)
-        if n:
+        if n and wall_limit is None:
             reason = session.advance(t, h, n)
             nsteps += n
             h_prev = h
+        elif n:
+            reason, dt, done = advance_bounded(session, t, h, n, wall_limit - wall, chunk)
+            wall, nsteps, h_prev = wall + dt, nsteps + done, h
+            if reason is None and wall > wall_limit:
+                reason = f"wall-clock limit {wall_limit:g} s reached"
         t = t_stop
         if reason is None:
             rows = sample_at.get(t_stop, [])

@@ -56,7 +56,7 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         revolutions: int = RunRequest.revolutions, samples: int = RunRequest.samples,
         max_violation: float = RunRequest.max_violation,
         max_speed_error: float = RunRequest.max_speed_error, chords: str = RunRequest.chords,
-        plan: Plan | None = None) -> EngineRun:
+        plan: Plan | None = None, wall_limit: float | None = None) -> EngineRun:
     """Simulate the linkage in ``engine`` and sample it (see :mod:`sim_models.engines.protocol`).
 
     Parameters
@@ -77,6 +77,9 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
     plan
         A ready sampling plan (e.g. equal times over a long run); default
         :func:`plan_samples`.
+    wall_limit
+        Seconds of stepping after which the run ends as a failed run that says so
+        (None: no limit).
 
     Raises :class:`EngineRefusal` when the engine cannot run this motion and
     :class:`SettingsError` for a request outside :mod:`sim_models.engines.ranges`; a diverging
@@ -84,7 +87,8 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
     """
     # the request first: a value out of range is refused before anything is built
     request = RunRequest(revolutions, samples, max_violation, max_speed_error,
-                         mech.chords_mode if isinstance(mech, SimTree) else chords, "run")
+                         mech.chords_mode if isinstance(mech, SimTree) else chords, "run",
+                         wall_limit)
     tree = compile_linkage(mech, chords=chords)
     plan = plan or plan_samples(tree, revolutions, samples)
     with open_session(tree, engine, settings) as session:

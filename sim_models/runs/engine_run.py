@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -233,11 +234,17 @@ class RunRequest:
     max_speed_error: float = 1e-2
     chords: str = "moving"
     mode: str = "run"               # "run" or "instantaneous"
+    #: s of wall-clock stepping after which the run ends as a failed run that says so
+    #: (``xval plot --wall-limit``); None: no limit (the report's and baselines' runs)
+    wall_limit: float | None = None
 
     def __post_init__(self):
         """Every value within :mod:`sim_models.engines.ranges` (the command line's ranges):
         :class:`~sim_models.engines.settings.SettingsError` naming the key otherwise."""
-        for key, rng in self.ranges().items():
+        rngs = self.ranges()
+        if self.wall_limit is not None:
+            rngs["wall_limit"] = ranges.WALL_LIMIT
+        for key, rng in rngs.items():
             value = getattr(self, key)
             problem = rng.problem(value)
             if problem:
@@ -339,5 +346,33 @@ class EngineRun:
         return pd.DataFrame(cols)
 
 
-__all__ = ["EngineRun", "Recorder", "RunRequest", "fmt_value", "loop_gap", "loop_gaps",
-           "scatter_index"]
+
+#: Steps of the first bounded :func:`advance_bounded` call; later calls take as many
+#: steps as :data:`WALL_CHUNK_S` of wall time allows at the rate measured, so a wall-clock
+#: limit is honoured within about that much however many steps one stop holds
+#: (``--samples 2 --timestep 1e-6``: 2e8 steps; 999 revolutions before the last).
+WALL_CHUNK_STEPS = 256
+WALL_CHUNK_S = 0.1
+
+
+def advance_bounded(session, t: float, h: float, n: int, left: float,
+                    chunk: list[int]) -> tuple[str | None, float, int]:
+    """``session.advance(t, h, n)`` in calls of ``chunk[0]`` steps (adapted to take about
+    :data:`WALL_CHUNK_S` each; the list carries it from stop to stop), stopping once
+    ``left`` s of wall time are spent: ``(reason, wall, steps taken)``.  A stop within
+    one chunk is one call, as before."""
+    done, wall = 0, 0.0
+    while done < n:
+        m = min(chunk[0], n - done)
+        t0 = time.perf_counter()
+        reason = session.advance(t + done * h, h, m)
+        dt = time.perf_counter() - t0
+        wall, done = wall + dt, done + m
+        if reason is not None or wall > left:
+            return reason, wall, done
+        chunk[0] = max(1, min(10 * chunk[0], int(m * WALL_CHUNK_S / max(dt, 1e-9))))
+    return None, wall, done
+
+
+__all__ = ["WALL_CHUNK_S", "WALL_CHUNK_STEPS", "EngineRun", "Recorder", "RunRequest",
+           "advance_bounded", "fmt_value", "loop_gap", "loop_gaps", "scatter_index"]
