@@ -282,14 +282,7 @@ def test_hostile_input(scratch, cid, argv, expected):
         assert "nan" not in out.lower().split()
 
 
-_API_OWNER = "owner: the Python API's and plugin's ranges (reports/regression)"
-_XFAIL_API = {
-    "api-samples-0": "judges t = 0 only and passes; " + _API_OWNER,
-    "api-samples-neg": "ValueError from numpy.linspace; " + _API_OWNER,
-    "api-samples-float": "TypeError from numpy.linspace; " + _API_OWNER,
-    "api-duration-nan": "ValueError from analytic.free_motion.simulate; " + _API_OWNER,
-    "api-duration-neg": "ValueError from analytic.free_motion.simulate; " + _API_OWNER,
-}
+_XFAIL_API: dict[str, str] = {}  # every API input now meets the command line's ranges (s5doors)
 
 
 @pytest.mark.parametrize("cid,kwargs,expected", [
