@@ -27,6 +27,7 @@ from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
 from .dynamics import check_masses, coefficients, terms, unwrap_to
+from .switch_check import Overlap, event_state
 
 #: Relative tolerance of DOP853 (a few units of double rounding above 1e-16 so that
 #: the step-size control stays meaningful; the runs reach ~1e-12, see the tests).
@@ -54,6 +55,9 @@ class Segment:
     ts: np.ndarray       # the integrator's step times
     xs: np.ndarray       # (len(ts), J) unwrapped joint coordinates at those times
     nfev: int
+    #: the switch defect at this segment's start (:mod:`.switch_check`); None for the
+    #: first segment, or where the old coordinate could not be continued past the switch
+    check: float | None = None
 
 
 class NoInertiaError(LinkageError):
@@ -178,10 +182,12 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     e_scale = _energy_scale(mech, tm0, size)
     stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
     x_ref = x0
+    pending = None  # the overlap check of the last switch (:mod:`.switch_check`)
     while True:
         sysm = _System(lk, x_ref, scale)
         r = sysm.ratios(float(y[0]))
         if np.max(r) > SWITCH_RATIO:  # the coordinate fails here: switch before moving
+            pending = None
             lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
             continue
         qs = (1.0 if isinstance(lk.mech.driver_joint, Revolute) else size)
@@ -197,7 +203,9 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
             raise _failed(mech, sysm, sol, float(y[0]))
         xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)
         segs.append(Segment(lk, lk.mech.driver.joint, t, float(sol.t[-1]), sol.sol, sol.t,
-                            xs, sysm.nfev))
+                            xs, sysm.nfev,
+                            pending.defect(sysm, sol) if pending is not None else None))
+        pending = None
         if sol.status == 0 and t_end >= T:
             return segs, switches
         if sol.status == 0:  # at a table breakpoint: go on in the same coordinate
@@ -206,9 +214,14 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         if len(switches) >= MAX_SWITCHES:
             raise LinkageError(f"mechanism {mech.name!r}: more than {MAX_SWITCHES} "
                                "coordinate switches")
-        t, y, x_ref = float(sol.t[-1]), sol.y[:, -1].copy(), xs[-1]
+        # the state at the switch from a step of the integrator, not from its dense
+        # output (order 7: 1.5e-10 rad/s off on free01, carried into the new coordinate)
+        t = float(sol.t[-1])
+        y = event_state(sysm, sol, method, rtol, atol)
+        x_ref = xs[-1]
         sysm.last = x_ref
         r = sysm.ratios(float(y[0]))
+        pending = Overlap(sysm, float(sol.t[-2]), sol.y[:, -2].copy(), method, rtol, atol)
         lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
 
 

@@ -98,6 +98,22 @@ class FreeTrajectory:
     def nfev(self) -> int:
         return sum(s.nfev for s in self.segments)
 
+    @property
+    def switch_defect(self) -> float | None:
+        """The self-check of the coordinate switches (:mod:`.switch_check`): the largest
+        difference, at the first step after a switch, between the new coordinate's
+        solution and the old coordinate integrated on past the switch (coordinate: rad
+        or fraction of the size; rate: fraction of its scale).  Of the order of the
+        integration's tolerance when no state is lost at a switch; None without a
+        checked switch."""
+        got = [s.check for s in self.segments if s.check is not None]
+        return max(got) if got else None
+
+    @property
+    def switches_checked(self) -> int:
+        """How many of the switches :attr:`switch_defect` covers."""
+        return sum(s.check is not None for s in self.segments)
+
     def _segment_of(self, t: np.ndarray) -> np.ndarray:
         starts = np.array([s.t0 for s in self.segments])
         return np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)

@@ -96,6 +96,8 @@ def cmd_simulate(args) -> int:
     if args.json:
         out = {"case": mech.name, "duration_s": traj.duration, "rtol": traj.rtol,
                "method": traj.method, "evaluations": traj.nfev,
+               "switch_check": {"switches_checked": traj.switches_checked,
+                                "defect": traj.switch_defect},
                "released": release.as_json() if release else None,
                "events": [{"t_s": e.t, "kind": e.kind, "joint": e.joint,
                            "detail": e.detail} for e in traj.events],
@@ -126,6 +128,10 @@ def _print_table(mech, smp, traj) -> None:
     scale = float(np.max(smp.kinetic) + np.ptp(smp.potential)) or 1.0
     print(f"work-energy balance: max |residual| {np.max(np.abs(smp.energy_residual)):.3g} J "
           f"({np.max(np.abs(smp.energy_residual)) / scale:.3g} of the energy scale)")
+    if traj.switches_checked:
+        print(f"switch self-check: two coordinates agree past {traj.switches_checked} of "
+              f"{len(traj.switches)} switch(es) to {traj.switch_defect:.2g} of scale "
+              "(analytic.free_motion.switch_check)")
     if traj.events:
         print(f"events ({len(traj.events)}):")
         for e in traj.events[:50]:
