@@ -26,6 +26,7 @@ from ..errors import AssemblyError, LinkageError
 from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
+from .clock import WallClock
 from .dynamics import check_masses, coefficients, terms, unwrap_to
 from .switch_check import Overlap, event_state
 
@@ -68,8 +69,9 @@ class _System:
     """The right-hand side of one segment, with the last evaluation cached (the
     switching event asks for the same state as the step)."""
 
-    def __init__(self, lk: Linkage, x_ref: np.ndarray, scale: np.ndarray):
+    def __init__(self, lk: Linkage, x_ref: np.ndarray, scale: np.ndarray, clock=None):
         self.lk = lk
+        self.clock = clock
         self.rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
         self.last = np.array(x_ref, float)
         self.k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
@@ -87,6 +89,8 @@ class _System:
 
     def __call__(self, t, y):
         self.nfev += 1
+        if self.clock is not None:
+            self.clock.check(t)
         co, x = self.coeffs(float(y[0]))
         tm = terms(self.lk, co, x[None], y[1], t)
         M = float(tm.M[0])
@@ -151,8 +155,10 @@ def _pose_gap(kin_a, kin_b, size: float) -> float:
 
 
 def integrate(mech, duration: float | None = None, rtol: float = RTOL,
-              method: str = "DOP853") -> tuple[list[Segment], list[tuple[float, str, str]]]:
-    """Integrate ``mech.motion`` over ``duration`` (s; default the description's).
+              method: str = "DOP853", clock: WallClock | None = None,
+              ) -> tuple[list[Segment], list[tuple[float, str, str]]]:
+    """Integrate ``mech.motion`` over ``duration`` (s; default the description's),
+    within ``clock``'s wall-clock limit (:mod:`.clock`).
 
     Returns the segments and the coordinate switches ``(t, from joint, to joint)``.
     """
@@ -184,7 +190,9 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     x_ref = x0
     pending = None  # the overlap check of the last switch (:mod:`.switch_check`)
     while True:
-        sysm = _System(lk, x_ref, scale)
+        sysm = _System(lk, x_ref, scale, clock)
+        if clock is not None:
+            clock.switches = len(switches)
         r = sysm.ratios(float(y[0]))
         if np.max(r) > SWITCH_RATIO:  # the coordinate fails here: switch before moving
             pending = None

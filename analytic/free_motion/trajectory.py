@@ -255,9 +255,10 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
     return out
 
 
-def find_events(traj: FreeTrajectory) -> list[Event]:
+def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
     """Switches, singular crossings, joint limit positions and turning points, located
-    to ~1e-13 s by root-finding on the dense output between the integrator's steps."""
+    to ~1e-13 s by root-finding on the dense output between the integrator's steps
+    (``clock``: a :class:`~.clock.WallClock` checked at each segment)."""
     events = [Event(t, "switch", b, f"integrated coordinate {a!r} -> {b!r}")
               for t, a, b in traj.switches]
     names = traj.joints
@@ -266,6 +267,8 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
         return events + [stop]
     for seg in traj.segments:
         ts = seg.ts
+        if clock is not None:
+            clock.check()
         if len(ts) < 2:
             continue
         q = seg.sol(ts)

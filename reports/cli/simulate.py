@@ -33,6 +33,8 @@ from reports.comparison.free_cases import (
     MIN_DURATION,  # one definition for every door
     command_case,
 )
+from reports.comparison.progress import engine_progress
+from sim_models.free_run import FreeRequest
 
 
 def register(sub) -> None:
@@ -82,7 +84,10 @@ def cmd_simulate(args) -> int:
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
     mech, release = command_case(args.case, args.duration)
-    traj = simulate(mech, args.duration)
+    T = mech.motion.duration if args.duration is None else args.duration
+    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s"):
+        traj = simulate(mech, args.duration,
+                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
     n = args.samples or mech.motion.samples
     if release is not None and not args.json:
         print(release.text)
