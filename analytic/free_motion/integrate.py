@@ -28,6 +28,7 @@ from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
 from .clock import WallClock
 from .dynamics import check_masses, coefficients, terms, unwrap_to
+from .stiffness import check_stiffness
 from .switch_check import Overlap, event_state
 
 #: Relative tolerance of DOP853 (a few units of double rounding above 1e-16 so that
@@ -91,7 +92,14 @@ class _System:
         self.nfev += 1
         if self.clock is not None:
             self.clock.check(t)
-        co, x = self.coeffs(float(y[0]))
+        try:
+            with np.errstate(invalid="ignore", divide="ignore"):  # a stage past the limit
+                co, x = self.coeffs(float(y[0]))
+        except AssemblyError:
+            # a trial stage past the coordinate's limit position (a fast motion steps
+            # over the switch's margin): NaN rejects the step and DOP853 retries a fifth
+            # as long, until the switch event catches the coordinate before its limit
+            return [math.nan] * 5
         tm = terms(self.lk, co, x[None], y[1], t)
         M = float(tm.M[0])
         if not M > 0:
@@ -185,6 +193,7 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     tm0 = terms(lk, co, x0[None], y[1], 0.0)
     if not tm0.M[0] > 0:
         raise NoInertiaError(_no_inertia(lk, float(y[0])))
+    check_stiffness(lk, co, float(tm0.M[0]), T)  # one line, not an endless run
     e_scale = _energy_scale(mech, tm0, size)
     stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
     x_ref = x0
