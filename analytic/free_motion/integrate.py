@@ -28,6 +28,7 @@ from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
 from .clock import WallClock
 from .dynamics import check_masses, coefficients, terms, unwrap_to
+from .equilibrium import held
 from .stiffness import check_stiffness
 from .switch_check import Overlap, event_state
 
@@ -60,6 +61,8 @@ class Segment:
     #: the switch defect at this segment's start (:mod:`.switch_check`); None for the
     #: first segment, or where the old coordinate could not be continued past the switch
     check: float | None = None
+    #: the run held at an equilibrium it was released in at rest (:mod:`.equilibrium`)
+    held: bool = False
 
 
 class NoInertiaError(LinkageError):
@@ -194,8 +197,10 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     if not tm0.M[0] > 0:
         raise NoInertiaError(_no_inertia(lk, float(y[0])))
     check_stiffness(lk, co, float(tm0.M[0]), T)  # one line, not an endless run
+    if held(mech, lk, co, float(tm0.Q[0])):  # at rest in an equilibrium: it stays
+        return [_held_segment(lk, y, T, x0)], switches
     e_scale = _energy_scale(mech, tm0, size)
-    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
+    stops = kinks(fm.motors, T)
     x_ref = x0
     pending = None  # the overlap check of the last switch (:mod:`.switch_check`)
     while True:
@@ -240,6 +245,37 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         r = sysm.ratios(float(y[0]))
         pending = Overlap(sysm, float(sol.t[-2]), sol.y[:, -2].copy(), method, rtol, atol)
         lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+
+
+def _held_segment(lk, y, T: float, x0) -> Segment:
+    """The whole run at the state ``y`` (:mod:`.equilibrium`)."""
+    sol = solve_ivp(lambda t, y: np.zeros_like(y), (0.0, T), y, dense_output=True)
+    xs = np.repeat(np.asarray(x0, float)[None], len(sol.t), axis=0)
+    return Segment(lk, lk.mech.driver.joint, 0.0, T, sol.sol, sol.t, xs, 0, held=True)
+
+
+#: A motor table's breakpoint restarts the integration where the effort's slope changes
+#: by more than this fraction of the table's effort range per run duration (a sharp
+#: kink: a high-order step across it would lose its order).  A dense table sampling a
+#: smooth effort changes slope by far less at each row (f'' dt: 4e-3 of it for a sine of
+#: three periods in 100,000 rows), and the step-size control resolves such gentle kinks
+#: as it resolves any curvature; restarting at each of 100,000 rows took hours.
+KINK_REL = 1e-2
+
+
+def kinks(motors, T: float) -> list[float]:
+    """The breakpoints inside ``(0, T)`` where a motor table's slope changes sharply."""
+    out = set()
+    for mo in motors:
+        if len(mo.times) < 3:
+            continue
+        ts, es = (np.asarray(v, float) for v in (mo.times, mo.efforts))
+        slope = np.diff(es) / np.diff(ts)
+        jump = np.abs(np.diff(slope))
+        span = (float(np.ptp(es)) or abs(float(es[0])) or 1.0) / T
+        inside = (ts[1:-1] > 0.0) & (ts[1:-1] < T)
+        out.update(ts[1:-1][inside & (jump > KINK_REL * span)].tolist())
+    return sorted(out)
 
 
 def _start_elsewhere(lk, co, y, scale, closed, size, switches):

@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq as _brentq
 
 from ..kinetostatics import solve_forces
 from ..mechanism import Revolute
@@ -230,8 +230,19 @@ def _stopped(traj: FreeTrajectory) -> Event | None:
     fm = traj.mech.motion
     where = (f"at a dead centre of joint {fm.joint!r} (its coordinate is singular there)"
              if traj.switches and traj.switches[0][0] == 0.0 else "in equilibrium")
+    if traj.segments[0].held:
+        where += (" (its generalized force is rounding noise: held there, as an unstable "
+                  "equilibrium would amplify that noise into a fall)")
     return Event(0.0, "stop", fm.joint, f"released at rest {where}: the motion stops "
                  f"(rates stay below {STOP_RATE:g} over {traj.duration:g} s)")
+
+
+def brentq(f, a: float, b: float, xtol: float = 1e-14) -> float:
+    """A root of ``f`` bracketed in ``[a, b]``: SciPy's brentq without its exception
+    when the iteration cap is met (a function that is rounding noise near its root, as
+    a loop determinant that touches zero: the bracket is then already below the
+    noise's width, and its best point is the answer)."""
+    return float(_brentq(f, a, b, xtol=xtol, maxiter=200, disp=False))
 
 
 def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
@@ -247,7 +258,7 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
         for i in np.flatnonzero((q[:-1] - v) * (q[1:] - v) <= 0):
             if q[i] == q[i + 1]:
                 continue
-            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1], xtol=1e-14)
+            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1])
             if not any(abs(tc - t) < 1e-12 for t, _ in out):
                 out.append((tc, f"change point at {seg.joint!r} = {v:.12g} crossed "
                                 f"({len(c.joints)} dyads meet: {', '.join(c.joints[:4])}"
@@ -283,9 +294,11 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
         for tc, detail in crossed:
             events.append(Event(tc, "singular", seg.joint, detail))
         for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
-            tc = brentq(g_det, ts[i], ts[i + 1], xtol=1e-14)
-            if any(abs(tc - t) < 1e-9 for t, _ in crossed):
-                continue  # the same change point, listed with its dyads
+            if any(ts[i] <= t <= ts[i + 1] for t, _ in crossed):
+                # the same change point, listed with its dyads (at a stretched pass the
+                # determinant touches zero flatly: its root is only good to ~1e-7 s)
+                continue
+            tc = brentq(g_det, ts[i], ts[i + 1])
             events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
                                 "(dead centre or change point) crossed"))
         for j in range(len(names)):
@@ -295,12 +308,12 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
             for i in np.flatnonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0):
                 def g(t, seg=seg, j=j):
                     return float(coefficients(seg.lk, seg.sol(t)[0]).x_q[0, j])
-                tc = brentq(g, ts[i], ts[i + 1], xtol=1e-14)
+                tc = brentq(g, ts[i], ts[i + 1])
                 events.append(Event(tc, "limit", names[j], f"joint {names[j]!r} reverses "
                                     "(limit position of its coordinate)"))
         qd = q[1]
         for i in np.flatnonzero(np.sign(qd[:-1]) * np.sign(qd[1:]) < 0):
-            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1], xtol=1e-14)
+            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1])
             events.append(Event(tc, "turn", seg.joint, "the motion reverses (rate of "
                                 f"{seg.joint!r} is zero)"))
     return sorted(events, key=lambda e: e.t)
