@@ -286,9 +286,13 @@ def _start_elsewhere(lk, co, y, scale, closed, size, switches):
     mech = lk.mech
     jn0 = mech.driver.joint
     if y[1] != 0.0:
-        raise LinkageError(f"mechanism {mech.name!r}: [motion] joint {jn0!r} = {y[0]:.6g} is "
-                           f"a singular position of its coordinate (a dead centre: it cannot "
-                           f"move there), so its rate must be 0, got {y[1]:.6g}")
+        rev = isinstance(mech.driver_joint, Revolute)
+        k, u = (math.degrees(1.0), "deg") if rev else (1.0, "m")
+        raise LinkageError(f"{mech.source + ': ' if mech.source else ''}mechanism "
+                           f"{mech.name!r}: [motion] joint {jn0!r} = {y[0] * k:.6g} {u} is a "
+                           "singular position of its coordinate (a dead centre or a limit "
+                           "position: no motion passes there with the joint moving), so its "
+                           f"rate must be 0, got {y[1] * k:.6g} {u}/s")
     best = None
     for j, jt in enumerate(mech.joints):
         if jt.name == jn0:
