@@ -62,3 +62,17 @@ def test_element_too_stiff_to_resolve_is_refused_at_once(name, what):
     """Before: a hang (springs) or "loops cannot close ... = -inf deg" (damper)."""
     with pytest.raises(TooStiffError, match=what + r".* shorten the duration to"):
         simulate(_load(name))
+
+
+@pytest.mark.parametrize("name, said", [
+    ("F3b_prismatic_dead_centre_moving.toml",
+     r"joint 'slide' = 0\.3 m is a singular position .* got 0\.05 m/s"),
+    ("F4b_crank_limit_moving.toml",
+     r"joint 'O2' = 81\.1074 deg is a singular position .* got 57\.2958 deg/s")])
+def test_moving_release_at_a_singular_position_says_value_and_rate_in_units(name, said):
+    """A joint at its own limit position or dead centre cannot move (its rate is zero
+    there on every motion through it): one line with the value and rate in the file's
+    kinds of unit (before: '= 1.41559 ... got 1', radians unlabelled)."""
+    from analytic.errors import LinkageError
+    with pytest.raises(LinkageError, match=said):
+        simulate(_load(name))
