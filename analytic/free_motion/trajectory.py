@@ -237,15 +237,17 @@ def _stopped(traj: FreeTrajectory) -> Event | None:
                  f"(rates stay below {STOP_RATE:g} over {traj.duration:g} s)")
 
 
-def brentq(f, a: float, b: float, xtol: float = 1e-14) -> float:
+def brentq(f, a: float, b: float, clock=None, xtol: float = 1e-14) -> float:
     """A root of ``f`` bracketed in ``[a, b]``: SciPy's brentq without its exception
     when the iteration cap is met (a function that is rounding noise near its root, as
     a loop determinant that touches zero: the bracket is then already below the
-    noise's width, and its best point is the answer)."""
+    noise's width, and its best point is the answer).  The wall clock is checked first."""
+    if clock is not None:
+        clock.check()
     return float(_brentq(f, a, b, xtol=xtol, maxiter=200, disp=False))
 
 
-def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
+def _change_points(seg: Segment, q: np.ndarray, clock=None) -> list[tuple[float, str]]:
     """The solver's change points (:meth:`analytic.Linkage.branch_crossings`: where
     dyads meet, including those where the loop Jacobian's determinant touches zero
     without changing sign, as the N four-bar's 40 windows at once) crossed by the
@@ -258,7 +260,8 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
         for i in np.flatnonzero((q[:-1] - v) * (q[1:] - v) <= 0):
             if q[i] == q[i + 1]:
                 continue
-            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1])
+            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1],
+                        clock)
             if not any(abs(tc - t) < 1e-12 for t, _ in out):
                 out.append((tc, f"change point at {seg.joint!r} = {v:.12g} crossed "
                                 f"({len(c.joints)} dyads meet: {', '.join(c.joints[:4])}"
@@ -269,7 +272,7 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
 def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
     """Switches, singular crossings, joint limit positions and turning points, located
     to ~1e-13 s by root-finding on the dense output between the integrator's steps
-    (``clock``: a :class:`~.clock.WallClock` checked at each segment)."""
+    (``clock``: a :class:`~.clock.WallClock` checked at each segment and root)."""
     events = [Event(t, "switch", b, f"integrated coordinate {a!r} -> {b!r}")
               for t, a, b in traj.switches]
     names = traj.joints
@@ -290,7 +293,7 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
         def g_det(t, seg=seg):
             return float(coefficients(seg.lk, seg.sol(t)[0]).kin.determinant[0])
 
-        crossed = _change_points(seg, q[0])
+        crossed = _change_points(seg, q[0], clock)
         for tc, detail in crossed:
             events.append(Event(tc, "singular", seg.joint, detail))
         for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
@@ -298,7 +301,7 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
                 # the same change point, listed with its dyads (at a stretched pass the
                 # determinant touches zero flatly: its root is only good to ~1e-7 s)
                 continue
-            tc = brentq(g_det, ts[i], ts[i + 1])
+            tc = brentq(g_det, ts[i], ts[i + 1], clock)
             events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
                                 "(dead centre or change point) crossed"))
         for j in range(len(names)):
@@ -308,12 +311,12 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
             for i in np.flatnonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0):
                 def g(t, seg=seg, j=j):
                     return float(coefficients(seg.lk, seg.sol(t)[0]).x_q[0, j])
-                tc = brentq(g, ts[i], ts[i + 1])
+                tc = brentq(g, ts[i], ts[i + 1], clock)
                 events.append(Event(tc, "limit", names[j], f"joint {names[j]!r} reverses "
                                     "(limit position of its coordinate)"))
         qd = q[1]
         for i in np.flatnonzero(np.sign(qd[:-1]) * np.sign(qd[1:]) < 0):
-            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1])
+            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1], clock)
             events.append(Event(tc, "turn", seg.joint, "the motion reverses (rate of "
                                 f"{seg.joint!r} is zero)"))
     return sorted(events, key=lambda e: e.t)
