@@ -35,7 +35,8 @@ def simulate(mech, duration: float | None = None, rtol: float = RTOL,
     if duration is not None:
         check_duration(mech, duration)  # in range, and every motor table covers it
     T = mech.motion.duration if duration is None else float(duration)
-    clock = WallClock(mech.name, T, wall_limit, progress)
+    where = f"{mech.source}: " if mech.source else ""
+    clock = WallClock(f"{where}mechanism {mech.name!r}", T, wall_limit, progress)
     segs, switches = integrate(mech, duration, rtol, method, clock)
     traj = FreeTrajectory(mech, segs, switches, rtol, method)
     traj.events = find_events(traj, clock)

@@ -37,7 +37,8 @@ def check_wall_limit(limit: float | None) -> None:
 
 
 class WallClock:
-    """Counts wall-clock time from construction; ``limit`` s (None: none)."""
+    """Counts wall-clock time from construction; ``limit`` s (None: none); ``name`` says
+    what runs (file and mechanism), for the message."""
 
     def __init__(self, name: str, duration: float, limit: float | None = None,
                  progress: Callable[[float, float], None] | None = None):
@@ -54,7 +55,7 @@ class WallClock:
             self.t = max(self.t, t)
         if self.limit is not None and now - self.start > self.limit:
             raise WallLimitError(
-                f"mechanism {self.name!r}: the exact integration reached the wall-clock "
+                f"{self.name}: the exact integration reached the wall-clock "
                 f"limit of {self.limit:g} s at t = {self.t:.6g} s of {self.duration:g} s "
                 f"({self.switches} coordinate switches so far); raise --wall-limit or "
                 "shorten --duration")
