@@ -84,7 +84,7 @@ def cmd_simulate(args) -> int:
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
     mech, release = command_case(args.case, args.duration)
-    T = mech.motion.duration if args.duration is None else args.duration
+    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
     with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s"):
         traj = simulate(mech, args.duration,
                         wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
