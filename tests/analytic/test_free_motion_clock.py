@@ -31,3 +31,14 @@ def test_wall_limit_range(bad):
 def test_sim_models_range_uses_the_same_bound():
     from sim_models.ranges import WALL_LIMIT
     assert WALL_LIMIT.hi == MAX_WALL_LIMIT
+
+
+def test_progress_is_reported_with_the_time_reached():
+    """The command line shows it on a terminal; the library reports (t, duration) every
+    quarter second of wall-clock time."""
+    mech = load_mechanism(BUGS / "F6_duration_1e4.toml")
+    seen = []
+    with pytest.raises(WallLimitError):
+        simulate(mech, duration=1e4, wall_limit=1.0, progress=lambda t, T: seen.append((t, T)))
+    assert seen and all(T == 1e4 for _, T in seen)
+    assert [t for t, _ in seen] == sorted(t for t, _ in seen) and seen[-1][0] > 0.0
