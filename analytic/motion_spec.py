@@ -37,6 +37,10 @@ MAX_STIFFNESS = 1e12
 MAX_EFFORT = 1e12
 #: Most rows of a motor table.
 MAX_TABLE = 100_000
+#: Largest wall-clock limit (s) of one run, exact or engine: one day.  The exact
+#: integration's ``wall_limit`` (:mod:`analytic.free_motion.clock`) and the engines'
+#: ``--wall-limit`` range (``sim_models.ranges.WALL_LIMIT``) both use it.
+MAX_WALL_LIMIT = 86400.0
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from analytic.free_motion.clock import MAX_WALL_LIMIT  # one bound for the exact side too
+from analytic.motion_spec import MAX_WALL_LIMIT  # one bound for the exact side too
 
 
 @dataclass(frozen=True)

@@ -13,11 +13,8 @@ import time
 from collections.abc import Callable
 
 from ..errors import LinkageError
+from ..motion_spec import MAX_WALL_LIMIT  # with the other ranges
 
-#: Largest wall-clock limit (s) of one run, exact or engine: one day.  The engines'
-#: ``--wall-limit`` range (``sim_models.ranges.WALL_LIMIT``) is built on it, so every
-#: door applies the same bound.
-MAX_WALL_LIMIT = 86400.0
 #: Seconds between two progress reports.
 PROGRESS_EVERY_S = 0.25
 
