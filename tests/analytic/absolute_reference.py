@@ -117,7 +117,9 @@ class AbsoluteModel:
             gam.append(g)
         return np.concatenate(C), J, np.concatenate(gam)
 
-    def rhs(self, t, y):
+    def solve(self, t, y):
+        """Accelerations and multipliers; the multipliers of pin k, ``sol[n + 2k:n + 2k
+        + 2]``, are the force by body_a on body_b (N, world frame)."""
         n = 3 * self.nb
         z, zd = y[:n], y[n:]
         C, J, gam = self.constraints(z, zd)
@@ -128,8 +130,11 @@ class AbsoluteModel:
         A[:n, :n] = np.diag(self.Mdiag)
         A[:n, n:] = J.T
         A[n:, :n] = J
-        sol = np.linalg.lstsq(A, np.concatenate([self.forces(z, zd, t), rc]), rcond=None)[0]
-        return np.concatenate([zd, sol[:n]])
+        return np.linalg.lstsq(A, np.concatenate([self.forces(z, zd, t), rc]), rcond=None)[0]
+
+    def rhs(self, t, y):
+        n = 3 * self.nb
+        return np.concatenate([y[n:], self.solve(t, y)[:n]])
 
 
 def initial_state(mech, lk, value: float, rate: float) -> np.ndarray:
@@ -146,9 +151,12 @@ def initial_state(mech, lk, value: float, rate: float) -> np.ndarray:
     return np.concatenate([z, zd])
 
 
-def joint_history(mech, lk, times, rtol: float = 1e-13) -> tuple[np.ndarray, np.ndarray]:
+def joint_history(mech, lk, times, rtol: float = 1e-13, reactions: dict | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Every joint's coordinate and rate ``(N, J)`` at ``times`` from the release of
-    ``mech.motion`` (``lk``: a Linkage driven at the released joint, for the start)."""
+    ``mech.motion`` (``lk``: a Linkage driven at the released joint, for the start);
+    ``reactions``, if given, is filled with joint -> ``(N, 2)`` forces by body_a on
+    body_b (N), the pins' Lagrange multipliers."""
     fm = mech.motion
     model = AbsoluteModel(mech)
     y0 = initial_state(mech, lk, fm.value, fm.rate)
@@ -156,6 +164,10 @@ def joint_history(mech, lk, times, rtol: float = 1e-13) -> tuple[np.ndarray, np.
                     atol=rtol * 1e-2, t_eval=times)
     assert sol.success, sol.message
     n = 3 * model.nb
+    if reactions is not None:
+        lam = np.array([model.solve(t, sol.y[:, i])[n:] for i, t in enumerate(times)])
+        for k, jt in enumerate(mech.joints):
+            reactions[jt.name] = lam[:, 2 * k:2 * k + 2]
     x = np.zeros((len(times), len(mech.joints)))
     xd = np.zeros_like(x)
     for k, jt in enumerate(mech.joints):

@@ -38,12 +38,15 @@ def test_free01_every_joint_within_1e_9_of_range_after_switches():
     times = np.linspace(0.0, 3.0, 61)
     fm = mech.motion
     lk = Linkage(replace(mech, driver=Driver(fm.joint, fm.value, fm.rate)))
-    x_ref, xd_ref = joint_history(mech, lk, times, rtol=1e-12)
-    s = traj.at(times, forces=False)
+    reactions = {}
+    x_ref, xd_ref = joint_history(mech, lk, times, rtol=1e-12, reactions=reactions)
+    s = traj.at(times)
     dx = (s.x - x_ref + np.pi) % (2 * np.pi) - np.pi   # whole turns are the same angle
     for k, name in enumerate(traj.joints):
         assert np.max(np.abs(dx[:, k])) <= SWITCH_REL * np.ptp(x_ref[:, k]), name
         assert np.max(np.abs(s.xd[:, k] - xd_ref[:, k])) <= SWITCH_REL * np.ptp(xd_ref[:, k]), name
+        ref = reactions[name]  # before: 8e-7 of range
+        assert np.max(np.abs(s.reactions[name] - ref)) <= SWITCH_REL * np.max(np.ptp(ref, 0)), name
     assert traj.switches_checked == 7
     assert traj.switch_defect <= SWITCH_DEFECT
 
