@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 from .errors import DescriptionError
 
@@ -36,6 +37,10 @@ MAX_STIFFNESS = 1e12
 MAX_EFFORT = 1e12
 #: Most rows of a motor table.
 MAX_TABLE = 100_000
+#: Largest wall-clock limit (s) of one run, exact or engine: one day.  The exact
+#: integration's ``wall_limit`` (:mod:`analytic.free_motion.clock`) and the engines'
+#: ``--wall-limit`` range (``sim_models.engines.ranges.WALL_LIMIT``) both use it.
+MAX_WALL_LIMIT = 86400.0
 
 
 @dataclass(frozen=True)
@@ -95,7 +100,15 @@ class Motor:
         if not self.times:
             return self.effort
         import numpy as np  # only here: the description needs no numpy otherwise
-        return float(np.interp(t, self.times, self.efforts))
+        ts, es = self._table
+        return float(np.interp(t, ts, es))
+
+    @cached_property
+    def _table(self):
+        """The table as arrays, converted once (np.interp converts a tuple at every call:
+        5 ms for 100,000 rows, at every evaluation of the equation of motion)."""
+        import numpy as np
+        return np.asarray(self.times, float), np.asarray(self.efforts, float)
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MissingMassError
+from ..errors import LinkageError, MissingMassError
 from ..mechanism import Revolute
 from ..motion_spec import JointSpring, PointDamper, PointSpring
 from ..planar import cplx
@@ -89,6 +89,15 @@ def _massive(lk):
     return got
 
 
+def _size(lk) -> float:
+    """The mechanism's size (m), kept in the linkage's ``derived``."""
+    got = lk.derived.get("free_size")
+    if got is None:
+        from ..mechanism import mechanism_size
+        got = lk.derived["free_size"] = mechanism_size(lk.mech.bodies) or 1.0
+    return got
+
+
 def _revolute_pairs(lk):
     """Per joint: revolute or not, and the body indices of its two bodies (revolute;
     0 for a prismatic joint), cached on the linkage."""
@@ -134,17 +143,39 @@ class Terms:
     kinetic: np.ndarray
 
 
-def _point_pair(kin, el):
+#: Ends of a spring or damper closer than this fraction of the mechanism's size coincide
+#: (the same pin, computed through two bodies: rounding leaves ~1e-16 of the size): the
+#: element's line, and so its direction, is undefined there.
+COINCIDENT = 1e-12
+
+
+class CoincidentEndsError(LinkageError):
+    """A spring with a non-zero free length whose ends coincide: its force has a size
+    but no direction."""
+
+
+def _point_pair(kin, el, size: float = 1.0):
     """Positions and unit-rate velocities (complex) of a spring's or damper's ends,
-    its length L and its rate per unit q, L_q."""
+    its length L and its rate per unit q, L_q.  Where the ends coincide the direction
+    ``u`` is 0 (a zero-length spring or a damper there exerts no force; see
+    :func:`_check_coincident` for a spring that should push)."""
     ra, va, _ = kin.point_c(el.body_a, el.point_a)
     rb, vb, _ = kin.point_c(el.body_b, el.point_b)
     d = rb - ra
     L = np.abs(d)
     with np.errstate(invalid="ignore", divide="ignore"):
-        u = d / L
+        u = np.where(L > COINCIDENT * size, d / L, 0.0)
     L_q = u.real * (vb - va).real + u.imag * (vb - va).imag
     return L, L_q, u
+
+
+def _check_coincident(mech, s, L, size: float) -> None:
+    if s.free_length and np.any(L <= COINCIDENT * size):
+        raise CoincidentEndsError(
+            f"{mech.source + ': ' if mech.source else ''}spring {s.body_a}.{s.point_a} - "
+            f"{s.body_b}.{s.point_b}: its ends coincide (length 0) while its free length is "
+            f"{s.free_length:g} m, so its force ({s.stiffness * s.free_length:.6g} N) has "
+            "no direction; give free_length = 0 or ends that do not meet")
 
 
 def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
@@ -179,7 +210,8 @@ def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
     Qs, Qd, Qm = np.zeros(N), np.zeros(N), np.zeros(N)
     for s in (fm.springs if fm else ()):
         if isinstance(s, PointSpring):
-            L, L_q, _ = _point_pair(kin, s)
+            L, L_q, _ = _point_pair(kin, s, _size(lk))
+            _check_coincident(mech, s, L, _size(lk))
             ext = L - s.free_length
         else:
             k = jidx[s.joint]
@@ -187,7 +219,7 @@ def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
         Qs -= s.stiffness * ext * L_q
         V += 0.5 * s.stiffness * ext ** 2
     for d in (fm.dampers if fm else ()):
-        L_q = (_point_pair(kin, d)[1] if isinstance(d, PointDamper)
+        L_q = (_point_pair(kin, d, _size(lk))[1] if isinstance(d, PointDamper)
                else co.x_q[:, jidx[d.joint]])
         Qd -= d.coefficient * L_q ** 2 * qd
     for mo in (fm.motors if fm else ()):
@@ -208,7 +240,7 @@ def element_forces(lk, co: Coefficients, x: np.ndarray, qd: float, t: float):
     joint_effort: dict[str, float] = {}
     for el in fm.springs + fm.dampers:
         if isinstance(el, PointSpring | PointDamper):
-            L, L_q, u = _point_pair(kin, el)
+            L, L_q, u = _point_pair(kin, el, _size(lk))
             tension = (el.stiffness * (L[0] - el.free_length) if isinstance(el, PointSpring)
                        else el.coefficient * L_q[0] * qd)
             F = tension * u[0]  # pulls b towards a, a towards b

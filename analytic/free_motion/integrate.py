@@ -26,7 +26,11 @@ from ..errors import AssemblyError, LinkageError
 from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
+from .clock import WallClock
 from .dynamics import check_masses, coefficients, terms, unwrap_to
+from .equilibrium import held
+from .stiffness import check_stiffness
+from .switch_check import Overlap, event_state
 
 #: Relative tolerance of DOP853 (a few units of double rounding above 1e-16 so that
 #: the step-size control stays meaningful; the runs reach ~1e-12, see the tests).
@@ -54,6 +58,11 @@ class Segment:
     ts: np.ndarray       # the integrator's step times
     xs: np.ndarray       # (len(ts), J) unwrapped joint coordinates at those times
     nfev: int
+    #: the switch defect at this segment's start (:mod:`.switch_check`); None for the
+    #: first segment, or where the old coordinate could not be continued past the switch
+    check: float | None = None
+    #: the run held at an equilibrium it was released in at rest (:mod:`.equilibrium`)
+    held: bool = False
 
 
 class NoInertiaError(LinkageError):
@@ -64,8 +73,9 @@ class _System:
     """The right-hand side of one segment, with the last evaluation cached (the
     switching event asks for the same state as the step)."""
 
-    def __init__(self, lk: Linkage, x_ref: np.ndarray, scale: np.ndarray):
+    def __init__(self, lk: Linkage, x_ref: np.ndarray, scale: np.ndarray, clock=None):
         self.lk = lk
+        self.clock = clock
         self.rev = np.array([isinstance(j, Revolute) for j in lk.mech.joints])
         self.last = np.array(x_ref, float)
         self.k = [j.name for j in lk.mech.joints].index(lk.mech.driver.joint)
@@ -83,7 +93,16 @@ class _System:
 
     def __call__(self, t, y):
         self.nfev += 1
-        co, x = self.coeffs(float(y[0]))
+        if self.clock is not None:
+            self.clock.check(t)
+        try:
+            with np.errstate(invalid="ignore", divide="ignore"):  # a stage past the limit
+                co, x = self.coeffs(float(y[0]))
+        except AssemblyError:
+            # a trial stage past the coordinate's limit position (a fast motion steps
+            # over the switch's margin): NaN rejects the step and DOP853 retries a fifth
+            # as long, until the switch event catches the coordinate before its limit
+            return [math.nan] * 5
         tm = terms(self.lk, co, x[None], y[1], t)
         M = float(tm.M[0])
         if not M > 0:
@@ -147,8 +166,10 @@ def _pose_gap(kin_a, kin_b, size: float) -> float:
 
 
 def integrate(mech, duration: float | None = None, rtol: float = RTOL,
-              method: str = "DOP853") -> tuple[list[Segment], list[tuple[float, str, str]]]:
-    """Integrate ``mech.motion`` over ``duration`` (s; default the description's).
+              method: str = "DOP853", clock: WallClock | None = None,
+              ) -> tuple[list[Segment], list[tuple[float, str, str]]]:
+    """Integrate ``mech.motion`` over ``duration`` (s; default the description's),
+    within ``clock``'s wall-clock limit (:mod:`.clock`).
 
     Returns the segments and the coordinate switches ``(t, from joint, to joint)``.
     """
@@ -175,13 +196,20 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
     tm0 = terms(lk, co, x0[None], y[1], 0.0)
     if not tm0.M[0] > 0:
         raise NoInertiaError(_no_inertia(lk, float(y[0])))
+    check_stiffness(lk, co, float(tm0.M[0]), T)  # one line, not an endless run
+    if held(mech, lk, co, float(tm0.Q[0])):  # at rest in an equilibrium: it stays
+        return [_held_segment(lk, y, T, x0)], switches
     e_scale = _energy_scale(mech, tm0, size)
-    stops = sorted({b for mo in fm.motors for b in mo.times if 0.0 < b < T})
+    stops = kinks(fm.motors, T)
     x_ref = x0
+    pending = None  # the overlap check of the last switch (:mod:`.switch_check`)
     while True:
-        sysm = _System(lk, x_ref, scale)
+        sysm = _System(lk, x_ref, scale, clock)
+        if clock is not None:
+            clock.switches = len(switches)
         r = sysm.ratios(float(y[0]))
         if np.max(r) > SWITCH_RATIO:  # the coordinate fails here: switch before moving
+            pending = None
             lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
             continue
         qs = (1.0 if isinstance(lk.mech.driver_joint, Revolute) else size)
@@ -197,7 +225,9 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
             raise _failed(mech, sysm, sol, float(y[0]))
         xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)
         segs.append(Segment(lk, lk.mech.driver.joint, t, float(sol.t[-1]), sol.sol, sol.t,
-                            xs, sysm.nfev))
+                            xs, sysm.nfev,
+                            pending.defect(sysm, sol) if pending is not None else None))
+        pending = None
         if sol.status == 0 and t_end >= T:
             return segs, switches
         if sol.status == 0:  # at a table breakpoint: go on in the same coordinate
@@ -206,10 +236,46 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         if len(switches) >= MAX_SWITCHES:
             raise LinkageError(f"mechanism {mech.name!r}: more than {MAX_SWITCHES} "
                                "coordinate switches")
-        t, y, x_ref = float(sol.t[-1]), sol.y[:, -1].copy(), xs[-1]
+        # the state at the switch from a step of the integrator, not from its dense
+        # output (order 7: 1.5e-10 rad/s off on free01, carried into the new coordinate)
+        t = float(sol.t[-1])
+        y = event_state(sysm, sol, method, rtol, atol)
+        x_ref = xs[-1]
         sysm.last = x_ref
         r = sysm.ratios(float(y[0]))
+        pending = Overlap(sysm, float(sol.t[-2]), sol.y[:, -2].copy(), method, rtol, atol)
         lk, y, x_ref = _switch(lk, sysm, y, _pick(r, closed), size, switches, t)
+
+
+def _held_segment(lk, y, T: float, x0) -> Segment:
+    """The whole run at the state ``y`` (:mod:`.equilibrium`)."""
+    sol = solve_ivp(lambda t, y: np.zeros_like(y), (0.0, T), y, dense_output=True)
+    xs = np.repeat(np.asarray(x0, float)[None], len(sol.t), axis=0)
+    return Segment(lk, lk.mech.driver.joint, 0.0, T, sol.sol, sol.t, xs, 0, held=True)
+
+
+#: A motor table's breakpoint restarts the integration where the effort's slope changes
+#: by more than this fraction of the table's effort range per run duration (a sharp
+#: kink: a high-order step across it would lose its order).  A dense table sampling a
+#: smooth effort changes slope by far less at each row (f'' dt: 4e-3 of it for a sine of
+#: three periods in 100,000 rows), and the step-size control resolves such gentle kinks
+#: as it resolves any curvature; restarting at each of 100,000 rows took hours.
+KINK_REL = 1e-2
+
+
+def kinks(motors, T: float) -> list[float]:
+    """The breakpoints inside ``(0, T)`` where a motor table's slope changes sharply."""
+    out = set()
+    for mo in motors:
+        if len(mo.times) < 3:
+            continue
+        ts, es = (np.asarray(v, float) for v in (mo.times, mo.efforts))
+        slope = np.diff(es) / np.diff(ts)
+        jump = np.abs(np.diff(slope))
+        span = (float(np.ptp(es)) or abs(float(es[0])) or 1.0) / T
+        inside = (ts[1:-1] > 0.0) & (ts[1:-1] < T)
+        out.update(ts[1:-1][inside & (jump > KINK_REL * span)].tolist())
+    return sorted(out)
 
 
 def _start_elsewhere(lk, co, y, scale, closed, size, switches):
@@ -220,9 +286,13 @@ def _start_elsewhere(lk, co, y, scale, closed, size, switches):
     mech = lk.mech
     jn0 = mech.driver.joint
     if y[1] != 0.0:
-        raise LinkageError(f"mechanism {mech.name!r}: [motion] joint {jn0!r} = {y[0]:.6g} is "
-                           f"a singular position of its coordinate (a dead centre: it cannot "
-                           f"move there), so its rate must be 0, got {y[1]:.6g}")
+        rev = isinstance(mech.driver_joint, Revolute)
+        k, u = (math.degrees(1.0), "deg") if rev else (1.0, "m")
+        raise LinkageError(f"{mech.source + ': ' if mech.source else ''}mechanism "
+                           f"{mech.name!r}: [motion] joint {jn0!r} = {y[0] * k:.6g} {u} is a "
+                           "singular position of its coordinate (a dead centre or a limit "
+                           "position: no motion passes there with the joint moving), so its "
+                           f"rate must be 0, got {y[1] * k:.6g} {u}/s")
     best = None
     for j, jt in enumerate(mech.joints):
         if jt.name == jn0:

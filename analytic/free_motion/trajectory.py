@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq as _brentq
 
 from ..kinetostatics import solve_forces
 from ..mechanism import Revolute
@@ -97,6 +97,22 @@ class FreeTrajectory:
     @property
     def nfev(self) -> int:
         return sum(s.nfev for s in self.segments)
+
+    @property
+    def switch_defect(self) -> float | None:
+        """The self-check of the coordinate switches (:mod:`.switch_check`): the largest
+        difference, at the first step after a switch, between the new coordinate's
+        solution and the old coordinate integrated on past the switch (coordinate: rad
+        or fraction of the size; rate: fraction of its scale).  Of the order of the
+        integration's tolerance when no state is lost at a switch; None without a
+        checked switch."""
+        got = [s.check for s in self.segments if s.check is not None]
+        return max(got) if got else None
+
+    @property
+    def switches_checked(self) -> int:
+        """How many of the switches :attr:`switch_defect` covers."""
+        return sum(s.check is not None for s in self.segments)
 
     def _segment_of(self, t: np.ndarray) -> np.ndarray:
         starts = np.array([s.t0 for s in self.segments])
@@ -214,11 +230,24 @@ def _stopped(traj: FreeTrajectory) -> Event | None:
     fm = traj.mech.motion
     where = (f"at a dead centre of joint {fm.joint!r} (its coordinate is singular there)"
              if traj.switches and traj.switches[0][0] == 0.0 else "in equilibrium")
+    if traj.segments[0].held:
+        where += (" (its generalized force is rounding noise: held there, as an unstable "
+                  "equilibrium would amplify that noise into a fall)")
     return Event(0.0, "stop", fm.joint, f"released at rest {where}: the motion stops "
                  f"(rates stay below {STOP_RATE:g} over {traj.duration:g} s)")
 
 
-def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
+def brentq(f, a: float, b: float, clock=None, xtol: float = 1e-14) -> float:
+    """A root of ``f`` bracketed in ``[a, b]``: SciPy's brentq without its exception
+    when the iteration cap is met (a function that is rounding noise near its root, as
+    a loop determinant that touches zero: the bracket is then already below the
+    noise's width, and its best point is the answer).  The wall clock is checked first."""
+    if clock is not None:
+        clock.check()
+    return float(_brentq(f, a, b, xtol=xtol, maxiter=200, disp=False))
+
+
+def _change_points(seg: Segment, q: np.ndarray, clock=None) -> list[tuple[float, str]]:
     """The solver's change points (:meth:`analytic.Linkage.branch_crossings`: where
     dyads meet, including those where the loop Jacobian's determinant touches zero
     without changing sign, as the N four-bar's 40 windows at once) crossed by the
@@ -231,7 +260,8 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
         for i in np.flatnonzero((q[:-1] - v) * (q[1:] - v) <= 0):
             if q[i] == q[i + 1]:
                 continue
-            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1], xtol=1e-14)
+            tc = brentq(lambda t, v=v: float(seg.sol(t)[0]) - v, ts[i], ts[i + 1],
+                        clock)
             if not any(abs(tc - t) < 1e-12 for t, _ in out):
                 out.append((tc, f"change point at {seg.joint!r} = {v:.12g} crossed "
                                 f"({len(c.joints)} dyads meet: {', '.join(c.joints[:4])}"
@@ -239,9 +269,10 @@ def _change_points(seg: Segment, q: np.ndarray) -> list[tuple[float, str]]:
     return out
 
 
-def find_events(traj: FreeTrajectory) -> list[Event]:
+def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
     """Switches, singular crossings, joint limit positions and turning points, located
-    to ~1e-13 s by root-finding on the dense output between the integrator's steps."""
+    to ~1e-13 s by root-finding on the dense output between the integrator's steps
+    (``clock``: a :class:`~.clock.WallClock` checked at each segment and root)."""
     events = [Event(t, "switch", b, f"integrated coordinate {a!r} -> {b!r}")
               for t, a, b in traj.switches]
     names = traj.joints
@@ -250,6 +281,8 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
         return events + [stop]
     for seg in traj.segments:
         ts = seg.ts
+        if clock is not None:
+            clock.check()
         if len(ts) < 2:
             continue
         q = seg.sol(ts)
@@ -260,13 +293,15 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
         def g_det(t, seg=seg):
             return float(coefficients(seg.lk, seg.sol(t)[0]).kin.determinant[0])
 
-        crossed = _change_points(seg, q[0])
+        crossed = _change_points(seg, q[0], clock)
         for tc, detail in crossed:
             events.append(Event(tc, "singular", seg.joint, detail))
         for i in np.flatnonzero(np.sign(det[:-1]) * np.sign(det[1:]) < 0):
-            tc = brentq(g_det, ts[i], ts[i + 1], xtol=1e-14)
-            if any(abs(tc - t) < 1e-9 for t, _ in crossed):
-                continue  # the same change point, listed with its dyads
+            if any(ts[i] <= t <= ts[i + 1] for t, _ in crossed):
+                # the same change point, listed with its dyads (at a stretched pass the
+                # determinant touches zero flatly: its root is only good to ~1e-7 s)
+                continue
+            tc = brentq(g_det, ts[i], ts[i + 1], clock)
             events.append(Event(tc, "singular", seg.joint, "loop Jacobian singular "
                                 "(dead centre or change point) crossed"))
         for j in range(len(names)):
@@ -276,12 +311,12 @@ def find_events(traj: FreeTrajectory) -> list[Event]:
             for i in np.flatnonzero(np.sign(c[:-1]) * np.sign(c[1:]) < 0):
                 def g(t, seg=seg, j=j):
                     return float(coefficients(seg.lk, seg.sol(t)[0]).x_q[0, j])
-                tc = brentq(g, ts[i], ts[i + 1], xtol=1e-14)
+                tc = brentq(g, ts[i], ts[i + 1], clock)
                 events.append(Event(tc, "limit", names[j], f"joint {names[j]!r} reverses "
                                     "(limit position of its coordinate)"))
         qd = q[1]
         for i in np.flatnonzero(np.sign(qd[:-1]) * np.sign(qd[1:]) < 0):
-            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1], xtol=1e-14)
+            tc = brentq(lambda t, seg=seg: float(seg.sol(t)[1]), ts[i], ts[i + 1], clock)
             events.append(Event(tc, "turn", seg.joint, "the motion reverses (rate of "
                                 f"{seg.joint!r} is zero)"))
     return sorted(events, key=lambda e: e.t)

@@ -34,6 +34,8 @@ from reports.comparison.free_cases import (
     command_case,
     free_request_problem,
 )
+from reports.comparison.progress import engine_progress
+from sim_models.runs.free_run import FreeRequest
 
 
 def register(sub) -> None:
@@ -88,7 +90,10 @@ def cmd_simulate(args) -> int:
     if bad:  # judged runs: every door's range (reports.comparison.free_cases.FREE_SAMPLES)
         raise opt.UsageError(("argument --samples: " if args.samples else
                               f"{args.case}: [motion] samples with --engine: ") + bad[2])
-    traj = simulate(mech, args.duration)
+    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
+    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s"):
+        traj = simulate(mech, args.duration,
+                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
     if release is not None and not args.json:
         print(release.text)
     if getattr(args, "engine", None):
@@ -101,6 +106,8 @@ def cmd_simulate(args) -> int:
     if args.json:
         out = {"case": mech.name, "duration_s": traj.duration, "rtol": traj.rtol,
                "method": traj.method, "evaluations": traj.nfev,
+               "switch_check": {"switches_checked": traj.switches_checked,
+                                "defect": traj.switch_defect},
                "released": release.as_json() if release else None,
                "events": [{"t_s": e.t, "kind": e.kind, "joint": e.joint,
                            "detail": e.detail} for e in traj.events],
@@ -131,6 +138,10 @@ def _print_table(mech, smp, traj) -> None:
     scale = float(np.max(smp.kinetic) + np.ptp(smp.potential)) or 1.0
     print(f"work-energy balance: max |residual| {np.max(np.abs(smp.energy_residual)):.3g} J "
           f"({np.max(np.abs(smp.energy_residual)) / scale:.3g} of the energy scale)")
+    if traj.switches_checked:
+        print(f"switch self-check: two coordinates agree past {traj.switches_checked} of "
+              f"{len(traj.switches)} switch(es) to {traj.switch_defect:.2g} of scale "
+              "(analytic.free_motion.switch_check)")
     if traj.events:
         print(f"events ({len(traj.events)}):")
         for e in traj.events[:50]:

@@ -50,16 +50,18 @@ def add_options(s) -> None:
                    help=f"every engine's largest step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s (needs --engine)")
     s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
-                   help="end each engine's run after this much wall-clock time, "
-                        f"{WALL_LIMIT.text()} (default {FreeRequest.wall_limit:g} s; a run "
-                        "that reaches it ends as a result that says so; needs --engine)")
+                   help="end the exact integration and each engine's run after this "
+                        f"much wall-clock time, {WALL_LIMIT.text()} (default "
+                        f"{FreeRequest.wall_limit:g} s; an engine run that reaches it ends "
+                        "as a result that says so, the exact integration with one line, "
+                        "status 2)")
     opt.add_ci_outputs(s)
 
 
 def engine_options_given(args) -> list[str]:
     """The engine-only options given without ``--engine`` (for the one-line refusal)."""
     named = {"--set": args.set, "--integrator": args.integrator, "--timestep": args.timestep,
-             "--wall-limit": args.wall_limit, "--junit": args.junit, "--summary": args.summary}
+             "--junit": args.junit, "--summary": args.summary}
     return [k for k, v in named.items() if v]
 
 

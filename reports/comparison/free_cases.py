@@ -177,7 +177,7 @@ def release_and_judge(mech: Mechanism, engine: str, duration: float | None = Non
     check_free_request(duration, samples)
     if mech.motion is None:
         mech = released(mech, RELEASE_DURATION if duration is None else duration)
-    traj = simulate(mech, duration)
+    traj = simulate(mech, duration, wall_limit=FreeRequest.wall_limit)  # bounded, as the CLI
     req = FreeRequest(duration=traj.duration, samples=samples)
     run = run_free(mech, engine, free_settings(engine, settings), req, traj)
     return run, compare_free(run, traj, reference_samples(traj, req.times()))

@@ -19,6 +19,8 @@ import math
 import numbers
 from dataclasses import dataclass
 
+from analytic.motion_spec import MAX_WALL_LIMIT  # one bound for the exact side too
+
 
 @dataclass(frozen=True)
 class Range:
@@ -156,7 +158,7 @@ STATES = Range(1, 100 * MAX_SAMPLES, whole=True, why="states evaluated one by on
 #: Wall-clock limit of one engine's free run (s): a run past it ends as a result ("wall-clock
 #: limit reached"), not an error.  The default 120 s suits the report's short runs; A02's
 #: 20 s takes PyBullet about 30 min on a shared 2-core machine.
-WALL_LIMIT = Range(0, 86400, lo_open=True, unit="s",
+WALL_LIMIT = Range(0, MAX_WALL_LIMIT, lo_open=True, unit="s",
                    why="at most one day of stepping per engine run")
 
 

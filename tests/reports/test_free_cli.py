@@ -8,6 +8,7 @@ than 1 % of the swing (the test expects the failure, not a number)."""
 from __future__ import annotations
 
 import json
+import re
 import xml.etree.ElementTree as ET
 
 import pytest
@@ -78,12 +79,36 @@ def test_text_verdict_fits_80_columns_and_a_pendulum_has_no_loop_row(monkeypatch
     assert max(len(line) for line in out.splitlines()) <= 80
 
 
-def test_the_wall_limit_reaches_the_run():
-    """``--wall-limit``: a run past it ends as a result that says so (a failed verdict,
-    status 1), not an error."""
+def test_the_wall_limit_reaches_the_run(monkeypatch):
+    """``--wall-limit``: an engine run past it ends as a result that says so (a failed
+    verdict, status 1), not an error.  (The limit bounds the exact integration too, see
+    below; here the exact side runs unbounded so that the engine's path is tested.)"""
+    import reports.cli.simulate as sim
+    real = sim.simulate
+    monkeypatch.setattr(sim, "simulate", lambda mech, duration, wall_limit=None:
+                        real(mech, duration))
     code, out = run("simulate", "iftomm-a01-pendulum", "--engine", "mujoco", "--duration",
                     "0.5", "--wall-limit", "1e-9", "--json")
     assert code == 1, out
     data = json.loads(out)
     text = json.dumps(data)
     assert "wall-clock limit 1e-09 s reached" in text, text[:2000]
+
+
+def test_the_wall_limit_bounds_the_exact_integration(capsys):
+    """Before: ``--wall-limit`` needed ``--engine`` and the exact integration of 10,000 s
+    ran for hours; now one line naming the limit and how far it got, status 2."""
+    code, out = run("simulate", "iftomm-a01-pendulum", "--duration", "10000",
+                    "--wall-limit", "0.5")
+    err = capsys.readouterr().err
+    assert code == 2, out
+    assert re.search(r"the exact integration reached the wall-clock limit of 0\.5 s at "
+                     r"t = \S+ s of 10000 s", err), err
+
+
+def test_simulate_json_reports_the_switch_self_check():
+    code, out = run("simulate", "tests/data/bugs/turn4/F7b_rate_50_limit_overshoot.toml",
+                    "--json", "--samples", "3")
+    assert code == 0
+    chk = json.loads(out)["switch_check"]
+    assert chk["switches_checked"] == 3 and chk["defect"] < 1e-10

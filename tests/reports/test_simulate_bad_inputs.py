@@ -183,8 +183,6 @@ BAD = [
      r"86400 s"),
     ("option-wall-limit-inf", four_bar, ("--engine", "mujoco", "--wall-limit", "inf"),
      r"argument --wall-limit: inf is not a finite number"),
-    ("option-wall-limit-without-engine", four_bar, ("--wall-limit", "10"),
-     r"--wall-limit need\(s\) --engine"),
 ]
 
 
