@@ -41,6 +41,7 @@ COMMANDS = {
                 "(GIF, MP4, HTML)"),
     "view": ("reports.cli.view", "MuJoCo's viewer on the linkage (needs a display)"),
     "simulate": ("reports.cli.simulate", "free motion: the exact released trajectory"),
+    "import": ("reports.cli.own_import", "read your own MJCF model and write its description"),
 }
 
 
