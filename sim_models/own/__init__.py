@@ -71,7 +71,7 @@ def imported_toml(imp: Imported) -> str:
     p = imp.plane
 
     def v(x) -> str:
-        return "(" + ", ".join(f"{float(a):.9g}" for a in np.asarray(x)) + ")"
+        return "(" + ", ".join(f"{float(a) + 0.0:.9g}" for a in np.asarray(x)) + ")"
 
     head = [f"# Imported by `xval import` from {imp.compiled.path} ({imp.compiled.config}).",
             f"# Plane: normal n = {v(p.n)} (joint {imp.driver.name!r}'s axis; rates are about "

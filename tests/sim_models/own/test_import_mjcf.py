@@ -1,0 +1,152 @@
+"""``xval import`` of MJCF models written by hand (tests/sim_models/own/user_models.py):
+the description MuJoCo's compiler gives, its kinematics at the model's configuration
+against the closed forms, and the one-line refusals."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from analytic.errors import DescriptionError
+from analytic.kinematics import Linkage
+from analytic.toml_io import mechanism_from_dict
+from sim_models.own import import_model, imported_toml
+
+from . import user_models as um
+
+pytest.importorskip("mujoco")
+
+#: Body rates and accelerations against the closed forms, relative to the peak over the
+#: bodies: the issue's 1e-12 (both sides are double-precision closed forms of a
+#: well-conditioned loop; the importer's geometry is MuJoCo's, exact to its float64
+#: kinematics).
+RATE_TOL = 1e-12
+#: Masses and inertias against the capsule's closed form: MuJoCo computes the same
+#: composition in double precision (a few ulps).
+MASS_TOL = 1e-12
+W_IN = 10.0  # rad/s, the issue's input rate
+
+
+def _write(tmp_path, text: str, name: str = "model.xml") -> str:
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+def _rates(mech, w_in: float = W_IN) -> dict[str, tuple[float, float]]:
+    lk = Linkage(mech.with_driver(velocity=w_in, acceleration=0.0))
+    kin = lk.kinematics()
+    return {b.name: (float(kin.omega[0, lk.body_index(b.name)]),
+                     float(kin.alpha[0, lk.body_index(b.name)]))
+            for b in mech.moving_bodies}
+
+
+def _check_rates(got: dict, want: dict) -> float:
+    peak_w = max(abs(w) for w, _ in want.values())
+    peak_a = max(abs(a) for _, a in want.values())
+    worst = 0.0
+    for name, (w, a) in want.items():
+        worst = max(worst, abs(got[name][0] - w) / peak_w, abs(got[name][1] - a) / peak_a)
+    assert worst <= RATE_TOL, (got, want)
+    return worst
+
+
+@pytest.mark.parametrize("closure", ["anchor", "sites"])
+def test_four_bar_xz_plane(tmp_path, closure):
+    imp = import_model(_write(tmp_path, um.four_bar_xml(closure)))
+    mech = imp.mechanism
+    assert [b.name for b in mech.moving_bodies] == ["crank", "coupler", "rocker"]
+    assert [j.name for j in mech.joints] == ["O2", "A", "O4", "close"]
+    assert mech.driver.joint == "O2" and mech.driver.value == 0.0  # qpos0
+    np.testing.assert_allclose(imp.plane.n, [0, -1, 0], atol=1e-15)
+    assert mech.gravity == pytest.approx((0.0, -9.81), abs=1e-15)
+    for name, length in (("crank", um.A_LEN), ("coupler", um.B_LEN), ("rocker", um.C_LEN)):
+        m, i = um.capsule_mass_inertia(length)
+        b = mech.body(name)
+        assert b.mass == pytest.approx(m, rel=MASS_TOL)
+        assert b.inertia == pytest.approx(i, rel=MASS_TOL)
+    w3, w4, al3, al4 = um.four_bar_rates(W_IN)
+    _check_rates(_rates(mech), {"crank": (W_IN, 0.0), "coupler": (w3, al3),
+                                "rocker": (w4, al4)})
+    text = imported_toml(imp)
+    assert f"equality connect 'close' ({'anchor' if closure == 'anchor' else 'sites'}" in text
+    import tomllib
+    again = mechanism_from_dict(tomllib.loads(text), "again")  # the file reads back
+    _check_rates(_rates(again), _rates(mech))
+
+
+def test_slider_crank(tmp_path):
+    imp = import_model(_write(tmp_path, um.slider_crank_xml()))
+    mech = imp.mechanism
+    assert mech.driver.joint == "crank_pin"
+    w3, al3, v, acc = um.slider_crank_rates(W_IN)
+    _check_rates(_rates(mech), {"crank": (W_IN, 0.0), "rod": (w3, al3),
+                                "piston": (0.0, 0.0)})
+    lk = Linkage(mech.with_driver(velocity=W_IN))
+    kin = lk.kinematics()
+    s, sd, sdd = (float(x[0]) for x in kin.slider("slide"))
+    assert s == pytest.approx(0.0, abs=1e-15)  # the model's qpos of the slide at qpos0
+    assert sd == pytest.approx(v, abs=RATE_TOL * abs(v))
+    assert sdd == pytest.approx(acc, abs=RATE_TOL * abs(acc))
+
+
+def test_five_bar_refused(tmp_path):
+    with pytest.raises(DescriptionError, match=r"2 degrees of freedom: joints \[.*\]"):
+        import_model(_write(tmp_path, um.FIVE_BAR_XML))
+
+
+def test_tilted_hinge_refused(tmp_path):
+    with pytest.raises(DescriptionError, match=r"joint 'O4': hinge axis is tilted by 0\.001 "):
+        import_model(_write(tmp_path, um.four_bar_xml(tilt=1e-3)))
+
+
+def test_site_loop_2mm_open_refused(tmp_path):
+    with pytest.raises(DescriptionError, match=r"connect 'close' .*open by 2 mm"):
+        import_model(_write(tmp_path, um.four_bar_xml("sites", gap=0.002)))
+
+
+def test_anchor_beyond_coupler_read_as_mujoco(tmp_path):
+    """The anchor 2 mm beyond the coupler's end: MuJoCo pins the rocker where that point
+    lies at qpos0; the reference's rates, put into MuJoCo's joint velocities, leave its
+    own constraint's velocity (efc_vel of the connect rows) at rounding."""
+    import mujoco
+    path = _write(tmp_path, um.four_bar_xml(anchor_beyond=0.002))
+    imp = import_model(path)
+    rates = _rates(imp.mechanism)
+    m = mujoco.MjModel.from_xml_path(path)
+    d = mujoco.MjData(m)
+    # MuJoCo's joint velocities: O2 the crank's rate, A the coupler's relative to the
+    # crank, O4 the rocker's (all hinge axes along the plane's normal)
+    d.qvel[:] = [rates["crank"][0], rates["coupler"][0] - rates["crank"][0],
+                 rates["rocker"][0]]
+    mujoco.mj_forward(m, d)
+    rows = d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+    assert rows.sum() == 3
+    scale = W_IN * um.A_LEN  # the crank tip's speed, m/s
+    assert np.abs(d.efc_vel[rows]).max() <= 1e-12 * scale
+    # and the geometry differs from the 2 mm-shorter closure: not the textbook rates
+    w3, _, _, _ = um.four_bar_rates(W_IN)
+    assert abs(rates["coupler"][0] - w3) > 1e-6 * W_IN
+
+
+def test_major_simulator_four_bar(tmp_path):
+    imp = import_model(_write(tmp_path, um.major_four_bar_xml()), driver="crank_pin")
+    mech = imp.mechanism
+    for b in mech.moving_bodies:
+        assert b.mass == 20.0 and b.inertia == pytest.approx(20 * 16 / 12, rel=1e-13)
+    t2 = math.atan(math.sqrt(15.0))
+    w3, w4, al3, al4 = um.loop_rates(4.0, 4.0, 4.0, t2, math.pi, math.pi - t2, W_IN)
+    _check_rates(_rates(mech), {"crank": (W_IN, 0.0), "coupler": (w3, al3),
+                                "rocker": (w4, al4)})
+
+
+def test_driver_and_keyframe_refusals(tmp_path):
+    path = _write(tmp_path, um.major_four_bar_xml())
+    with pytest.raises(DescriptionError, match="no actuated joint: name the input"):
+        import_model(path)
+    with pytest.raises(DescriptionError, match="--driver 'nope': no such"):
+        import_model(path, driver="nope")
+    with pytest.raises(DescriptionError, match="no keyframe 'k'"):
+        import_model(path, driver="crank_pin", keyframe="k")
