@@ -28,6 +28,9 @@ from sim_models.registry import engine_names, skipped_engines
 
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
+    if str(args.case).lower().endswith(".xml"):  # the user's own engine model
+        from reports.cli.own_compare import cmd_compare_own
+        return cmd_compare_own(args)
     mech = load_case(args.case)
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])
@@ -149,8 +152,13 @@ def note_skipped_engines() -> None:
 def register(sub) -> None:
     """Add ``compare`` to ``xval``'s subparsers."""
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
-    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("case", help="built-in case name, TOML file, or your own MJCF model "
+                   "(.xml, read as xval import reads it)")
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
+    s.add_argument("--driver", help="with a model file: its input joint (default: the one "
+                   "actuated joint)")
+    s.add_argument("--keyframe", help="with a model file: the reference configuration "
+                   "(default: qpos0)")
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
                    help="run: step through the driver's motion; instantaneous: the "
                         "engine's forward dynamics at the analytic state (MuJoCo)")
