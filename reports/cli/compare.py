@@ -30,7 +30,7 @@ def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
     if str(args.case).lower().endswith(".xml"):  # the user's own engine model
         from reports.cli.own_compare import cmd_compare_own
-        return cmd_compare_own(args)
+        return cmd_compare_own(args, _print_compare_text, _verdict_json)
     mech = load_case(args.case)
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the case file", args.case)])

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 
-from reports.cli import compare as cli_compare
 from reports.cli import options as opt
 from reports.cli.paths import check_outputs
 from reports.comparison.compare import compare_run, json_safe
@@ -26,8 +25,9 @@ def is_model_file(path: str | None) -> bool:
     return bool(path) and str(path).lower().endswith(".xml")
 
 
-def cmd_compare_own(args) -> int:
-    """``xval compare MODEL.xml``: see the module."""
+def cmd_compare_own(args, print_text, verdict_json) -> int:
+    """``xval compare MODEL.xml``: see the module.  ``print_text`` and ``verdict_json``
+    are ``xval compare``'s table printer and JSON object (handed over: no import cycle)."""
     if args.engine not in ("mujoco", "all"):
         raise opt.UsageError(f"--engine {args.engine}: a user's MJCF model runs in MuJoCo "
                              "only (--engine mujoco)")
@@ -49,14 +49,14 @@ def cmd_compare_own(args) -> int:
     v = Verdict(tree, r, tuple(compare_run(r)))
     lines = [f"diagnosis: {x}" for x in model_defects(imp) + run_findings(r)]
     if args.json:
-        obj = cli_compare._verdict_json(v, "run") | {"file": str(args.case),
+        obj = verdict_json(v, "run") | {"file": str(args.case),
                                                       "diagnosis": lines}
         print(json.dumps(json_safe([obj]), indent=2, allow_nan=False))
     else:
         print(f"model file: {args.case} ({imp.compiled.config}), driver "
               f"{mech.driver.joint!r} at {mech.driver.velocity:g} "
               f"{'rad/s' if tree.linkage.driver_is_revolute else 'm/s'}")
-        cli_compare._print_compare_text(mech, "run", [v], tree.linkage.driver_is_revolute)
+        print_text(mech, "run", [v], tree.linkage.driver_is_revolute)
         for line in lines:
             print(line)
     write_compare_outputs(mech, [v], str(args.case), args.junit, args.summary)

@@ -38,6 +38,10 @@ def run_findings(run) -> list[str]:
     out = []
     for what, t in sorted(run.extra.get("active", {}).items(), key=lambda kv: kv[1]):
         out.append(f"modelling: {what} acted during the motion (first at t = {t:.4g} s)")
+    if not run.ok:
+        out.append(f"engine: the run stopped: {run.reason} (with the model's solref/solimp "
+                   f"at its step {run.timestep:.3g} s; the loops opened beyond the harness's "
+                   "divergence limit)")
     viol = np.asarray(run.loop_violation, float)
     if viol.size and np.isfinite(viol).any():
         out.append(f"engine: the loops opened by up to {np.nanmax(np.abs(viol)) * 1e3:.3g} mm "

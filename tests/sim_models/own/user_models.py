@@ -72,24 +72,27 @@ def _f(x: float) -> str:
 
 
 def four_bar_xml(closure: str = "anchor", tilt: float = 0.0, gap: float = 0.0,
-                 anchor_beyond: float = 0.0) -> str:
+                 anchor_beyond: float = 0.0, stiff: bool = False) -> str:
     """The four-bar as a user writes it: a default class for the links, inertia from
     capsule geoms with a density, bodies placed at the assembled pose.  ``closure``:
     "anchor" (connect by an anchor in the coupler's frame) or "sites" (connect site1/
     site2); ``tilt`` tilts the rocker's hinge axis (rad) about x; ``gap`` moves the
     rocker's site this far along the rocker, beyond B (m); ``anchor_beyond`` puts the
-    connect's anchor this far beyond the coupler's end along the coupler (m)."""
+    connect's anchor this far beyond the coupler's end along the coupler (m); ``stiff``
+    gives the connect a near-hard solref 0.002 s and solimp 0.9999 (else MuJoCo's
+    defaults, 0.02 s and 0.9-0.95)."""
     (ax, az), (bx, bz), t3, _ = four_bar_pose()
     cbx, cbz = bx - ax, bz - az
     ext = 1 + anchor_beyond / B_LEN
     rbx, rbz = bx - D_LEN, bz
     sg = 1 + gap / C_LEN
     rocker_axis = f"{_f(math.sin(tilt))} {_f(-math.cos(tilt))} 0"
+    soft = 'solref="0.002 1" solimp="0.9999 0.9999 0.001" ' if stiff else ""
     if closure == "anchor":
-        eq = (f'<connect name="close" body1="coupler" body2="rocker" '
+        eq = (f'<connect name="close" {soft}body1="coupler" body2="rocker" '
               f'anchor="{_f(cbx * ext)} 0 {_f(cbz * ext)}"/>')
     else:
-        eq = '<connect name="close" site1="coupler_B" site2="rocker_B"/>'
+        eq = f'<connect name="close" {soft}site1="coupler_B" site2="rocker_B"/>'
     return f"""<mujoco model="user-four-bar">
   <compiler angle="degree" inertiafromgeom="true"/>
   <option gravity="0 0 -9.81" timestep="0.0005" integrator="RK4"/>
