@@ -39,7 +39,12 @@ def register(sub) -> None:
     s = sub.add_parser("simulate", help="free motion: integrate a released linkage")
     s.add_argument("case", help="built-in case name or TOML file with a [motion] table (a "
                         "built-in case without one is released at rest under gravity, as "
-                        "the report's free-motion section releases it)")
+                        "the report's free-motion section releases it), or your own MJCF "
+                        "model (.xml, read as xval import reads it)")
+    s.add_argument("--driver", help="with a model file: the joint whose coordinate the "
+                   "reference integrates (default: the one actuated joint)")
+    s.add_argument("--keyframe", help="with a model file: the released state (default: "
+                   "qpos0 at rest)")
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"seconds, {MIN_DURATION:g} to {MAX_DURATION:g} (default: the "
                         "description's)")
@@ -71,6 +76,9 @@ def _frame(mech, smp):
 
 
 def cmd_simulate(args) -> int:
+    if str(args.case).lower().endswith(".xml"):  # the user's own engine model
+        from reports.cli.own_simulate import cmd_simulate_own
+        return cmd_simulate_own(args, _print_table)
     if args.json and args.csv == "-":
         raise OutputError("--json and --csv - both write to standard output; give --csv a "
                           "file name")

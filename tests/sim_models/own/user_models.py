@@ -217,13 +217,17 @@ FIVE_BAR_XML = """<mujoco model="user-five-bar">
 """
 
 
-def major_four_bar_xml() -> str:
+def major_four_bar_xml(crank_rate: float = 1.0) -> str:
     """The four-bar of a major simulator's documented example (the SDF four-bar of
     Gazebo's tutorials / Drake's four_bar example): three links of 4 m and 20 kg, ground
     pins 2 m apart, the crank at atan(sqrt 15) above the ground line, so the coupler is
     horizontal and the mechanism an isosceles trapezoid; uniform rods (inertia m L^2/12 +
-    a thin section), gravity -z, released at rest."""
+    a thin section), gravity -z.  At rest this symmetric pose is an equilibrium, so the
+    keyframe "moving" releases it with the crank at ``crank_rate`` (rad/s) and the other
+    joints at the rates the loop allows (closed form :func:`loop_rates`)."""
     t = math.atan(math.sqrt(15.0))
+    w3, w4, _, _ = loop_rates(4.0, 4.0, 4.0, t, math.pi, math.pi - t, crank_rate)
+    qvel = f"{_f(crank_rate)} {_f(w3 - crank_rate)} {_f(w4)}"
     ax, az = 4 * math.cos(t), 4 * math.sin(t)    # (1, sqrt 15)
     return f"""<mujoco model="major-four-bar">
   <option gravity="0 0 -9.81" timestep="0.001" integrator="RK4"/>
@@ -254,6 +258,9 @@ def major_four_bar_xml() -> str:
   <equality>
     <connect name="loop" body1="coupler" body2="rocker" anchor="-4 0 0"/>
   </equality>
+  <keyframe>
+    <key name="moving" qpos="0 0 0" qvel="{qvel}"/>
+  </keyframe>
 </mujoco>
 """
 
