@@ -121,8 +121,10 @@ def _bodies(c: Compiled, f: _Frames, points: dict, table: list, notes: list) -> 
             jt, a = arm[g.name]
             i_n += a
             extra = f" + armature {a:g} kg m^2 of joint {jt.name!r}"
-        out.append(Body(g.name, points[g.name], g.mass, f.local(g.name, g.com) if g.mass > 0
-                        else (0.0, 0.0), i_n))
+        com = f.local(g.name, g.com) if g.mass > 0 else (0.0, 0.0)
+        if len(points[g.name]) == 1 and g.mass > 0:  # a pendulum: its centre gives it a size
+            points[g.name]["com" if "com" not in points[g.name] else "centre_of_mass"] = com
+        out.append(Body(g.name, points[g.name], g.mass, com, i_n))
         table.append((f"body {g.name!r}" + (f" + welded {welded}" if welded else ""),
                       f"[bodies.{g.name}] mass {g.mass:.6g} kg, inertia {i_n:.6g} kg m^2"
                       f"{extra}"))

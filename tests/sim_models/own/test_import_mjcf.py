@@ -5,6 +5,7 @@ against the closed forms, and the one-line refusals."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -150,3 +151,64 @@ def test_driver_and_keyframe_refusals(tmp_path):
         import_model(path, driver="nope")
     with pytest.raises(DescriptionError, match="no keyframe 'k'"):
         import_model(path, driver="crank_pin", keyframe="k")
+
+
+PENDULUM_ELEMENTS = """<mujoco model="elements">
+  <compiler angle="degree"/>
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <body name="arm">
+      <joint name="pivot" axis="0 -1 0" damping="0.3" stiffness="2" springref="30"
+             armature="0.01" frictionloss="0.1" limited="true" range="-170 170"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02" mass="1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="torque" joint="pivot" gear="2"/>
+    <position name="servo" joint="pivot" kp="5"/>
+  </actuator>
+  <keyframe>
+    <key name="up" qpos="0.5" qvel="1.5" ctrl="0.25 0"/>
+  </keyframe>
+</mujoco>
+"""
+
+
+def test_elements_keyframe_and_not_modelled(tmp_path):
+    """Joint damping, stiffness about springref, a constant-effort motor (gear x ctrl of
+    the keyframe) and the armature of a ground hinge (added to the body's inertia: its
+    kinetic energy is a (w - 0)^2 / 2) are carried; friction loss, the limit and the
+    position actuator are listed as not modelled."""
+    imp = import_model(_write(tmp_path, PENDULUM_ELEMENTS), driver="pivot", keyframe="up")
+    mech, fm = imp.mechanism, imp.mechanism.motion
+    assert mech.driver.value == 0.5 and fm.value == 0.5 and fm.rate == 1.5
+    assert [(d.joint, d.coefficient) for d in fm.dampers] == [("pivot", 0.3)]
+    (sp,) = fm.springs
+    assert sp.stiffness == 2.0 and sp.free_value == pytest.approx(math.radians(30), rel=1e-15)
+    (mo,) = fm.motors
+    assert mo.effort == pytest.approx(2 * 0.25, rel=1e-15)
+    m_rod, length, r = 1.0, 0.5, 0.02
+    # MuJoCo's capsule of mass 1 kg: cylinder + hemispheres, as in the test above
+    _, i_unit = um.capsule_mass_inertia(length, r, rho=1.0)
+    m_unit, _ = um.capsule_mass_inertia(length, r, rho=1.0)
+    i_com = i_unit * m_rod / m_unit
+    assert mech.body("arm").inertia == pytest.approx(i_com + 0.01, rel=1e-12)
+    text = " ".join(imp.not_modelled)
+    assert "friction loss on joints ['pivot']" in text and "limits on joints ['pivot']" in text
+    assert "actuator 'servo'" in text
+
+
+@pytest.mark.parametrize("xml, words", [
+    ("""<mujoco><worldbody><body name="b"><joint name="j" type="ball"/>
+        <geom size="0.1"/></body></worldbody></mujoco>""", "joint 'j' is a ball joint"),
+    ("""<mujoco><worldbody><body name="b"><joint name="j1" axis="0 1 0"/>
+        <joint name="j2" axis="0 1 0"/><geom size="0.1"/></body></worldbody></mujoco>""",
+     "body 'b' has 2 joints"),
+    ("""<mujoco><worldbody><body name="a"><joint name="ja" axis="0 1 0"/><geom size="0.1"/>
+        </body><body name="b" pos="1 0 0"><joint name="jb" axis="0 1 0"/><geom size="0.1"/>
+        </body></worldbody><equality><weld name="glue" body1="a" body2="b"/></equality>
+        </mujoco>""", "equality 'glue' is a weld constraint"),
+])
+def test_what_the_description_cannot_hold_is_refused(tmp_path, xml, words):
+    with pytest.raises(DescriptionError, match=re.escape(words)):
+        import_model(_write(tmp_path, xml), driver="j" if "ball" in xml else None)
