@@ -43,7 +43,7 @@ def import_model(path: str, driver: str | None = None, keyframe: str | None = No
     drv = choose_driver(c, driver)
     plane = plane_of(c, drv)
     check_closures(c)
-    check_one_dof(c, plane)
+    check_one_dof(c, plane, drv)
     imp = build(c, plane, drv, duration)
     _check_branch(imp)
     return imp

@@ -128,7 +128,7 @@ def check_closures(c: Compiled) -> None:
                 f"size {size:.4g} m. Move the site or the body so the points meet", c.path)
 
 
-def check_one_dof(c: Compiled, plane: Plane) -> None:
+def check_one_dof(c: Compiled, plane: Plane, driver: TreeJoint) -> None:
     """Exactly one degree of freedom: the joints less the rank of the closures' in-plane
     Jacobian (``mj_jac`` at the reference).  Otherwise the independent joints named."""
     import mujoco
@@ -149,10 +149,23 @@ def check_one_dof(c: Compiled, plane: Plane) -> None:
     if dof == 0:
         raise DescriptionError("0 degrees of freedom: the closures lock every joint "
                                f"({sorted(names.values())})", c.path)
-    import scipy.linalg
     null = np.linalg.svd(jac)[2][rank:] if rows else np.eye(m.nv)
-    piv = scipy.linalg.qr(null, pivoting=True)[2][:dof]
-    free = [names[int(i)] for i in sorted(piv)]
+    free = _independent(c, null, driver)
     raise DescriptionError(f"{dof} degrees of freedom: joints {free} move independently "
                            "(a driven linkage has one; close another loop or fix a "
                            "joint)", c.path)
+
+
+def _independent(c: Compiled, null: np.ndarray, driver: TreeJoint) -> list[str]:
+    """A set of joints whose coordinates fix the mechanism (columns of the closures'
+    null space ``null`` (dof, nv) of full rank), taken greedily: the driver first, then
+    the joints on the ground, then the others, in the model's order."""
+    order = sorted(c.joints, key=lambda j: (j is not driver, j.parent != "world", j.id))
+    picked: list[TreeJoint] = []
+    for j in order:
+        cols = null[:, [p.dof for p in picked + [j]]]
+        if np.linalg.matrix_rank(cols, tol=RANK_TOLERANCE) == len(picked) + 1:
+            picked.append(j)
+        if len(picked) == null.shape[0]:
+            break
+    return [j.name for j in picked]
