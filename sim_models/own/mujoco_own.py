@@ -336,8 +336,9 @@ def run_prescribed(imp: Imported, request=None, timestep: float | None = None):
     """The user's model driven along the description's prescribed motion: an
     :class:`sim_models.engine_run.EngineRun` against ``compile_linkage(imp.mechanism)``."""
     from ..engine_base import RunRequest, compile_linkage, drive, plan_samples
-    request = request or RunRequest()
-    tree = compile_linkage(imp.mechanism, chords=request.chords)
+    request = dataclasses.replace(request or RunRequest(), chords="analytic")
+    # the model's own tree: its joints first (description order), its connects the chords
+    tree = compile_linkage(imp.mechanism, chords="analytic")
     plan = plan_samples(tree, request.revolutions, request.samples)
     with OwnMujocoSession(tree, imp, own_settings(imp, timestep=timestep)) as session:
         return tree, drive(session, plan, request)

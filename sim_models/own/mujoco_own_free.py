@@ -69,7 +69,7 @@ def run_free_own(imp: Imported, request=None, reference=None, timestep: float | 
     from ..engine_base import compile_linkage
     from ..free_base import drive_free
     from ..free_run import FreeRequest
-    tree = compile_linkage(imp.mechanism)
+    tree = compile_linkage(imp.mechanism, chords="analytic")  # the model's own tree
     fm = imp.mechanism.motion
     request = request or FreeRequest(duration=fm.duration, samples=max(1, fm.samples - 1))
     session = OwnFreeSession(tree, imp, own_settings(imp, prescribed=False,

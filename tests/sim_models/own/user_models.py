@@ -271,3 +271,36 @@ def _quat_y(angle_xz: float) -> str:
     # z -> (cos t, 0, sin t): a rotation about y by (pi/2 - t)
     h = (math.pi / 2 - angle_xz) / 2
     return f"{_f(math.cos(h))} 0 {_f(math.sin(h))} 0"
+
+
+def chain_four_bar_xml() -> str:
+    """The four-bar as one chain world-crank-coupler-rocker, its loop closed at the
+    ground pin O4 by a connect to the world (``body2`` left out), near-hard."""
+    (ax, az), (bx, bz), _, _ = four_bar_pose()
+    return f"""<mujoco model="chain-four-bar">
+  <option gravity="0 0 -9.81" timestep="0.0005" integrator="RK4"/>
+  <default>
+    <joint axis="0 -1 0"/>
+    <geom type="capsule" size="{RADIUS}" density="{DENSITY}" contype="0" conaffinity="0"/>
+  </default>
+  <worldbody>
+    <body name="crank">
+      <joint name="O2"/>
+      <geom fromto="0 0 0 {_f(ax)} 0 {_f(az)}"/>
+      <body name="coupler" pos="{_f(ax)} 0 {_f(az)}">
+        <joint name="A"/>
+        <geom fromto="0 0 0 {_f(bx - ax)} 0 {_f(bz - az)}"/>
+        <body name="rocker" pos="{_f(bx - ax)} 0 {_f(bz - az)}">
+          <joint name="B"/>
+          <geom fromto="0 0 0 {_f(D_LEN - bx)} 0 {_f(-bz)}"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="O4" body1="rocker" anchor="{_f(D_LEN - bx)} 0 {_f(-bz)}"
+             solref="0.002 1" solimp="0.9999 0.9999 0.001"/>
+  </equality>
+  <actuator><motor joint="O2"/></actuator>
+</mujoco>
+"""
