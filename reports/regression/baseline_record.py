@@ -20,6 +20,7 @@ from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison import runs as verdict_runs
 from reports.comparison.runs import request_of
 from reports.regression import model_identity as mid
+from reports.regression import own_model as own
 from reports.regression.baseline import (
     Baseline,
     ModelSource,
@@ -49,6 +50,8 @@ def run_and_compare(mech, engine: str, settings, request: dict):
     ``(EngineRun, [Comparison])`` (``[engine]`` rows left out).  A free-motion request
     (:mod:`reports.regression.baseline_free`) releases the linkage instead: ``(FreeEngineRun,
     [FreeComparison])``."""
+    if own.is_model_file(getattr(mech, "source", None)):  # a user's MJCF model
+        return own.run_and_compare_own(mech, engine, settings, request)
     if is_free(request):
         return run_and_compare_free(mech, engine, settings, request)
     v = verdict_runs.run_verdict(mech, engine, settings, request_of(request))
@@ -72,7 +75,10 @@ def request_dict(revolutions: int | None = None, samples: int | None = None,
 
 def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
-    paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
+    paths in the baseline are relative to ``base_dir``, the baseline file's folder); a
+    user's MJCF file (:mod:`reports.regression.own_model`)."""
+    if own.is_model_file(model):
+        return own.own_source(model, base_dir)
     if model in builtin_names():
         mech = load_case(model)
         return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech

@@ -59,22 +59,29 @@ class OwnMujocoSettings(EngineSettings):
         return f"the user's model {self.file} with its own options: {self.options}"
 
 
-def model_options(m) -> str:
+def option_items(m) -> dict[str, str]:
     """The compiled model's solver options and its equality constraints' ``solref`` and
-    ``solimp``, in one line."""
+    ``solimp`` (and any joint's armature), ``key -> value`` as written in the settings
+    line and kept in a baseline's model identity."""
     import mujoco
     o = m.opt
-    text = (f"timestep={o.timestep:g} integrator={mujoco.mjtIntegrator(o.integrator).name[6:]} "
-            f"solver={mujoco.mjtSolver(o.solver).name[6:]} iterations={o.iterations} "
-            f"tolerance={o.tolerance:g} cone={mujoco.mjtCone(o.cone).name[7:]}")
+    out = {"timestep": f"{o.timestep:g}",
+           "integrator": mujoco.mjtIntegrator(o.integrator).name[6:],
+           "solver": mujoco.mjtSolver(o.solver).name[6:], "iterations": str(o.iterations),
+           "tolerance": f"{o.tolerance:g}", "cone": mujoco.mjtCone(o.cone).name[7:]}
     for e in range(m.neq):
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality{e}"
-        text += (f" {name}.solref=({','.join(f'{x:g}' for x in m.eq_solref[e])})"
-                 f" {name}.solimp=({','.join(f'{x:g}' for x in m.eq_solimp[e])})")
+        out[f"{name}.solref"] = "(" + ",".join(f"{x:g}" for x in m.eq_solref[e]) + ")"
+        out[f"{name}.solimp"] = "(" + ",".join(f"{x:g}" for x in m.eq_solimp[e]) + ")"
     arm = [(j, float(m.dof_armature[j])) for j in range(m.nv) if m.dof_armature[j] > 0]
     if arm:
-        text += " armature=" + ",".join(f"dof{j}:{a:g}" for j, a in arm)
-    return text
+        out["armature"] = ",".join(f"dof{j}:{a:g}" for j, a in arm)
+    return out
+
+
+def model_options(m) -> str:
+    """:func:`option_items` in one line."""
+    return " ".join(f"{k}={v}" for k, v in option_items(m).items())
 
 
 def own_settings(imp: Imported, prescribed: bool = True,
