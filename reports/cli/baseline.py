@@ -192,7 +192,8 @@ def register(sub) -> None:
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
     r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
     r.add_argument("models", nargs="+", type=_model, metavar="CASE_OR_FILE",
-                   help="built-in case names, TOML files, or 'all' (every built-in case)")
+                   help="built-in case names, TOML files, your own MJCF models (.xml, "
+                        "with --engine mujoco), or 'all' (every built-in case)")
     r.add_argument("--engine", action="append", choices=[*engine_names(), "all"],
                    help="an engine (repeatable; default all)")
     r.add_argument("--out", required=True, type=opt.output_file, metavar="FILE",

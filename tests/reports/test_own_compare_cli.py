@@ -61,3 +61,16 @@ def test_refusals(tmp_path, capsys, args, words):
     path = _model(tmp_path, um.four_bar_xml())
     code, _ = run("compare", path, *args)
     assert code == 2 and words in capsys.readouterr().err
+
+
+def test_a_limit_reached_during_the_motion_is_named(tmp_path):
+    """A limit of +-5 deg on the rocker's joint, which swings further in a revolution: the
+    diagnosis names the limit as a modelling defect acting during the motion (and the
+    header of the import lists it as not modelled)."""
+    xml = um.four_bar_xml(stiff=True).replace(
+        '<joint name="O4"', '<joint name="O4" limited="true" range="-5 5"')
+    path = _model(tmp_path, xml)
+    code, out = run("compare", path, "--engine", "mujoco", "--revolutions", "1")
+    assert code == 1
+    assert "diagnosis: modelling: limit of joint 'O4' acted during the motion" in out
+    assert "diagnosis: not modelled: limits on joints ['O4']" in out
