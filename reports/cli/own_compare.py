@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 
 from reports.cli import options as opt
+from reports.cli.own_import import own_closes
 from reports.cli.paths import check_outputs
 from reports.comparison.compare import compare_run, json_safe
 from reports.comparison.progress import engine_progress
@@ -41,7 +42,7 @@ def cmd_compare_own(args, print_text, verdict_json) -> int:
                                  "to see whether an error falls with it)")
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the model file", args.case)])
-    imp = import_model(args.case, args.driver, args.keyframe)
+    imp = import_model(args.case, args.driver, args.keyframe, closes=own_closes(args))
     mech = imp.mechanism
     request = RunRequest(args.revolutions, args.samples)
     with engine_progress(f"mujoco: {args.case}, {args.revolutions} revolutions"):

@@ -11,6 +11,7 @@ import numpy as np
 
 from analytic.free_motion import simulate
 from reports.cli import options as opt
+from reports.cli.own_import import own_closes
 from reports.cli.paths import check_outputs
 from reports.cli.simulate_engines import print_verdict, write_ci
 from reports.comparison.compare import json_safe
@@ -20,6 +21,10 @@ from sim_models.free_run import FreeRequest
 from sim_models.own import DEFAULT_DURATION, import_model
 from sim_models.own.diagnose import model_defects, run_findings
 from sim_models.own.mujoco_own_free import run_free_own
+
+#: A reference whose joint coordinates all stay within this (rad or m) does not move:
+#: rounding of a closed loop at rest is ~1e-16 rad; a motion worth judging is far above.
+STILL = 1e-9
 
 
 def cmd_simulate_own(args, print_table) -> int:
@@ -35,12 +40,17 @@ def cmd_simulate_own(args, print_table) -> int:
     check_outputs([("--junit", args.junit), ("--summary", args.summary)],
                   [("the model file", args.case)])
     imp = import_model(args.case, args.driver, args.keyframe,
-                       args.duration or DEFAULT_DURATION)
+                       args.duration or DEFAULT_DURATION, own_closes(args))
     mech = imp.mechanism
     traj = simulate(mech)
     n = args.samples or mech.motion.samples
+    smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
+    if np.ptp(smp.x) <= STILL:  # nothing to judge a run against
+        raise opt.UsageError(f"{args.case}: released from {imp.compiled.config} the model "
+                             "does not move (at rest, no in-plane gravity, spring or motor); "
+                             "give a keyframe with a velocity (--keyframe NAME)")
     if not args.engine:
-        print_table(mech, traj.at(np.linspace(0.0, traj.duration, n), forces=False), traj)
+        print_table(mech, smp, traj)
         return 0
     request = FreeRequest(duration=traj.duration, samples=max(1, n - 1),
                           wall_limit=args.wall_limit or FreeRequest.wall_limit)

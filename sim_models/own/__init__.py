@@ -23,7 +23,7 @@ from analytic.errors import DescriptionError
 from analytic.toml_io import mechanism_to_toml
 
 from .describe import DEFAULT_DURATION, Imported, build
-from .mjcf_read import read_mjcf
+from .mjcf_read import Close, read_mjcf
 from .plane import check_closures, check_one_dof, choose_driver, plane_of
 
 #: Largest difference (rad) between a body's angle in the analytic solution at the
@@ -34,12 +34,14 @@ BRANCH_TOLERANCE = 1e-5
 
 
 def import_model(path: str, driver: str | None = None, keyframe: str | None = None,
-                 duration: float = DEFAULT_DURATION) -> Imported:
-    """Read ``path`` (MJCF) and return its description (see the module)."""
-    if not str(path).lower().endswith(".xml"):
-        raise DescriptionError("not an MJCF file (.xml); URDF and SDF models are not read "
-                               "yet", str(path))
-    c = read_mjcf(str(path), keyframe)
+                 duration: float = DEFAULT_DURATION, closes: tuple[Close, ...] = ()
+                 ) -> Imported:
+    """Read ``path`` (MJCF, or URDF with its loop closures ``closes``, both through
+    MuJoCo's reader) and return its description (see the module)."""
+    if not str(path).lower().endswith((".xml", ".urdf")):
+        raise DescriptionError("not an MJCF (.xml) or URDF (.urdf) file; SDF models are "
+                               "not read", str(path))
+    c = read_mjcf(str(path), keyframe, tuple(closes))
     drv = choose_driver(c, driver)
     plane = plane_of(c, drv)
     check_closures(c)
@@ -92,4 +94,4 @@ def table_text(imp: Imported) -> str:
     return "\n".join(f"{a:<{w}}  ->  {b}" for a, b in imp.table)
 
 
-__all__ = ["DEFAULT_DURATION", "Imported", "import_model", "imported_toml", "table_text"]
+__all__ = ["Close", "DEFAULT_DURATION", "Imported", "import_model", "imported_toml", "table_text"]

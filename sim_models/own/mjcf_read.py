@@ -80,16 +80,62 @@ class Compiled:
     joints: tuple[TreeJoint, ...]
     closures: tuple[Closure, ...]
     ctrl: np.ndarray
+    closes: tuple[Close, ...] = ()
 
 
-def compile_file(path: str):
-    """``mujoco.MjModel.from_xml_path`` or one line naming the file and MuJoCo's reason."""
+@dataclass(frozen=True)
+class Close:
+    """A loop closure given on the command line (a URDF cannot hold one): point ``pa`` of
+    link ``a`` pinned to point ``pb`` of link ``b`` (m, link frames); added to the model
+    as two sites and a ``connect`` equality between them."""
+
+    a: str
+    pa: tuple[float, float, float]
+    b: str
+    pb: tuple[float, float, float]
+
+    @property
+    def name(self) -> str:
+        return f"close_{self.a}_{self.b}"
+
+
+def load_spec(path: str, closes: tuple[Close, ...] = ()):
+    """The model's ``mujoco.MjSpec`` (MJCF, or URDF through MuJoCo's URDF reader) with
+    the ``closes`` added; a file MuJoCo cannot read is one line naming it."""
     import mujoco
     if not os.path.isfile(path):
         raise DescriptionError("no such file", path)
     try:
-        return mujoco.MjModel.from_xml_path(path)
-    except ValueError as e:  # MuJoCo's compiler error, several lines: keep them on one
+        spec = mujoco.MjSpec.from_file(path)
+    except ValueError as e:  # MuJoCo's parser error, several lines: keep them on one
+        raise DescriptionError("MuJoCo cannot read the file: " + " ".join(str(e).split()),
+                               path) from None
+    for k, cl in enumerate(closes):
+        sites = []
+        for end, (link, p) in enumerate(((cl.a, cl.pa), (cl.b, cl.pb))):
+            body = spec.worldbody if link == "world" else spec.body(link)
+            if body is None:
+                raise DescriptionError(f"--close {k + 1}: no link {link!r} in the model",
+                                       path)
+            sites.append(body.add_site(name=f"{cl.name}:{end}", pos=list(p)).name)
+        eq = spec.add_equality(name=cl.name, type=mujoco.mjtEq.mjEQ_CONNECT,
+                               objtype=mujoco.mjtObj.mjOBJ_SITE)
+        eq.name1, eq.name2 = sites
+    return spec
+
+
+def compile_file(path: str, closes: tuple[Close, ...] = ()):
+    """The compiled model (:func:`load_spec`), or one line naming the file and
+    MuJoCo's reason."""
+    import warnings
+    spec = load_spec(path, closes)
+    try:
+        # MuJoCo's compile-time warnings (a singular inertia at qpos0) come back as
+        # Python warnings: the checks that follow say what is wrong in one line
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            return spec.compile()
+    except ValueError as e:
         raise DescriptionError("MuJoCo cannot compile the file: "
                                + " ".join(str(e).split()), path) from None
 
@@ -211,11 +257,14 @@ def _closures(m, d, owner: dict[int, str], path: str) -> list[Closure]:
     return out
 
 
-def read_mjcf(path: str, keyframe: str | None = None) -> Compiled:
-    """The compiled model of ``path`` at its reference configuration (see the module)."""
-    m = compile_file(path)
+def read_mjcf(path: str, keyframe: str | None = None, closes: tuple[Close, ...] = ()
+              ) -> Compiled:
+    """The compiled model of ``path`` (with ``closes`` added) at its reference
+    configuration (see the module)."""
+    m = compile_file(path, closes)
     d, config, ctrl = reference_state(m, path, keyframe)
     groups, owner = _groups(m, d, path)
     joints = _tree_joints(m, d, owner, path)
     closures = _closures(m, d, owner, path)
-    return Compiled(path, m, d, config, tuple(groups), tuple(joints), tuple(closures), ctrl)
+    return Compiled(path, m, d, config, tuple(groups), tuple(joints), tuple(closures), ctrl,
+                    tuple(closes))

@@ -27,6 +27,7 @@ from ..engine_settings import EngineSettings
 from ..mujoco_engine import MujocoSession
 from ..tree import SimTree, wrap
 from .describe import Imported
+from .mjcf_read import load_spec
 
 #: The drive's armature relative to the driver's diagonal of the model's mass matrix at
 #: the reference (added before compiling).  The harness's own models take a fixed 1e8
@@ -191,7 +192,7 @@ class OwnMujocoSession(MujocoSession):
         imp, st = self.imp, self.tree
         # the drive's armature added before compiling, as the harness's own models have
         # it: the compiled constraint weights (dof/body_invweight0) then see it
-        spec = mujoco.MjSpec.from_file(str(imp.compiled.path))
+        spec = load_spec(str(imp.compiled.path), imp.compiled.closes)
         self.A = float(self.settings.armature)
         if self.A:
             spec.joint(imp.driver.name).armature += self.A

@@ -151,9 +151,11 @@ def check_one_dof(c: Compiled, plane: Plane, driver: TreeJoint) -> None:
                                f"({sorted(names.values())})", c.path)
     null = np.linalg.svd(jac)[2][rank:] if rows else np.eye(m.nv)
     free = _independent(c, null, driver)
+    hint = (" (a URDF holds no loop: close each with --close LINK_A:x,y,z=LINK_B:x,y,z)"
+            if str(c.path).lower().endswith(".urdf") else "")
     raise DescriptionError(f"{dof} degrees of freedom: joints {free} move independently "
                            "(a driven linkage has one; close another loop or fix a "
-                           "joint)", c.path)
+                           f"joint){hint}", c.path)
 
 
 def _independent(c: Compiled, null: np.ndarray, driver: TreeJoint) -> list[str]:

@@ -74,3 +74,19 @@ def test_a_limit_reached_during_the_motion_is_named(tmp_path):
     assert code == 1
     assert "diagnosis: modelling: limit of joint 'O4' acted during the motion" in out
     assert "diagnosis: not modelled: limits on joints ['O4']" in out
+
+
+def test_urdf_with_close_runs_in_mujoco(tmp_path, capsys):
+    """A URDF four-bar closed by --close, run by MuJoCo with the options its URDF reader
+    gives (0.002 s, Euler, the default connect): a verdict naming the file and those
+    settings; released at rest with no in-plane force it is refused (nothing moves)."""
+    p = tmp_path / "four_bar.urdf"
+    p.write_text(um.four_bar_urdf())
+    close = "coupler:0.3,0,0=rocker:0.25,0,0"
+    code, out = run("compare", str(p), "--engine", "mujoco", "--driver", "O2",
+                    "--close", close)
+    assert code in (0, 1) and f"the user's model {p}" in out
+    assert "integrator=EULER" in out and "close_coupler_rocker.solref=(0.02,1)" in out
+    code, _ = run("simulate", str(p), "--engine", "mujoco", "--driver", "O2", "--close",
+                  close)
+    assert code == 2 and "does not move" in capsys.readouterr().err

@@ -304,3 +304,28 @@ def chain_four_bar_xml() -> str:
   <actuator><motor joint="O2"/></actuator>
 </mujoco>
 """
+
+
+def four_bar_urdf() -> str:
+    """The test four-bar as a URDF (the XY plane, joint axes +z, link frames along each
+    link, inertia of uniform rods of 0.2 / 0.6 / 0.5 kg), an open tree: its loop is
+    closed on the command line by ``--close coupler:0.3,0,0=rocker:0.25,0,0``."""
+    _, _, t3, t4 = four_bar_pose()
+
+    def link(name: str, length: float, mass: float) -> str:
+        i = mass * length**2 / 12
+        return (f'<link name="{name}"><inertial><origin xyz="{_f(length / 2)} 0 0"/>'
+                f'<mass value="{mass}"/><inertia ixx="1e-9" iyy="{_f(i)}" izz="{_f(i)}" '
+                'ixy="0" ixz="0" iyz="0"/></inertial></link>')
+
+    def joint(name, parent, child, xyz, yaw) -> str:
+        return (f'<joint name="{name}" type="continuous"><parent link="{parent}"/>'
+                f'<child link="{child}"/><origin xyz="{xyz}" rpy="0 0 {_f(yaw)}"/>'
+                '<axis xyz="0 0 1"/></joint>')
+
+    return "\n".join([
+        '<robot name="urdf-four-bar">', '<link name="base"/>',
+        link("crank", A_LEN, 0.2), link("coupler", B_LEN, 0.6), link("rocker", C_LEN, 0.5),
+        joint("O2", "base", "crank", "0 0 0", THETA2),
+        joint("A", "crank", "coupler", f"{A_LEN} 0 0", t3 - THETA2),
+        joint("O4", "base", "rocker", f"{D_LEN} 0 0", t4), "</robot>", ""])
