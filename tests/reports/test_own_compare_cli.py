@@ -26,7 +26,8 @@ def test_stiff_connect_passes_with_its_own_settings(tmp_path):
     assert code == 0, out
     assert ": PASS" in out
     # the verdict names the file and the settings it ran with
-    assert f"the user's model {path}" in out and "close.solref=(0.002,1)" in out
+    assert f"model file: {path}" in out and "settings: the user's model" in out
+    assert "close.solref=(0.002,1)" in out
     assert "integrator=RK4" in out and "timestep=0.0005" in out
     assert "diagnosis: loop closure at the model's pose (qpos0): connect 'close' 0 mm" in out
 
