@@ -34,7 +34,7 @@ def test_import_writes_description_and_table(tmp_path):
     (um.four_bar_xml("sites", gap=0.002), "equality connect 'close' (sites 'coupler_B', "
                                           "'rocker_B', bodies 'coupler' and 'rocker'): the "
                                           "loop is open by 2 mm"),
-    ("<mujoco><worldbody><body><joint/></body></mujoco>", "MuJoCo cannot compile"),
+    ("<mujoco><worldbody><body><joint/></body></mujoco>", "MuJoCo cannot read the file"),
 ])
 def test_refusals_are_one_line(tmp_path, capsys, xml, words):
     p = tmp_path / "m.xml"
