@@ -57,3 +57,16 @@ def test_without_engine_prints_the_exact_motion(tmp_path):
     path = _model(tmp_path, um.slider_crank_xml())
     code, out = run("simulate", path, "--duration", "0.5")
     assert code == 0 and "free motion, 0.5 s" in out and "work-energy balance" in out
+
+
+def test_watt_six_bar_released_passes(tmp_path):
+    """The two-loop six-bar, near-hard connects, released from rest at qpos0 under
+    gravity: a pass over 2 s (measured worst 3.0e-3 of range, O6.xd), both loops' pins
+    judged, energy drift 1.7e-6 (RK4 at the model's 0.5 ms)."""
+    path = _model(tmp_path, um.six_bar_xml())
+    code, out = run("simulate", path, "--duration", "2", "--engine", "mujoco")
+    assert code == 0, out
+    assert ": PASS" in out and "trusted horizon: whole run (2 s)" in out
+    assert re.search(r"B\.force .* pass", out) and re.search(r"D\.force .* pass", out)
+    drift = float(re.search(r"energy drift: max (\S+) of", out).group(1))
+    assert drift < 1e-5

@@ -329,3 +329,82 @@ def four_bar_urdf() -> str:
         joint("O2", "base", "crank", "0 0 0", THETA2),
         joint("A", "crank", "coupler", f"{A_LEN} 0 0", t3 - THETA2),
         joint("O4", "base", "rocker", f"{D_LEN} 0 0", t4), "</robot>", ""])
+
+
+# --- a Watt six-bar (two four-bars in series, two loops): the four-bar above, its rocker
+# a ternary link O4-B-C driving a second four-bar O4-C-D-O6 (link5 C-D, link6 O6-D) ---
+O6 = (0.75, 0.25)                 # ground pin of link6 (x, z), m
+R4C, DELTA4 = 0.2, math.radians(-30.0)  # O4->C on the rocker: 0.2 m at -30 deg from O4->B
+L5, L6 = 0.35, 0.3
+
+
+def _circles(p, r1, q, r2):
+    """The intersection of the circles (p, r1) and (q, r2) to the left of p -> q."""
+    dx, dz = q[0] - p[0], q[1] - p[1]
+    e = math.hypot(dx, dz)
+    along = (r1**2 - r2**2 + e**2) / (2 * e)
+    h = math.sqrt(r1**2 - along**2)
+    ux, uz = dx / e, dz / e
+    return (p[0] + along * ux - h * uz, p[1] + along * uz + h * ux)
+
+
+def six_bar_pose(theta2: float = THETA2):
+    """The joint points (x, z) O2, A, B, O4, C, D, O6 of the six-bar at ``theta2``, from
+    circle intersections (B above the ground line, D left of C -> O6)."""
+    (ax, az), (bx, bz), _, t4 = four_bar_pose(theta2)
+    c = (D_LEN + R4C * math.cos(t4 + DELTA4), R4C * math.sin(t4 + DELTA4))
+    d = _circles(c, L5, O6, L6)
+    return {"O2": (0.0, 0.0), "A": (ax, az), "B": (bx, bz), "O4": (D_LEN, 0.0), "C": c,
+            "D": d, "O6": O6}
+
+
+def six_bar_xml(stiff: bool = True) -> str:
+    """The six-bar as a user writes it: crank and coupler a chain from the world, the
+    ternary rocker (geoms to B and to C) with link5 its child at C, link6 on the ground at
+    O6; the loops closed by a connect at B (anchor, in the coupler's frame) and one at D
+    (two sites).  Capsules with a density, the XZ plane, gravity -z.  ``stiff``: the
+    connects near-hard (solref 0.002 s, solimp 0.9999)."""
+    p = six_bar_pose()
+    soft = 'solref="0.002 1" solimp="0.9999 0.9999 0.001" ' if stiff else ""
+
+    def rel(a: str, b: str) -> str:  # point b in a frame at point a (no rotation), "x 0 z"
+        return f"{_f(p[b][0] - p[a][0])} 0 {_f(p[b][1] - p[a][1])}"
+
+    return f"""<mujoco model="user-watt-six-bar">
+  <option gravity="0 0 -9.81" timestep="0.0005" integrator="RK4"/>
+  <default>
+    <joint axis="0 -1 0"/>
+    <geom type="capsule" size="{RADIUS}" density="{DENSITY}" contype="0" conaffinity="0"/>
+  </default>
+  <worldbody>
+    <body name="crank">
+      <joint name="O2"/>
+      <geom fromto="0 0 0 {rel('O2', 'A')}"/>
+      <body name="coupler" pos="{rel('O2', 'A')}">
+        <joint name="A"/>
+        <geom fromto="0 0 0 {rel('A', 'B')}"/>
+      </body>
+    </body>
+    <body name="rocker" pos="{rel('O2', 'O4')}">
+      <joint name="O4"/>
+      <geom fromto="0 0 0 {rel('O4', 'B')}"/>
+      <geom fromto="0 0 0 {rel('O4', 'C')}"/>
+      <body name="link5" pos="{rel('O4', 'C')}">
+        <joint name="C"/>
+        <geom fromto="0 0 0 {rel('C', 'D')}"/>
+        <site name="link5_D" pos="{rel('C', 'D')}"/>
+      </body>
+    </body>
+    <body name="link6" pos="{rel('O2', 'O6')}">
+      <joint name="O6"/>
+      <geom fromto="0 0 0 {rel('O6', 'D')}"/>
+      <site name="link6_D" pos="{rel('O6', 'D')}"/>
+    </body>
+  </worldbody>
+  <equality>
+    <connect name="B" {soft}body1="coupler" body2="rocker" anchor="{rel('A', 'B')}"/>
+    <connect name="D" {soft}site1="link5_D" site2="link6_D"/>
+  </equality>
+  <actuator><motor joint="O2"/></actuator>
+</mujoco>
+"""
