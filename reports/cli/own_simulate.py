@@ -17,14 +17,11 @@ from reports.cli.simulate_engines import print_verdict, write_ci
 from reports.comparison.compare import json_safe
 from reports.comparison.free_compare import compare_free, reference_samples
 from reports.comparison.progress import engine_progress
+from reports.regression.own_model import STILL
 from sim_models.free_run import FreeRequest
 from sim_models.own import DEFAULT_DURATION, import_model
 from sim_models.own.diagnose import model_defects, run_findings
 from sim_models.own.mujoco_own_free import run_free_own
-
-#: A reference whose joint coordinates all stay within this (rad or m) does not move:
-#: rounding of a closed loop at rest is ~1e-16 rad; a motion worth judging is far above.
-STILL = 1e-9
 
 
 def cmd_simulate_own(args, print_table) -> int:

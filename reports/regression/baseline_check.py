@@ -236,7 +236,7 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
         return out
     out.wall = time.perf_counter() - t0
     if own.is_model_file(getattr(mech, "source", None)):  # the user's file's own options
-        out.settings_text = r.settings_text
+        out.settings_text = getattr(r, "settings_text", None) or r.settings.describe()
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}
@@ -273,7 +273,7 @@ def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
         return None
     try:
         if own.is_model_file(p):  # a user's MJCF model: identity with its options
-            mech, flat = own.own_content(str(p))
+            mech, flat = own.own_content(str(p), recorded=src.content or {})
         else:
             mech = load_case(src.name if src.kind == "builtin" else str(p))
             flat = mid.content(mech)
