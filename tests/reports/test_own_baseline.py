@@ -55,3 +55,46 @@ def test_baseline_of_a_user_model(tmp_path, capsys, monkeypatch):
     assert code == 1
     assert 'mjcf.close.solref "(0.002,1)" -> "(0.02,1)"' in out
     assert "close.force: error" in out and "exceeds its tolerance" in out
+
+
+def test_free_baselines_of_user_models(tmp_path, capsys, monkeypatch):
+    """``baseline record MODEL.xml --free``: the six-bar released from qpos0 and the
+    simulator four-bar from its keyframe 'moving' (--driver, --keyframe kept in the
+    model's identity); the check passes as recorded, and after a solref change of the
+    six-bar names the parameter."""
+    (tmp_path / "six.xml").write_text(um.six_bar_xml())
+    (tmp_path / "major.xml").write_text(um.major_four_bar_xml())
+    monkeypatch.chdir(tmp_path)
+    code, out = run("baseline", "record", "six.xml", "--engine", "mujoco", "--free",
+                    "--duration", "0.5", "--out", "base.json")
+    assert code == 0 and "user-watt-six-bar / mujoco (free, 0.5 s)" in out, out
+    code, out = run("baseline", "record", "major.xml", "--engine", "mujoco", "--free",
+                    "--duration", "1", "--driver", "crank_pin", "--keyframe", "moving",
+                    "--out", "base.json")
+    assert code == 0 and "trusted horizon whole run" in out, out
+    base = json.loads((tmp_path / "base.json").read_text())
+    major = next(r for r in base["runs"] if r["case"] == "major-four-bar")
+    assert major["model"]["content"]["own.keyframe"] == "moving"
+    assert major["request"] == {"mode": "free", "duration": 1.0, "samples": 201}
+    code, out = run("baseline", "check", "base.json")
+    assert code == 0 and "result: PASS: 0 of 2 runs failed" in out, out
+    six = tmp_path / "six.xml"
+    six.write_text(six.read_text().replace('solref="0.002 1"', 'solref="0.02 1"'))
+    code, out = run("baseline", "check", "base.json")
+    assert code == 1 and 'mjcf.D.solref "(0.002,1)" -> "(0.02,1)"' in out, out
+    assert "--driver crank_pin --keyframe moving" in out  # the command to record again
+
+
+@pytest.mark.parametrize("args, words", [
+    (["seed-four-bar", "--engine", "mujoco", "--driver", "O2"],
+     "--driver applies to your own MJCF models"),
+    (["six.xml", "--engine", "pybullet"], "runs in MuJoCo only"),
+    (["six.xml", "--engine", "mujoco", "--free", "--duration", "0"], "--duration"),
+])
+def test_record_refusals(tmp_path, capsys, monkeypatch, args, words):
+    (tmp_path / "six.xml").write_text(um.six_bar_xml())
+    monkeypatch.chdir(tmp_path)
+    code, _ = run("baseline", "record", *args, "--out", "b.json")
+    err = capsys.readouterr().err
+    assert code == 2 and words in err and err.count("\n") == 1, err
+    assert not (tmp_path / "b.json").exists()
