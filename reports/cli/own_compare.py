@@ -19,6 +19,8 @@ from sim_models.engine_run import RunRequest
 from sim_models.own import import_model
 from sim_models.own.diagnose import model_defects, run_findings
 from sim_models.own.mujoco_own import run_prescribed
+from sim_models.own.pybullet_own import run_prescribed_pybullet
+from sim_models.pybullet_engine import PybulletSettings
 
 
 def is_model_file(path: str | None) -> bool:
@@ -29,9 +31,10 @@ def is_model_file(path: str | None) -> bool:
 def cmd_compare_own(args, print_text, verdict_json) -> int:
     """``xval compare MODEL.xml``: see the module.  ``print_text`` and ``verdict_json``
     are ``xval compare``'s table printer and JSON object (handed over: no import cycle)."""
-    if args.engine not in ("mujoco", "all"):
+    urdf = str(args.case).lower().endswith(".urdf")
+    if args.engine not in ("mujoco", "all") and not (urdf and args.engine == "pybullet"):
         raise opt.UsageError(f"--engine {args.engine}: a user's MJCF model runs in MuJoCo "
-                             "only (--engine mujoco)")
+                             "only (--engine mujoco; a URDF also --engine pybullet)")
     if args.mode != "run":
         raise opt.UsageError("--mode instantaneous is for the harness's own models; a "
                              "user's model is judged on its run (--mode run)")
@@ -45,10 +48,17 @@ def cmd_compare_own(args, print_text, verdict_json) -> int:
     imp = import_model(args.case, args.driver, args.keyframe, closes=own_closes(args))
     mech = imp.mechanism
     request = RunRequest(args.revolutions, args.samples)
-    with engine_progress(f"mujoco: {args.case}, {args.revolutions} revolutions"):
-        tree, r = run_prescribed(imp, request, args.timestep)
+    engine = "pybullet" if args.engine == "pybullet" else "mujoco"
+    with engine_progress(f"{engine}: {args.case}, {args.revolutions} revolutions"):
+        if engine == "pybullet":
+            tree, r = run_prescribed_pybullet(imp, request, PybulletSettings(
+                **({"timestep": args.timestep} if args.timestep else {})))
+        else:
+            tree, r = run_prescribed(imp, request, args.timestep)
     v = Verdict(tree, r, tuple(compare_run(r)))
-    lines = [f"diagnosis: {x}" for x in model_defects(imp) + run_findings(r)]
+    soft = ("PyBullet's point-to-point constraints" if engine == "pybullet"
+            else "the model's solref/solimp")
+    lines = [f"diagnosis: {x}" for x in model_defects(imp) + run_findings(r, soft)]
     if args.json:
         obj = verdict_json(v, "run") | {"file": str(args.case),
                                                       "diagnosis": lines}

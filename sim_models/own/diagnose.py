@@ -33,18 +33,19 @@ def model_defects(imp: Imported) -> list[str]:
     return out
 
 
-def run_findings(run) -> list[str]:
-    """What acted during the run besides the linkage, and the loop's opening."""
+def run_findings(run, soft: str = "the model's solref/solimp") -> list[str]:
+    """What acted during the run besides the linkage, and the loop's opening (``soft``:
+    what makes the loop constraints soft in that engine)."""
     out = []
     for what, t in sorted(run.extra.get("active", {}).items(), key=lambda kv: kv[1]):
         out.append(f"modelling: {what} acted during the motion (first at t = {t:.4g} s)")
     if not run.ok:
-        out.append(f"engine: the run stopped: {run.reason} (with the model's solref/solimp "
+        out.append(f"engine: the run stopped: {run.reason} (with {soft} "
                    f"at its step {run.timestep:.3g} s; the loops opened beyond the harness's "
                    "divergence limit)")
     viol = np.asarray(run.loop_violation, float)
     if viol.size and np.isfinite(viol).any():
         out.append(f"engine: the loops opened by up to {np.nanmax(np.abs(viol)) * 1e3:.3g} mm "
-                   "during the run (constraint softness of the model's solref/solimp at its "
+                   f"during the run (constraint softness of {soft} at its "
                    f"step {run.timestep:.3g} s)")
     return out

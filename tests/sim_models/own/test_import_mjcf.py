@@ -214,12 +214,14 @@ def test_what_the_description_cannot_hold_is_refused(tmp_path, xml, words):
         import_model(_write(tmp_path, xml), driver="j" if "ball" in xml else None)
 
 
-def test_urdf_four_bar_closed_on_the_command_line(tmp_path):
-    """A URDF four-bar (read by MuJoCo's URDF reader) closed by --close: the rates and
-    accelerations at 10 rad/s against the closed form; left open it is refused, naming
-    its degrees of freedom and how to close it."""
+@pytest.mark.parametrize("plane", ["xy", "xz"])
+def test_urdf_four_bar_closed_on_the_command_line(tmp_path, plane):
+    """A URDF four-bar (read by MuJoCo's URDF reader) closed by --close, in the XY plane
+    and in the XZ plane (gravity in its plane): the rates and accelerations at 10 rad/s
+    against the closed form; left open it is refused, naming its degrees of freedom and
+    how to close it."""
     from sim_models.own import Close
-    path = _write(tmp_path, um.four_bar_urdf(), "four_bar.urdf")
+    path = _write(tmp_path, um.four_bar_urdf(plane), "four_bar.urdf")
     close = Close("coupler", (um.B_LEN, 0.0, 0.0), "rocker", (um.C_LEN, 0.0, 0.0))
     imp = import_model(path, driver="O2", closes=(close,))
     w3, w4, al3, al4 = um.four_bar_rates(W_IN)

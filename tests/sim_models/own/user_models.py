@@ -306,11 +306,14 @@ def chain_four_bar_xml() -> str:
 """
 
 
-def four_bar_urdf() -> str:
+def four_bar_urdf(plane: str = "xy") -> str:
     """The test four-bar as a URDF (the XY plane, joint axes +z, link frames along each
     link, inertia of uniform rods of 0.2 / 0.6 / 0.5 kg), an open tree: its loop is
-    closed on the command line by ``--close coupler:0.3,0,0=rocker:0.25,0,0``."""
+    closed on the command line by ``--close coupler:0.3,0,0=rocker:0.25,0,0``.
+    ``plane="xz"``: the same in the XZ plane (joint axes -y, each joint's origin turned
+    about -y, i.e. ``rpy = (0, -angle, 0)``), so gravity -z acts in its plane."""
     _, _, t3, t4 = four_bar_pose()
+    xz = plane == "xz"
 
     def link(name: str, length: float, mass: float) -> str:
         i = mass * length**2 / 12
@@ -319,9 +322,10 @@ def four_bar_urdf() -> str:
                 'ixy="0" ixz="0" iyz="0"/></inertial></link>')
 
     def joint(name, parent, child, xyz, yaw) -> str:
+        rpy, axis = (f"0 {_f(-yaw)} 0", "0 -1 0") if xz else (f"0 0 {_f(yaw)}", "0 0 1")
         return (f'<joint name="{name}" type="continuous"><parent link="{parent}"/>'
-                f'<child link="{child}"/><origin xyz="{xyz}" rpy="0 0 {_f(yaw)}"/>'
-                '<axis xyz="0 0 1"/></joint>')
+                f'<child link="{child}"/><origin xyz="{xyz}" rpy="{rpy}"/>'
+                f'<axis xyz="{axis}"/></joint>')
 
     return "\n".join([
         '<robot name="urdf-four-bar">', '<link name="base"/>',
