@@ -115,10 +115,13 @@ def own_source(model: str, base_dir: Path, driver: str | None = None,
     return ModelSource("file", rel, mid.digest_of_content(flat), flat), mech
 
 
-def check_engine(path, engine: str) -> None:
+def check_engine(path, engine: str, free: bool = False) -> None:
+    """MuJoCo runs any user's model; PyBullet a URDF, driven (its free run is not built)."""
+    if engine == "pybullet" and str(path).lower().endswith(".urdf") and not free:
+        return
     if engine not in OWN_ENGINES:
         raise EngineRefusal(f"{path}: a user's engine model runs in MuJoCo only "
-                            "(engine 'mujoco')")
+                            "(engine 'mujoco'; a URDF's driven runs also in 'pybullet')")
 
 
 def run_key(path, opts: ImportOptions) -> tuple:
@@ -142,12 +145,16 @@ def check_request(request: dict):
                       request["max_speed_error"])
 
 
-def prescribed_own(path, opts: ImportOptions, request: dict):
-    """MuJoCo on the file, driven as ``request`` (a baseline's prescribed request) asks:
-    ``(EngineRun, judged comparisons)``."""
+def prescribed_own(path, opts: ImportOptions, request: dict, engine: str = "mujoco"):
+    """MuJoCo (or PyBullet, on a URDF) on the file, driven as ``request`` (a baseline's
+    prescribed request) asks: ``(EngineRun, judged comparisons)``."""
     from sim_models.own.mujoco_own import run_prescribed
+    from sim_models.own.pybullet_own import run_prescribed_pybullet
+    check_engine(path, engine)
     req = check_request(request)
-    tree, r = run_prescribed(import_own(path, opts), req)
+    imp = import_own(path, opts)
+    tree, r = (run_prescribed_pybullet(imp, req) if engine == "pybullet"
+               else run_prescribed(imp, req))
     return r, Verdict(tree, r, tuple(compare_run(r))).judged()
 
 
@@ -182,12 +189,12 @@ def run_and_compare_own(mech, engine: str, settings, request: dict):
     """MuJoCo on the user's file (``mech.source``) as ``request`` asks, driven or
     released (``settings`` unused: the model runs with its own options):
     ``(run, judged comparisons)``."""
-    check_engine(mech.source, engine)
+    check_engine(mech.source, engine, is_free(request))
     opts = options_of(mech)
     if is_free(request):
         run, v = free_own(mech.source, opts, request["duration"], request["samples"])
         return run, free_comparisons(v)
-    return prescribed_own(mech.source, opts, request)
+    return prescribed_own(mech.source, opts, request, engine)
 
 
 def free_comparisons(v) -> list:

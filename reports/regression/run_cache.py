@@ -95,14 +95,14 @@ class RunCache:
         if hit is not None:
             self.stats["hits"] += 1
             return hit
-        own.check_engine(path, engine)
+        own.check_engine(path, engine, is_free(request))
         own.check_request(request)  # before the count: no run for an impossible request
         t0 = time.perf_counter()
         self.stats["runs"] += 1
         try:
             hit = self.entries[key] = (
                 own.free_own(path, opts, request["duration"], request["samples"])
-                if is_free(request) else own.prescribed_own(path, opts, request))
+                if is_free(request) else own.prescribed_own(path, opts, request, engine))
         finally:
             self.stats["seconds"] += time.perf_counter() - t0
         return hit

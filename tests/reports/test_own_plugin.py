@@ -138,3 +138,18 @@ def test_the_command_lines_ranges(own_project, xval, call, kind, words):
         call(xval, str(own_project / "models" / "six_bar.xml"))
     assert "\n" not in str(e.value)
     assert xval.runs.stats["runs"] == before
+
+
+def test_a_urdf_with_its_closure_in_pybullet(tmp_path, xval):
+    """``xval.assert_agrees("four_bar.urdf", engine="pybullet", driver=, close=)``: PyBullet
+    loads the file, the loop closed at the given link points, within 1e-3 of peak (measured
+    worst 5.8e-6 over the default run, tests/reports/test_own_compare_cli.py); its free
+    run is refused in one line (not built for PyBullet)."""
+    p = tmp_path / "four_bar.urdf"
+    p.write_text(um.four_bar_urdf("xz"))
+    close = [("coupler", (um.B_LEN, 0.0, 0.0), "rocker", (um.C_LEN, 0.0, 0.0))]
+    comps = xval.assert_agrees(p, engine="pybullet", driver="O2", close=close,
+                               revolutions=1)
+    assert {c.quantity for c in comps} >= {"close_coupler_rocker.force", "rocker.alpha"}
+    with pytest.raises(EngineRefusal, match="runs in MuJoCo only"):
+        xval.assert_free_agrees(p, engine="pybullet", driver="O2", close=close)
