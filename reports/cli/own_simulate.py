@@ -22,14 +22,16 @@ from sim_models.free_run import FreeRequest
 from sim_models.own import DEFAULT_DURATION, import_model
 from sim_models.own.diagnose import model_defects, run_findings
 from sim_models.own.mujoco_own_free import run_free_own
+from sim_models.own.pybullet_own import run_free_pybullet
 
 
 def cmd_simulate_own(args, print_table) -> int:
     """See the module; ``print_table`` is ``xval simulate``'s table of the exact motion
     (handed over: no import cycle)."""
-    if args.engine not in (None, "mujoco", "all"):
+    urdf = str(args.case).lower().endswith(".urdf")
+    if args.engine not in (None, "mujoco", "all") and not (urdf and args.engine == "pybullet"):
         raise opt.UsageError(f"--engine {args.engine}: a user's MJCF model runs in MuJoCo "
-                             "only (--engine mujoco)")
+                             "only (--engine mujoco; a URDF also --engine pybullet)")
     for flag, value in (("--set", args.set), ("--integrator", args.integrator)):
         if value:
             raise opt.UsageError(f"{flag}: a user's model runs with its own options; change "
@@ -51,10 +53,14 @@ def cmd_simulate_own(args, print_table) -> int:
         return 0
     request = FreeRequest(duration=traj.duration, samples=max(1, n - 1),
                           wall_limit=args.wall_limit or FreeRequest.wall_limit)
-    with engine_progress(f"mujoco: {args.case}, free motion {traj.duration:g} s"):
-        run = run_free_own(imp, request, traj, args.timestep)
+    engine = "pybullet" if args.engine == "pybullet" else "mujoco"
+    with engine_progress(f"{engine}: {args.case}, free motion {traj.duration:g} s"):
+        run = (run_free_pybullet if engine == "pybullet" else run_free_own)(
+            imp, request, traj, args.timestep)
     v = compare_free(run, traj, reference_samples(traj, request.times()))
-    lines = [f"diagnosis: {x}" for x in model_defects(imp) + _free_findings(run)]
+    soft = ("PyBullet's point-to-point constraints" if engine == "pybullet"
+            else "the model's solref/solimp")
+    lines = [f"diagnosis: {x}" for x in model_defects(imp) + _free_findings(run, soft)]
     if args.json:
         print(json.dumps(json_safe({"file": str(args.case), "case": mech.name,
                                     "duration_s": traj.duration,
@@ -69,10 +75,10 @@ def cmd_simulate_own(args, print_table) -> int:
     return 0 if v.passed else 1
 
 
-def _free_findings(run) -> list[str]:
+def _free_findings(run, soft: str) -> list[str]:
     """:func:`sim_models.own.diagnose.run_findings` for a free run (its loop gap)."""
     class _Seen:
         ok, reason, timestep = run.ok, run.reason, run.timestep
         extra = {"active": run.extra.get("active", {})}
         loop_violation = np.asarray(run.loop_gap, float)
-    return run_findings(_Seen)
+    return run_findings(_Seen, soft)

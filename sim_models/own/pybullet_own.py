@@ -8,7 +8,10 @@ joint damping as written.  Added only what the harness adds to its own URDF mode
 pivots in each link's centre-of-mass frame, ``maxForce`` large), the world's gravity of
 the imported model (MuJoCo's reading of the file: a URDF has none of its own), PyBullet's
 default joint motors off and ``maxJointVelocity`` raised (PyBullet's own artefacts, not the
-user's model), and the drive: a ``VELOCITY_CONTROL`` motor on the driver joint.
+user's model), and the drive: a ``VELOCITY_CONTROL`` motor on the driver joint.  Its
+joint damping is switched off as in the harness's models: the description carries it
+(``[[dampers]]``, read by MuJoCo's URDF reader) and a free run applies it each step, as
+the harness's released PyBullet runs apply their elements.
 
 Coordinates are the model's joint coordinates, mapped onto the description's tree as for
 MuJoCo (:class:`sim_models.own.mujoco_own.Mapping`); readout as the harness's PyBullet
@@ -27,6 +30,7 @@ import numpy as np
 
 from ..engine_base import RunRequest, compile_linkage, drive, plan_samples
 from ..engine_run import Recorder
+from ..free_base import ElementLoads, FreeSession, drive_free
 from ..newton_euler import reconstruct
 from ..pybullet_engine import (
     PybulletSession,
@@ -35,6 +39,7 @@ from ..pybullet_engine import (
     _quiet_stderr,
     _require_pybullet,
 )
+from ..pybullet_free import PybulletFreeSession, PybulletFreeSettings
 from ..tree import SimTree
 from .describe import Imported
 from .mujoco_own import Mapping
@@ -82,10 +87,10 @@ class OwnPybulletSim(PybulletSim):
             by_link[info[12].decode()] = j
             p.setJointMotorControl2(b, j, p.VELOCITY_CONTROL, targetVelocity=0, force=0,
                                     physicsClientId=cid)
-            p.changeDynamics(b, j, linearDamping=0, angularDamping=0,
+            p.changeDynamics(b, j, linearDamping=0, angularDamping=0, jointDamping=0,
                              maxJointVelocity=float(s.max_joint_velocity), physicsClientId=cid)
         self.jidx = [by_joint[j.name] for j in c.joints]
-        self.link = by_link
+        self.link = by_link | {"world": -1}
         self.cons = []
         for cl in c.closes:
             ends = [(by_link[lk], self._com_frame(by_link[lk], pt))
@@ -147,7 +152,7 @@ class OwnPybulletSession(PybulletSession):
         self.jnames = [j.name for j in tree.mech.joints]
         self.notes.append(
             f"PyBullet loaded the user's URDF {imp.compiled.path} itself (its inertias, "
-            "limits, damping); loops closed by JOINT_POINT2POINT at the --close points; "
+            "limits); loops closed by JOINT_POINT2POINT at the --close points; "
             "tree-joint forces and drive effort reconstructed by Newton-Euler")
 
     def _tree(self, q, v):
@@ -200,6 +205,50 @@ class OwnPybulletSession(PybulletSession):
         return gap, rate
 
 
+class OwnPybulletTreeSim(OwnPybulletSim):
+    """:class:`OwnPybulletSim` read in the description's tree coordinates (what the
+    harness's released PyBullet session reads)."""
+
+    def states(self):
+        q, v, rf, tau = super().states()
+        mp = self.map
+        full = np.zeros((1, self.imp.compiled.model.nq))
+        full[:, mp.qadr] = q
+        return mp.tree_q(full)[0], v @ mp.T.T, rf, tau
+
+
+class OwnPybulletFreeSession(PybulletFreeSession):
+    """PyBullet on the user's URDF released from the description's exact start (its
+    ``qpos0`` or keyframe state), under the model's gravity; the description's springs,
+    dampers and motors applied by the harness each step as for its own models (PyBullet's
+    own joint damping off, as there)."""
+
+    def __init__(self, tree: SimTree, imp: Imported,
+                 settings: PybulletFreeSettings | None = None):
+        _require_pybullet()
+        FreeSession.__init__(self, tree, settings)
+        self.imp = imp
+        self.sim = OwnPybulletTreeSim(tree, imp, self.settings.prescribed())
+        self.elements = ElementLoads(tree)
+        self.h = None
+        self.v_hist = []
+        self.link = [self.sim.link[n] for n in tree.body_names]
+        fm = tree.mech.motion
+        self.motors = list(fm.motors) if fm else []
+
+
+def run_free_pybullet(imp: Imported, request, reference, timestep: float | None = None):
+    """The user's URDF released in PyBullet: a :class:`sim_models.free_run.FreeEngineRun`
+    against the exact free motion ``reference`` of ``imp.mechanism``."""
+    settings = PybulletFreeSettings(**({"timestep": timestep} if timestep else {}))
+    session = OwnPybulletFreeSession(compile_linkage(imp.mechanism, chords="analytic"), imp,
+                                     settings)
+    try:
+        return drive_free(session, request, reference)
+    finally:
+        session.close()
+
+
 def run_prescribed_pybullet(imp: Imported, request=None,
                             settings: PybulletSettings | None = None):
     """The user's URDF in PyBullet driven along the description's prescribed motion."""
@@ -210,4 +259,5 @@ def run_prescribed_pybullet(imp: Imported, request=None,
         return tree, drive(session, plan, request)
 
 
-__all__ = ["OwnPybulletSession", "run_prescribed_pybullet"]
+__all__ = ["OwnPybulletFreeSession", "OwnPybulletSession", "run_free_pybullet",
+           "run_prescribed_pybullet"]
