@@ -153,3 +153,18 @@ def test_a_urdf_with_its_closure_in_pybullet(tmp_path, xval):
     assert {c.quantity for c in comps} >= {"close_coupler_rocker.force", "rocker.alpha"}
     with pytest.raises(EngineRefusal, match="runs in MuJoCo only"):
         xval.assert_free_agrees(p, engine="pybullet", driver="O2", close=close)
+
+
+def test_free_assertion_failure_names_the_file_quantities_and_settings(tmp_path, xval):
+    """The XZ URDF four-bar released in MuJoCo with its URDF reader's options (Euler at
+    2 ms, the default connect; the loop opens): the free assertion fails, naming the
+    quantities over their tolerance, the trusted horizon and the model's own settings."""
+    p = tmp_path / "four_bar.urdf"
+    p.write_text(um.four_bar_urdf("xz"))
+    close = [("coupler", (um.B_LEN, 0.0, 0.0), "rocker", (um.C_LEN, 0.0, 0.0))]
+    with pytest.raises(AssertionError) as e:
+        xval.assert_free_agrees(p, engine="mujoco", driver="O2", close=close)
+    text = str(e.value)
+    assert text.startswith("urdf-four-bar / mujoco: free motion over 1 s disagrees "
+                           "(trusted horizon "), text
+    assert re.search(r"rocker\.theta", text) and "integrator=EULER" in text, text
