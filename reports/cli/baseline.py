@@ -30,6 +30,7 @@ from reports.regression import baseline_record as br
 from reports.regression import baseline_settings as bset
 from reports.regression import baseline_store as bs
 from reports.regression import ci_formats
+from reports.regression import own_model as own
 from reports.regression.baseline_free import DEFAULT_SAMPLES, free_mechanism, free_request
 from reports.regression.messages import report_lines
 from sim_models.engines.registry import engine_names, get_engine, settings_from_options
@@ -51,13 +52,15 @@ def cmd_record(args) -> int:
             classes={e: free_session_class(e).settings_class for e in engines})
         req = free_request(args.duration or RELEASE_DURATION, args.samples)
         for m in dict.fromkeys(models):  # one line, status 2, before any run
+            if own.is_model_file(m):  # a user's model: released from its own state
+                continue
             mech, _ = command_case(m, req["duration"])  # a file without [motion]: refused
             free_mechanism(mech, req)
     else:
         settings = settings_from_options(engines, args.set or ())
         req = br.request_dict(args.revolutions, args.samples)
     base = br.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
-                     args.tolerance)
+                     args.tolerance, own_options=_own_options(args, models))
     problems = br.record_problems(base)
     for r in base.runs:
         w = max(r.quantities, key=lambda q: q.error if math.isfinite(q.error) else math.inf,
@@ -89,6 +92,21 @@ def cmd_record(args) -> int:
              "added (--replace writes only the runs recorded now)" if counts else
              " (replaced)" if args.replace and os.path.exists(args.out) else ""))
     return 0
+
+
+def _own_options(args, models: list[str]) -> dict:
+    """``--driver`` / ``--keyframe``: they apply to users' model files only."""
+    given = {k: getattr(args, k) for k in ("driver", "keyframe") if getattr(args, k)}
+    if given and not any(own.is_model_file(m) for m in models):
+        raise opt.UsageError(f"--{next(iter(given))} applies to your own MJCF models "
+                             "(.xml) only")
+    for m in models:  # one line, status 2, before any run
+        if own.is_model_file(m):
+            for e in args.engine or ["all"]:
+                if e not in own.OWN_ENGINES:
+                    raise opt.UsageError(f"--engine {e}: {m} is your own MJCF model; it "
+                                         "runs in MuJoCo only (--engine mujoco)")
+    return given
 
 
 def _engines(choice: list[str] | None, free: bool = False) -> list[str]:
@@ -202,7 +220,8 @@ def register(sub) -> None:
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
     r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
     r.add_argument("models", nargs="+", type=_model, metavar="CASE_OR_FILE",
-                   help="built-in case names, TOML files, or 'all' (every built-in case)")
+                   help="built-in case names, TOML files, your own MJCF models (.xml, "
+                        "with --engine mujoco), or 'all' (every built-in case)")
     r.add_argument("--engine", action="append", choices=[*engine_names(), "all"],
                    help="an engine (repeatable; default all)")
     r.add_argument("--out", required=True, type=opt.output_file, metavar="FILE",
@@ -222,6 +241,11 @@ def register(sub) -> None:
     r.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"with --free: seconds, {MIN_DURATION:g} to {MAX_DURATION:g} "
                         f"(default {RELEASE_DURATION:g})")
+    r.add_argument("--driver", help="with your own MJCF model: its input joint (default: "
+                   "the one actuated joint)")
+    r.add_argument("--keyframe", help="with your own MJCF model: its reference "
+                   "configuration and, with --free, the state it is released from "
+                   "(default: qpos0)")
     r.add_argument("--tolerance", type=_tolerance, default=None,
                    help="relative to peak, recorded per quantity (default 1e-3)")
     r.add_argument("--replace", action="store_true",

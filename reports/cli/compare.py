@@ -14,6 +14,7 @@ import pandas as pd
 from analytic import load_case
 from analytic.input_display import format_input, input_number
 from reports.cli import options as opt
+from reports.cli.own_options import add_own_options
 from reports.comparison import runs as verdict_runs
 from reports.comparison.compare import FAIL, PASS, json_safe, step_note, verdict_word
 from reports.comparison.progress import engine_progress
@@ -27,6 +28,9 @@ from sim_models.runs.engine_run import RunRequest
 
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
+    if str(args.case).lower().endswith((".xml", ".urdf")):  # the user's own engine model
+        from reports.cli.own_compare import cmd_compare_own
+        return cmd_compare_own(args, _print_compare_text, _verdict_json)
     mech = load_case(args.case)
     engines = engine_list(args.engine, args.mode)
     settings = settings_for(engines, list(args.set or ()),
@@ -146,8 +150,10 @@ def note_skipped_engines() -> None:
 def register(sub) -> None:
     """Add ``compare`` to ``xval``'s subparsers."""
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
-    s.add_argument("case", help="built-in case name or TOML file")
+    s.add_argument("case", help="built-in case name, TOML file, or your own MJCF or URDF "
+                   "model (.xml, .urdf, read as xval import reads it)")
     s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
+    add_own_options(s)
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
                    help="run: step through the driver's motion; instantaneous: the "
                         "engine's forward dynamics at the analytic state (MuJoCo)")

@@ -23,6 +23,7 @@ from analytic.free_motion import simulate
 from analytic.mechanism import Revolute
 from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
 from reports.cli import options as opt
+from reports.cli.own_options import add_own_options
 from reports.cli.paths import write_csv
 from reports.cli.simulate_engines import (
     add_options,  # --engine, --set, ..., --junit, --summary
@@ -42,7 +43,9 @@ def register(sub) -> None:
     s = sub.add_parser("simulate", help="free motion: integrate a released linkage")
     s.add_argument("case", help="built-in case name or TOML file with a [motion] table (a "
                         "built-in case without one is released at rest under gravity, as "
-                        "the report's free-motion section releases it)")
+                        "the report's free-motion section releases it), or your own MJCF "
+                        "or URDF model (.xml, .urdf, read as xval import reads it)")
+    add_own_options(s)
     s.add_argument("--duration", type=opt.finite_float(MAX_DURATION, "s", lo=MIN_DURATION),
                    help=f"seconds, {MIN_DURATION:g} to {MAX_DURATION:g} (default: the "
                         "description's)")
@@ -74,6 +77,9 @@ def _frame(mech, smp):
 
 
 def cmd_simulate(args) -> int:
+    if str(args.case).lower().endswith((".xml", ".urdf")):  # the user's own engine model
+        from reports.cli.own_simulate import cmd_simulate_own
+        return cmd_simulate_own(args, _print_table)
     if args.json and args.csv == "-":
         raise OutputError("--json and --csv - both write to standard output; give --csv a "
                           "file name")

@@ -44,6 +44,8 @@ COMMANDS = {
     "view": ("reports.cli.view", "MuJoCo's viewer on the linkage (needs a display)"),
     "simulate": ("reports.cli.simulate", "the exact trajectory of a released linkage, "
                  "optionally judged in the engines"),
+    "import": ("reports.cli.own_import", "read your own MJCF or URDF model and write its "
+               "description"),
 }
 
 #: ``xval --help``'s groups of commands, in the order listed; every command of
@@ -52,6 +54,7 @@ GROUPS = (
     ("the analytic solver", ("cases", "solve", "sweep", "explain")),
     ("free motion", ("simulate",)),
     ("the engines against the solver", ("compare", "baseline", "report", "models")),
+    ("your own engine model", ("import",)),
     ("figures and viewing", ("plot", "animate", "view")),
 )
 

@@ -18,6 +18,7 @@ from analytic import load_case
 from analytic.errors import LinkageError
 from analytic.input_display import format_input
 from reports.regression import model_identity as mid
+from reports.regression import own_model as own
 from reports.regression.baseline import (
     DEFAULT_FACTOR,
     DRIFT_FLOOR,
@@ -239,6 +240,8 @@ def check_run(rec: RunRecord, baseline: Baseline, factor: float, runner: Runner,
         out.problems.append(f"recorded as case {rec.case!r}, but its model "
                             f"{rec.model.describe()} runs as {ran_as!r}: the record is "
                             "under another case's name; re-record it")
+    if own.is_model_file(getattr(mech, "source", None)):  # the user's file's own options
+        out.settings_text = getattr(r, "settings_text", None) or r.settings.describe()
     if not r.ok:
         out.problems.append(f"the run failed: {r.reason}")
     now = {c.quantity: c for c in comps}
@@ -274,15 +277,19 @@ def _mechanism_now(rec: RunRecord, baseline: Baseline, out: RunCheck):
         out.problems.append(f"the model {src.describe()} is gone (looked for {p})")
         return None
     try:
-        mech = load_case(src.name if src.kind == "builtin" else str(p))
+        if own.is_model_file(p):  # a user's MJCF model: identity with its options
+            mech, flat = own.own_content(str(p), recorded=src.content or {})
+        else:
+            mech = load_case(src.name if src.kind == "builtin" else str(p))
+            flat = mid.content(mech)
     except LinkageError as e:
         out.problems.append(f"the model {src.describe()} changed since the baseline and "
                             f"no longer loads: {e}")
         return None
     # identity by content: the parsed mechanism, not the bytes (a comment or CRLF is no
     # change); a file recorded before content identity holds the bytes' SHA-256
-    if mid.digest(mech) != src.sha256 and file_sha256(p) != src.sha256:
-        what = mid.changes(src.content, mid.content(mech)) if src.content is not None \
+    if mid.digest_of_content(flat) != src.sha256 and file_sha256(p) != src.sha256:
+        what = mid.changes(src.content, flat) if src.content is not None \
             else f"sha256 {src.sha256[:12]}... (recorded from the file's bytes)"
         out.problems.append(f"the model {src.describe()} changed since the baseline "
                             f"(parsed mechanism): {what}; re-record the baseline if the "

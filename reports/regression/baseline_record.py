@@ -20,6 +20,7 @@ from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison import runs as verdict_runs
 from reports.comparison.runs import request_of
 from reports.regression import model_identity as mid
+from reports.regression import own_model as own
 from reports.regression.baseline import (
     Baseline,
     ModelSource,
@@ -49,6 +50,8 @@ def run_and_compare(mech, engine: str, settings, request: dict):
     ``(EngineRun, [Comparison])`` (``[engine]`` rows left out).  A free-motion request
     (:mod:`reports.regression.baseline_free`) releases the linkage instead: ``(FreeEngineRun,
     [FreeComparison])``."""
+    if own.is_model_file(getattr(mech, "source", None)):  # a user's MJCF model
+        return own.run_and_compare_own(mech, engine, settings, request)
     if is_free(request):
         return run_and_compare_free(mech, engine, settings, request)
     v = verdict_runs.run_verdict(mech, engine, settings, request_of(request))
@@ -70,9 +73,13 @@ def request_dict(revolutions: int | None = None, samples: int | None = None,
             "chords": given(chords, "chords"), "mode": "run"}
 
 
-def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
+def source_of(model: str, base_dir: Path, own_options: dict | None = None
+              ) -> tuple[ModelSource, object]:
     """``(ModelSource, Mechanism)`` of a built-in case name or a TOML path (relative
-    paths in the baseline are relative to ``base_dir``, the baseline file's folder)."""
+    paths in the baseline are relative to ``base_dir``, the baseline file's folder); a
+    user's MJCF file (:mod:`reports.regression.own_model`)."""
+    if own.is_model_file(model):
+        return own.own_source(model, base_dir, **(own_options or {}))
     if model in builtin_names():
         mech = load_case(model)
         return ModelSource("builtin", model, mid.digest(mech), mid.content(mech)), mech
@@ -84,7 +91,8 @@ def source_of(model: str, base_dir: Path) -> tuple[ModelSource, object]:
 
 def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike,
            settings: dict | None = None, request: dict | None = None,
-           tolerance: float | None = None, runner: Runner | None = None) -> Baseline:
+           tolerance: float | None = None, runner: Runner | None = None,
+           own_options: dict | None = None) -> Baseline:
     """Run every model in every engine and return the baseline (not yet written).
 
     ``settings``: engine name -> settings object (default: the recommended ones);
@@ -93,7 +101,8 @@ def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike
     :class:`NothingToCompare` (status 2) as ``xval compare`` does.  A free-motion
     ``request`` (:func:`reports.regression.baseline_free.free_request`) records released runs,
     each quantity with its own tolerance (:mod:`reports.comparison.free_compare`; ``tolerance``
-    must be None) and trusted horizon."""
+    must be None) and trusted horizon.  ``own_options``: ``driver`` and ``keyframe`` of the
+    users' model files (:func:`reports.regression.own_model.own_source`)."""
     tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
     req = request or request_dict()
     runner = runner or run_and_compare
@@ -101,7 +110,7 @@ def record(models: Sequence[str], engines: Sequence[str], out: str | os.PathLike
     runs = []
     free = is_free(req)
     for model in models:
-        src, mech = source_of(model, base_dir)
+        src, mech = source_of(model, base_dir, own_options)
         for engine in engines:
             s = (settings or {}).get(engine) or (
                 free_settings_class(engine)() if free else get_engine(engine).settings())
@@ -190,10 +199,11 @@ def _record_words(runs, baseline: Baseline, cwd, free) -> str:
         models += [m] if m not in models else []
         engines += [r.engine] if r.engine not in engines else []
         sets += [s for s in _overrides(r) if s not in sets]
+        sets += [f"{k}" for k in _own_words(r) if k not in sets]
     if free is None and set(case_names()) <= set(models):
         models = ["all"] + [m for m in models if m not in case_names()]
     words = ["xval baseline record", *models, *(f"--engine {e}" for e in engines),
-             *(f"--set {s}" for s in sets)]
+             *(s if s.startswith("--") else f"--set {s}" for s in sets)]
     out = os.path.relpath(baseline.path.resolve(), cwd or os.getcwd())
     if free is not None:
         return " ".join([*words, f"--free --duration {free[0]:g} --samples {free[1]}",
@@ -207,6 +217,11 @@ def _record_words(runs, baseline: Baseline, cwd, free) -> str:
     if len(tols) == 1 and (t := tols.pop()) != ENGINE_RELATIVE:
         words.append(f"--tolerance {t:g}")
     return " ".join([*words, f"--out {out}"])
+
+
+def _own_words(rec: RunRecord) -> list[str]:
+    """``--driver J`` / ``--keyframe K`` a user's model was recorded with."""
+    return [f"--{k} {v}" for k, v in own.recorded_options(rec.model.content).items()]
 
 
 def _overrides(rec: RunRecord) -> list[str]:

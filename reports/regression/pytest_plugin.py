@@ -41,7 +41,9 @@ from reports.comparison.quantities import judged
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
 from reports.regression import baseline_store as bs
+from reports.regression import own_model as own
 from reports.regression.baseline import DEFAULT_FACTOR, BaselineError, tolerance_problem
+from reports.regression.baseline_free import free_request
 from reports.regression.baseline_settings import (
     fmt_value,
     override_classes,
@@ -52,6 +54,8 @@ from reports.regression.baseline_settings import (
 from reports.regression.messages import disagreement, failure_text
 from reports.regression.run_cache import SESSION, RunCache, settings_of
 from reports.studies.free_studies import free_verdict
+from sim_models.engines.settings import SettingsError
+from sim_models.own import DEFAULT_DURATION
 
 
 @contextmanager
@@ -105,51 +109,64 @@ class Xval:
 
     def compare(self, model, engine: str = "mujoco", tolerance: float | None = None,
                 settings=None, *, revolutions: int | None = None,
-                samples: int | None = None, quantities=None):
+                samples: int | None = None, quantities=None, **own_read):
         """``(run, comparisons)``: the judged quantities (engine readings left out) at
-        ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``."""
+        ``tolerance`` (relative to peak; default 1e-3), optionally only ``quantities``.
+        A user's engine model (``.xml``, ``.urdf``) runs as it is, with its own options
+        (``settings`` must be None), read with ``driver=``, ``keyframe=``, ``close=``
+        (:class:`sim_models.own.Close` or ``(link_a, (x, y, z), link_b, (x, y, z))``)
+        as ``xval import`` reads it."""
 
         __tracebackhide__ = True
         bad = None if tolerance is None else tolerance_problem(tolerance)
         if bad:  # the range of --tolerance and of a baseline file's tolerance
             pytest.fail(f"xval: error: tolerance={tolerance!r}: {bad}", pytrace=False)
         tol = ENGINE_RELATIVE if tolerance is None else float(tolerance)
-        mech = self.mechanism(model)
-        s = settings_of(engine, settings)
-        e = self.runs.entry(mech, engine, s, br.request_dict(revolutions, samples))
-        comps = [replace(c, tolerance=tol, passed=bool(c.normalised <= tol))
-                 for c in judged(e["comparisons"])]
+        req = br.request_dict(revolutions, samples)
+        if own.is_own_file(model):  # a user's engine model, run as it is
+            run_, comps = self.runs.own_entry(self.resolve(model),
+                                              _own_options(settings, own_read), engine, req)
+            name = run_.case
+        else:
+            _no_own_read(model, own_read)
+            mech = self.mechanism(model)
+            e = self.runs.entry(mech, engine, settings_of(engine, settings), req)
+            run_, comps, name = e["run"], judged(e["comparisons"]), mech.name
+        comps = [replace(c, tolerance=tol, passed=bool(c.normalised <= tol)) for c in comps]
         if quantities is not None:
             want = [quantities] if isinstance(quantities, str) else list(quantities)
             have = {c.quantity for c in comps}
             unknown = [q for q in want if q not in have]
             if unknown:
-                raise KeyError(f"{mech.name}: no quantity {unknown[0]!r}; compared: "
+                raise KeyError(f"{name}: no quantity {unknown[0]!r}; compared: "
                                f"{', '.join(sorted(have))}")
             comps = [c for c in comps if c.quantity in want]
-        return e["run"], comps
+        return run_, comps
 
     def assert_agrees(self, model, engine: str = "mujoco", tolerance: float | None = None,
                       settings=None, *, revolutions: int | None = None,
-                      samples: int | None = None, quantities=None):
+                      samples: int | None = None, quantities=None, **own_read):
         """Every judged quantity of ``model`` in ``engine`` within ``tolerance`` of its
         peak over the cycle (default 1e-3); returns the comparisons.  The failure message
-        names each failing quantity, its error, where in the cycle, and the settings."""
+        names each failing quantity, its error, where in the cycle, and the settings.
+        A user's engine model: see :meth:`compare`."""
         __tracebackhide__ = True
         run_, comps = self.compare(model, engine, tolerance, settings,
                                    revolutions=revolutions, samples=samples,
-                                   quantities=quantities)
+                                   quantities=quantities, **own_read)
         if run_.ok and all(c.accepted for c in comps):  # a precision limit passes
             return comps
         tol = comps[0].tolerance if comps else (tolerance or 0.0)
         src = f" ({os.fspath(model)})" if isinstance(model, (str, os.PathLike)) and \
             os.fspath(model) != run_.case else ""
+        text = f"{engine}: {run_.settings_text}" if own.is_own_file(model) else \
+            settings_line(engine, run_.settings)
         raise AssertionError(disagreement(f"{run_.case}{src} / {engine}", run_, comps, tol,
-                                          settings_line(engine, run_.settings)))
+                                          text))
 
     def assert_free_agrees(self, model, engine: str = "mujoco", *,
                            duration: float | None = None, samples: int = 200,
-                           settings=None):
+                           settings=None, **own_read):
         """Free motion: ``model`` (a case or file with ``[motion]``, or a driven one,
         released at rest under gravity) released in ``engine`` and judged against the
         exact trajectory (:func:`reports.comparison.free_compare.compare_free`); returns the
@@ -158,11 +175,21 @@ class Xval:
         ranges, and a file without ``[motion]`` refused as ``xval simulate`` refuses it
         (only a built-in driven case is released under gravity): one line otherwise.
         The failure names each failing quantity, its trusted horizon, the nearest
-        reference event and the engine's step."""
+        reference event and the engine's step.  A user's engine model (``.xml``,
+        ``.urdf``) is released from its own state (``qpos0``, or ``keyframe=``) with its
+        own options; ``samples`` intervals over ``duration`` (default 1 s), as
+        ``xval simulate MODEL`` does."""
         __tracebackhide__ = True
         with one_line_errors():
-            mech = self._free_mechanism(model, duration)
-            _, v = free_verdict(mech, engine, duration, samples, settings)
+            if own.is_own_file(model):
+                req = free_request(DEFAULT_DURATION if duration is None else duration,
+                                   int(samples) + 1)
+                _, v = self.runs.own_entry(self.resolve(model),
+                                           _own_options(settings, own_read), engine, req)
+            else:
+                _no_own_read(model, own_read)
+                mech = self._free_mechanism(model, duration)
+                _, v = free_verdict(mech, engine, duration, samples, settings)
         if v.passed:
             return v
         lines = [f"{v.case} / {engine}: free motion over {v.duration:g} s disagrees "
@@ -262,12 +289,13 @@ class Xval:
         return []
 
     def _record(self, path: Path, model: str, engine: str, settings, request, tolerance,
-                why: str) -> None:
-        """Record one run through the session cache and merge it into ``path``."""
+                why: str, own_options: dict | None = None) -> None:
+        """Record one run through the session cache and merge it into ``path``
+        (``own_options``: a user's model's driver and keyframe)."""
         __tracebackhide__ = True
         s = settings_of(engine, settings)
         new = br.record([model], [engine], path, {engine: s}, request, tolerance,
-                        runner=self.runs.runner)
+                        runner=self.runs.runner, own_options=own_options)
         problems = br.record_problems(new)
         if problems:
             raise AssertionError(f"--xval-update: {problems[0]} (a baseline records a "
@@ -292,7 +320,7 @@ class Xval:
             tol = rec.quantities[0].tolerance if rec.quantities and not rec.free else None
             why = c.problems[0] if c.problems else (c.failures() or c.loose())[0].message()
             self._record(base.path, model, rec.engine, s, rec.request, tol,
-                         f"rewrote ({why})")
+                         f"rewrote ({why})", own.recorded_options(rec.model.content))
 
 
 def _overrides(settings, engines, classes=None) -> dict:
@@ -302,6 +330,28 @@ def _overrides(settings, engines, classes=None) -> dict:
         return {}
     return overrides_for([f"{k}={fmt_value(v)}" for k, v in dict(settings).items()], engines,
                          classes)
+
+
+def _own_options(settings, read: dict):
+    """The import options of a user's model (``driver``, ``keyframe``, ``close``); it
+    runs with its own options, so ``settings`` is refused."""
+    from sim_models.own import Close
+    if settings is not None:
+        raise SettingsError("settings: a user's model runs with its own options; change "
+                            "them in the file", "settings", settings)
+    unknown = sorted(set(read) - {"driver", "keyframe", "close"})
+    if unknown:
+        raise TypeError(f"unexpected keyword argument {unknown[0]!r} (a user's model "
+                        "takes driver=, keyframe=, close=)")
+    closes = tuple(c if isinstance(c, Close) else Close(c[0], tuple(c[1]), c[2], tuple(c[3]))
+                   for c in read.get("close", ()))
+    return own.ImportOptions(read.get("driver"), read.get("keyframe"), closes)
+
+
+def _no_own_read(model, read: dict) -> None:
+    if read:
+        raise TypeError(f"{model}: {', '.join(sorted(read))} apply to your own engine "
+                        "models (.xml, .urdf) only")
 
 
 def make_xval(config) -> Xval:

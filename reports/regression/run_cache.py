@@ -18,6 +18,7 @@ from analytic.errors import LinkageError
 from reports.comparison import runs as verdict_runs
 from reports.comparison.quantities import judged
 from reports.comparison.runs import request_of
+from reports.regression import own_model as own
 from reports.regression.baseline_free import is_free, run_and_compare_free
 from reports.regression.baseline_record import request_dict
 from sim_models.engines.registry import get_engine
@@ -84,6 +85,28 @@ class RunCache:
             self.stats["seconds"] += time.perf_counter() - t0
         return hit
 
+    def own_entry(self, path, opts, engine: str, request: dict):
+        """A run of a user's model file (:mod:`reports.regression.own_model`), driven or
+        released as ``request`` asks, read with ``opts`` (its import options), cached
+        for the session by the file's bytes: ``(run, judged comparisons)`` of a driven
+        run, ``(FreeEngineRun, FreeVerdict)`` of a released one."""
+        key = ("own", *own.run_key(path, opts), engine, tuple(sorted(request.items())))
+        hit = self.entries.get(key)
+        if hit is not None:
+            self.stats["hits"] += 1
+            return hit
+        own.check_engine(path, engine, is_free(request))
+        own.check_request(request)  # before the count: no run for an impossible request
+        t0 = time.perf_counter()
+        self.stats["runs"] += 1
+        try:
+            hit = self.entries[key] = (
+                own.free_own(path, opts, request["duration"], request["samples"])
+                if is_free(request) else own.prescribed_own(path, opts, request, engine))
+        finally:
+            self.stats["seconds"] += time.perf_counter() - t0
+        return hit
+
     def make_run(self, mech, engine, settings, request) -> dict:
         """Run and compare (not cached here: :meth:`entry` keeps it)."""
         t0 = time.perf_counter()
@@ -109,7 +132,11 @@ class RunCache:
     def runner(self, mech, engine: str, settings, request: dict):
         """:data:`reports.regression.baseline_record.Runner` on the cache (baseline
         checks); a free-motion request (:mod:`reports.regression.baseline_free`) is
-        released and judged by the same function ``xval baseline`` uses, cached alike."""
+        released and judged by the same function ``xval baseline`` uses, cached alike;
+        a user's model file is run as it is (:meth:`own_entry`)."""
+        if own.is_model_file(getattr(mech, "source", None)):
+            r, comps = self.own_entry(mech.source, own.options_of(mech), engine, request)
+            return (r, own.free_comparisons(comps)) if is_free(request) else (r, comps)
         if is_free(request):
             return self.free_entry(mech, engine, settings, request)
         e = self.entry(mech, engine, settings, request)
