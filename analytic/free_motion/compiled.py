@@ -227,6 +227,7 @@ class FastEOM:
         self._susp = np.empty(1, np.int64)
         self._tol = self.lk.positions.tol
         self._signs_range = None
+        self._held = None  # a constant schedule's (signs, one row)
 
     # -- one configuration ---------------------------------------------------------
     def _chain_applies(self, q: float) -> bool:
@@ -241,9 +242,15 @@ class FastEOM:
         """The solver's branch signs at ``q`` (:meth:`FusedKernel.signs_for`): a
         constant schedule's one row, or the walk's segment holding ``q`` (the walk
         kept over a range and extended when ``q`` leaves it)."""
-        sch = getattr(self.lk.positions, "schedule", None)
+        ps = self.lk.positions
+        held = self._held
+        if held is not None and held[0] is ps.signs:
+            return held[1]
+        sch = getattr(ps, "schedule", None)
         if sch is None or getattr(sch, "constant", True):
-            return self.fk.signs_for(self._vals)
+            # the solver's held signs: kept while they are the same object
+            self._held = (ps.signs, self.fk.signs_for(self._vals))
+            return self._held[1]
         r = self._signs_range
         if r is None or not r[0] <= q <= r[1]:
             lo, hi = q - 2 * math.pi, q + 2 * math.pi
@@ -261,9 +268,9 @@ class FastEOM:
         the numpy path's (near a singular position, infeasible, loop not closed)."""
         fk = self.fk
         self._vals[0] = q
-        self._carry[:] = 0.0
-        self._stat[:] = 0
-        self._statf[0] = 0.0
+        self._carry.fill(0.0)
+        self._stat.fill(0)
+        self._statf.fill(0.0)
         fk.fn(2, self._vals, self._one, self._zero, self._signs(q), fk.pf, fk.pc,
               self._carry, self._stat, self._statf, self._susp, *self._outs)
         st = self._stat
