@@ -23,6 +23,7 @@ from __future__ import annotations
 import bisect
 import math
 import os
+import time
 from functools import cache
 from pathlib import Path
 from types import SimpleNamespace
@@ -302,10 +303,45 @@ class FastEOM:
         return p.x, p.xq, p.out
 
 
-def fast_eom(lk) -> FastEOM | None:
+#: How often (s of wall time) a run answered by the numpy path looks whether the
+#: background compiles it waits for have finished (a file read per kernel).
+RECHECK_S = 0.5
+
+
+class _Pending:
+    """The compiled path while its kernels compile in the background: the numpy path
+    answers (:meth:`evaluate` returns ``None``) until they are in numba's cache, then
+    they are loaded and the compiled path answers the rest of the run."""
+
+    def __init__(self, lk, names: list[str]):
+        self.lk, self.names = lk, names
+        self.next = time.monotonic() + RECHECK_S
+        self.real = None
+        self.new = False
+
+    def evaluate(self, q: float, qd: float, t: float, ref: np.ndarray):
+        real = self.real
+        if real is None:
+            now = time.monotonic()
+            if now < self.next:
+                return None
+            self.next = now + RECHECK_S
+            if not all(on_disk(n) for n in self.names):
+                return None
+            real = self.real = fast_eom(self.lk, pending=False)
+            if real is None:
+                self.next = math.inf
+                return None
+        got = real.evaluate(q, qd, t, ref)
+        self.new = real.new
+        return got
+
+
+def fast_eom(lk, pending: bool = True) -> FastEOM | _Pending | None:
     """The compiled evaluation for ``lk``, or ``None`` where the numpy path answers
-    (disabled, a kernel not yet compiled: then compiling in the background, or no
-    kernel for the structure).  Kept in the linkage's ``derived``."""
+    (disabled, no kernel for the structure); while a kernel compiles in the background,
+    a :class:`_Pending` (the numpy path answers until it is ready).  Kept in the
+    linkage's ``derived``."""
     mode = _mode()
     if mode in ("0", "off", "no", "false") or not fused.enabled():
         return None
@@ -317,11 +353,14 @@ def fast_eom(lk) -> FastEOM | None:
     chain = _chain(lk)
     fk = fused.kernel_for(lk)
     fn = None
-    if fk is not None and not fk.too_large:  # A02: the chain's identities serve it
+    usable = fk is not None and not fk.too_large  # A02: the chain's identities serve it
+    if usable:
         fn = _ready(fk, now) if not fk.loaded else fk.fn
         if fn is not None and fk._fn is None:
             fk._fn = fn
     if eom is None or (fn is None and chain is None):
-        return None
+        waiting = ([] if eom is not None else [_EOM[0].name]) + (
+            [fk.name] if usable and fn is None else [])
+        return _Pending(lk, waiting) if pending and waiting else None
     got = lk.derived["free_fast"] = FastEOM(lk, eom, fk if fn is not None else None, chain)
     return got
