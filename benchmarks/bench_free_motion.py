@@ -180,20 +180,9 @@ def _cpu(fn):
 def _warm(mech, T):
     """Kernels compiled (or loaded) before timing: the steady state of a machine that
     ran the case once (the first call's cost is measured by ``--first-call``)."""
-    import os
-
-    from analytic.free_motion.compiled import eom_kernel
-    eom_kernel(compile_now=True)
-    old = os.environ.get("XVAL_FUSED")
-    if mech.name != "A02":  # its fused kernel is too large: never compiled
-        os.environ["XVAL_FUSED"] = "always"
-    try:
-        simulate(mech, duration=min(T, 0.01))
-    finally:
-        if old is None:
-            os.environ.pop("XVAL_FUSED", None)
-        else:
-            os.environ["XVAL_FUSED"] = old
+    from analytic.free_motion.compiled import prepare
+    assert prepare(mech), "the compiled path does not serve this case"
+    simulate(mech, duration=min(T, 0.01))
 
 
 def _engine_runner(mech, T, engine, over, ref):

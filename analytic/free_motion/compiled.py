@@ -364,3 +364,24 @@ def fast_eom(lk, pending: bool = True) -> FastEOM | _Pending | None:
         return _Pending(lk, waiting) if pending and waiting else None
     got = lk.derived["free_fast"] = FastEOM(lk, eom, fk if fn is not None else None, chain)
     return got
+
+
+def prepare(mech) -> bool:
+    """Compile now (or load) the kernels that ``mech``'s release evaluates with: the
+    generic kernel and the solver's fused kernel of the released coordinate (not one
+    too large to compile: a parallelogram chain needs none).  For benchmarks and tests,
+    which time or compare the compiled path itself; whether the compiled path serves
+    the release."""
+    from dataclasses import replace
+
+    from ..kinematics import Linkage
+    from ..mechanism import Driver
+    if not fused.enabled():
+        return False
+    fm = mech.motion
+    lk = Linkage(replace(mech, driver=Driver(fm.joint, fm.value, fm.rate)))
+    eom_kernel(compile_now=True)
+    fk = fused.kernel_for(lk)
+    if fk is not None and not fk.too_large and not fk.loaded:
+        fk._fn = _ready(fk, True)
+    return isinstance(fast_eom(lk), FastEOM)

@@ -95,8 +95,7 @@ def _run_both(mech, T, monkeypatch):
         return got
 
     monkeypatch.setattr(compiled.FastEOM, "evaluate", counting)
-    if mech.name != "A02":  # A02's fused kernel is too large: its chain's identities serve
-        monkeypatch.setenv("XVAL_FUSED", "always")
+    assert compiled.prepare(mech)
     fast = simulate(mech, duration=T)
     monkeypatch.setattr(integrate_mod, "fast_eom", lambda lk: None)
     ref = simulate(mech, duration=T)
