@@ -12,7 +12,9 @@ structure is data (:class:`Layout`), so one compile serves every mechanism.
 Rule as for the prescribed solver: no call waits for a compile.  A kernel in numba's
 on-disk cache is loaded; one that is not is compiled by a background process
 (:mod:`analytic.kernels.background`) while the numpy path answers.  ``XVAL_FUSED=0``
-turns the compiled path off; ``XVAL_FUSED=always`` compiles what is missing at once.
+turns the compiled path off (and the prescribed solver's kernel), ``XVAL_FREE_COMPILED=0``
+only this one (the numpy path's numbers, for comparisons); ``XVAL_FUSED=always``
+compiles what is missing at once.
 Where the compiled path cannot answer a state as the numpy path would (a configuration
 near a singular position, outside the assembly, a parallelogram stretch not yet
 verified), that state goes to the numpy path.
@@ -343,7 +345,9 @@ def fast_eom(lk, pending: bool = True) -> FastEOM | _Pending | None:
     a :class:`_Pending` (the numpy path answers until it is ready).  Kept in the
     linkage's ``derived``."""
     mode = _mode()
-    if mode in ("0", "off", "no", "false") or not fused.enabled():
+    off = ("0", "off", "no", "false")
+    if (mode in off or not fused.enabled()
+            or os.environ.get("XVAL_FREE_COMPILED", "1").strip().lower() in off):
         return None
     got = lk.derived.get("free_fast")
     if got is not None:
