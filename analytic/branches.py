@@ -215,7 +215,11 @@ class BranchSchedule:
     def decide(self, t: float, signs, dyads, d: int) -> Crossing:
         """The signs after the change point ``t`` met moving in direction ``d``."""
         signs = tuple(signs)
-        key = (round(t, 9), signs, d)
+        # a revolute input's closed form is periodic in it: the same change point one
+        # turn on is decided alike (a rotating crank meets each one every turn)
+        tk = t if self.period is None else math.fmod(t - self.reference, self.period)
+        key = (round(tk + (self.period if tk < 0 else 0.0) if self.period else tk, 9),
+               signs, d)
         if key in self._decide_memo:
             c = self._decide_memo[key]
             return Crossing(t, c.joints, c.before, c.after, c.rule, c.jump)

@@ -27,6 +27,7 @@ from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
 from .clock import WallClock
+from .compiled import fast_eom
 from .dynamics import check_masses, coefficients, terms, unwrap_to
 from .equilibrium import held
 from .stiffness import check_stiffness
@@ -82,6 +83,7 @@ class _System:
         self.scale = scale / scale[self.k]
         self._key = None
         self.nfev = 0
+        self.fast = fast_eom(lk)  # the compiled evaluation, or None (numpy path)
 
     def coeffs(self, q: float):
         if self._key != q:
@@ -91,10 +93,23 @@ class _System:
             self.last = x
         return self._co, self._x
 
+    def _fast(self, q: float, qd: float, t: float):
+        """``(x, x_q, terms)`` from the compiled path (:mod:`.compiled`), or None."""
+        got = self.fast.evaluate(q, qd, t, self.last) if self.fast is not None else None
+        if got is not None and self.fast.new:
+            self.last = got[0].copy()
+        return got
+
     def __call__(self, t, y):
         self.nfev += 1
         if self.clock is not None:
             self.clock.check(t)
+        got = self._fast(float(y[0]), float(y[1]), t)
+        if got is not None and math.isfinite(got[2][8]):  # else the numpy path says why
+            out = got[2]
+            if not out[0] > 0:
+                raise NoInertiaError(_no_inertia(self.lk, float(y[0])))
+            return [y[1], out[8], out[3], out[4], out[5]]
         try:
             with np.errstate(invalid="ignore", divide="ignore"):  # a stage past the limit
                 co, x = self.coeffs(float(y[0]))
@@ -112,6 +127,9 @@ class _System:
                 float(tm.damper_power[0])]
 
     def ratios(self, q: float) -> np.ndarray:
+        got = self._fast(q, 0.0, 0.0)
+        if got is not None:
+            return np.abs(got[1]) * self.scale
         co, _ = self.coeffs(q)
         return np.abs(co.x_q[0]) * self.scale
 
