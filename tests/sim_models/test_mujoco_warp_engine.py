@@ -152,3 +152,24 @@ def test_dropped_constraint_rows_end_the_run(monkeypatch):
     r = run_free(_a02(2), "mujoco_warp", free_settings("mujoco_warp"),
                  FreeRequest(duration=0.02, samples=2))
     assert not r.ok and "dropped constraint rows" in r.reason and "njmax 3" in r.reason
+
+
+BUGS4 = __import__("pathlib").Path(__file__).parents[1] / "data" / "bugs" / "turn4"
+
+
+def test_load_on_a_revolute_body_is_applied_as_in_mujoco():
+    """turn4/warp-rocker-load.toml (a ``[[loads]]`` force at the rocker's pin B, so its
+    moment about the rocker's centre of mass moves with the pose): Warp's
+    ``xfrc_applied`` is (nworld, nbody) of spatial vectors, 1-D a world, and indexing it
+    as MjData's (nbody, 6) ended in an IndexError.  The run must follow the analytic
+    solution (which includes the load) and MuJoCo's float64 run of the same model."""
+    mech = load_case(BUGS4 / "warp-rocker-load.toml")
+    s = MujocoWarpSettings()
+    w = run(mech, "mujoco_warp", s, revolutions=2, samples=36)
+    assert w.ok, w.reason
+    assert_run_within(w, WARP_RUN, mech.name)
+    m = run(mech, "mujoco", s.mujoco_settings().with_overrides({"timestep": w.timestep}),
+            revolutions=2, samples=36)
+    for a, b in ((w.alpha, m.alpha), (w.drive_effort, m.drive_effort),
+                 (w.joint_force, m.joint_force)):
+        assert np.abs(a - b).max() <= WARP_VS_MUJOCO * np.abs(b).max()
