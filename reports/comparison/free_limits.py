@@ -61,20 +61,36 @@ def known_limit(engine: str, case: str, duration: float,
 
 def verdict_of(row, limits=KNOWN_LIMITS) -> tuple[str, str]:
     """``(verdict, note)`` of one :class:`reports.studies.free_studies.FreeRow` at the
-    recommended settings: ``pass``; ``known limit`` (failed, run complete, worst error
-    within the listed limit's ``worst_max``; the note is its reason); else ``FAIL``
-    (the note says why a listed limit does not cover it)."""
-    if row.passed:
+    recommended settings: :func:`label` of its fields."""
+    return label(row.engine, row.case, row.duration, row.passed, row.ok, row.worst_error,
+                 row.reason, limits)
+
+
+def verdict_of_free(v, limits=KNOWN_LIMITS) -> tuple[str, str]:
+    """``(verdict, note)`` of one :class:`reports.comparison.free_compare.FreeVerdict`
+    (``xval simulate --engine``): the same :func:`label` as the report's rows, so that
+    the command and the report give the same run the same word and exit status."""
+    return label(v.engine, v.case, v.duration, v.passed, v.run_ok, v.worst.normalised,
+                 v.reason or "", limits)
+
+
+def label(engine: str, case: str, duration: float, passed: bool, ok: bool, worst: float,
+          reason: str, limits=KNOWN_LIMITS) -> tuple[str, str]:
+    """``pass``; ``known limit`` (failed, run complete, worst error within the listed
+    limit's ``worst_max``; the note is its reason); else ``FAIL`` (the note says why a
+    listed limit does not cover it)."""
+    if passed:
         return "pass", ""
-    k = known_limit(row.engine, row.case, row.duration, limits)
+    k = known_limit(engine, case, duration, limits)
     if k is None:
         return "FAIL", ""
-    if not row.ok:
-        return "FAIL", f"listed known limit does not cover a run that stopped: {row.reason}"
-    if not (row.worst_error <= k.worst_max):
-        return "FAIL", (f"beyond its listed known limit: worst error {row.worst_error:.3g} "
+    if not ok:
+        return "FAIL", f"listed known limit does not cover a run that stopped: {reason}"
+    if not (worst <= k.worst_max):
+        return "FAIL", (f"beyond its listed known limit: worst error {worst:.3g} "
                         f"> {k.worst_max:.3g} ({k.reason})")
     return "known limit", k.reason
 
 
-__all__ = ["KNOWN_LIMITS", "KnownLimit", "known_limit", "verdict_of"]
+__all__ = ["KNOWN_LIMITS", "KnownLimit", "known_limit", "label", "verdict_of",
+           "verdict_of_free"]
