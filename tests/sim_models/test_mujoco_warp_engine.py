@@ -205,3 +205,15 @@ def test_inclined_slider_crank_force_error_is_warps_float32_loop_solve():
     assert_run_within(m, WARP_RUN, "MuJoCo float64, same model and step")
     _, soft = worst(s.with_overrides({"solref": (-1e2, -20.0)}))
     assert soft["drive.effort"].normalised < cw["drive.effort"].normalised / 5
+
+
+def test_released_offset_slider_crank_passes_at_the_recommended_free_settings():
+    """The full report: MuJoCo Warp failed the released offset slider-crank (0.123 of
+    slide.xd's scale) and inverted slider-crank (0.046) at stock inverse weights
+    (invweight_scale 1); MuJoCo float64 at the same settings fails the same way, so the
+    soft loop, not float32.  At the recommended 3e-2 it passes (measured 7.5e-4, 400
+    samples; 100 here)."""
+    from reports.comparison.free_cases import release_and_judge
+    run_, v = release_and_judge(load_case("offset-slider-crank"), "mujoco_warp", 2.0, 100)
+    assert run_.ok, run_.reason
+    assert v.passed, str(v.worst)
