@@ -146,7 +146,7 @@ QUANTITIES = ("x", "xd", "xdd", "theta", "omega", "alpha", "kinetic", "potential
 
 def _bench_case(name: str):
     """``(mechanism, duration s, engines, engine setting overrides)``."""
-    from sim_models.free_cases import released
+    from sim_models.builders.free_cases import released
     if name in ("seed", "six-bar"):
         case = "seed-four-bar" if name == "seed" else "six-bar"
         return released(load_case(case), duration=2.0), 2.0, ENGINES, {}
@@ -186,8 +186,8 @@ def _warm(mech, T):
 
 
 def _engine_runner(mech, T, engine, over, ref):
-    from sim_models.free_engine import free_settings, run_free
-    from sim_models.free_run import FreeRequest
+    from sim_models.runs.free import free_settings, run_free
+    from sim_models.runs.free_run import FreeRequest
     settings = free_settings(engine, over)
     req = FreeRequest(T, samples=30 if T < 0.1 else 400, wall_limit=600.0)
     return lambda: run_free(mech, engine, settings, req, ref)
@@ -287,7 +287,7 @@ c0, w0 = time.process_time(), time.perf_counter()
 from analytic import load_case
 from analytic.free_motion import simulate
 from analytic.free_motion.integrate import _System
-from sim_models.free_cases import released
+from sim_models.builders.free_cases import released
 m = released(load_case("seed-four-bar"), duration=2.0)
 c1, w1 = time.process_time(), time.perf_counter()
 tr = simulate(m, duration=2.0)

@@ -40,10 +40,9 @@ def cmd_compare(args) -> int:
         note_skipped_engines()
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
     request = RunRequest(args.revolutions, args.samples, mode=args.mode)
-    out = []
-    for eng in engines:
-        with engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"):
-            out.append(verdict_runs.run_verdict(tree, eng, settings[eng], request))
+    out = verdict_runs.run_verdicts(
+        tree, engines, settings, request,
+        lambda eng: engine_progress(f"{eng}: {mech.name}, {args.revolutions} revolutions"))
     all_ok = all(v.ok for v in out)
     if args.json:
         print(json.dumps(json_safe([_verdict_json(v, args.mode) for v in out]), indent=2,

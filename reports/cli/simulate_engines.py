@@ -15,14 +15,18 @@ import json
 import math
 import shutil
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
 
+from analytic import LinkageError
 from reports.cli import options as opt
 from reports.comparison.compare import json_safe
 from reports.comparison.free_compare import compare_free, reference_samples
+from reports.comparison.free_limits import verdict_of_free
 from reports.comparison.progress import engine_progress
+from reports.comparison.runs import crash_text
 from reports.regression.baseline import versions
 from reports.regression.ci_formats import CiCase, write_outputs
 from sim_models.engines.ranges import WALL_LIMIT
@@ -74,8 +78,29 @@ def free_settings_for(engines, args) -> dict:
         classes={e: free_session_class(e).settings_class for e in engines})
 
 
+@dataclass(frozen=True)
+class EngineCrash:
+    """An engine whose free run raised (a bug of the harness or the engine, never the
+    input's fault: bad input is refused before any engine runs): a failed verdict whose
+    ``cause`` is the exception in one line."""
+
+    case: str
+    engine: str
+    duration: float
+    cause: str
+    passed: bool = False
+
+    def as_json(self) -> dict:
+        return {"case": self.case, "engine": self.engine, "duration_s": self.duration,
+                "passed": False, "verdict": "FAIL", "note": "",
+                "run_ok": False, "reason": f"engine crashed: {self.cause}"}
+
+
 def run_engines(mech, traj, args, samples: int):
-    """Every chosen engine's free run, judged: a list of :class:`FreeVerdict`."""
+    """Every chosen engine's free run, judged: ``(run, FreeVerdict)`` per engine, or
+    ``(None, EngineCrash)`` for one that raised.  Of several engines, one that refuses
+    the model is an :class:`EngineCrash` too (saying so); the only engine's refusal
+    stays the one-line error of status 2."""
     engines = list(free_engine_names()) if args.engine == "all" else [args.engine]
     settings = free_settings_for(engines, args)
     request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1),
@@ -84,13 +109,51 @@ def run_engines(mech, traj, args, samples: int):
     out = []
     for eng in engines:
         with engine_progress(f"{eng}: {mech.name}, free motion {traj.duration:g} s"):
-            run = run_free(mech, eng, settings[eng], request, traj)
+            try:
+                run = run_free(mech, eng, settings[eng], request, traj)
+            except LinkageError as e:
+                if len(engines) == 1:
+                    raise
+                out.append((None, EngineCrash(mech.name, eng, traj.duration,
+                                              f"refused: {e}")))
+                continue
+            except Exception as e:  # noqa: BLE001 - one engine's crash is its failed verdict
+                out.append((None, EngineCrash(mech.name, eng, traj.duration, crash_text(e))))
+                continue
         out.append((run, compare_free(run, traj, ref)))
     return out
 
 
+def label_of(v) -> tuple[str, str]:
+    """``(word, note)``: ``pass``, ``known limit`` or ``FAIL``, the report's rule
+    (:func:`reports.comparison.free_limits.verdict_of_free`); a crash is a ``FAIL``."""
+    return ("FAIL", "") if isinstance(v, EngineCrash) else verdict_of_free(v)
+
+
+def exit_code(verdicts) -> int:
+    """1 when any verdict is a ``FAIL`` (a listed known engine limit is not: the report's
+    exit rule, :func:`reports.cli.report.exit_status`), else 0."""
+    return 1 if any(label_of(v)[0] == "FAIL" for v in verdicts) else 0
+
+
+def summary_line(case: str, verdicts) -> str:
+    """The line that closes ``xval simulate --engine``: passes, known limits and
+    failures by engine, and the exit status they make."""
+    words = [(v.engine, label_of(v)[0]) for v in verdicts]
+    ok = [e for e, w in words if w == "pass"]
+    lim = [e for e, w in words if w == "known limit"]
+    bad = [e for e, w in words if w == "FAIL"]
+    parts = [f"{len(ok)} of {len(words)} engines pass"]
+    if lim:
+        parts.append(f"{len(lim)} known engine limit ({', '.join(lim)}; not counted)")
+    if bad:
+        parts.append(f"{len(bad)} failed ({', '.join(bad)})")
+    return f"simulate {case}: {', '.join(parts)}; exit status {exit_code(verdicts)}"
+
+
 def cmd_engines(args, mech, traj, samples: int, release=None) -> int:
-    """The engine part of ``xval simulate``: run, judge, print; 0 pass, 1 fail.
+    """The engine part of ``xval simulate``: run, judge, print; 0 pass (or a listed
+    known engine limit), 1 fail.
     ``release``: the :class:`reports.comparison.free_cases.Release` of a built-in case without
     ``[motion]`` (in the JSON as ``released``; the text output says it before)."""
     results = run_engines(mech, traj, args, samples)
@@ -102,13 +165,22 @@ def cmd_engines(args, mech, traj, samples: int, release=None) -> int:
                 "method": traj.method, "rtol": traj.rtol,
                 "events": [{"t_s": e.t, "kind": e.kind, "joint": e.joint,
                             "detail": e.detail} for e in traj.events]},
-            "verdicts": [dict(v.as_json(), notes=list(r.notes)) for r, v in results]}),
+            "verdicts": [_verdict_json(r, v) for r, v in results],
+            "exit_status": exit_code(verdicts)}),
             indent=2, allow_nan=False))
     else:
         for r, v in results:
-            print_verdict(v, r.notes)
+            print_verdict(v, r.notes if r is not None else ())
+        print(summary_line(mech.name, verdicts))
     write_ci(args, mech, results)
-    return 0 if all(v.passed for v in verdicts) else 1
+    return exit_code(verdicts)
+
+
+def _verdict_json(run, v) -> dict:
+    if run is None:
+        return v.as_json()
+    word, note = label_of(v)
+    return dict(v.as_json(), notes=list(run.notes), verdict=word, note=note)
 
 
 def _say(text: str) -> None:
@@ -123,8 +195,17 @@ def horizon_text(h: float, duration: float) -> str:
 
 def print_verdict(v, notes=()) -> None:
     """One engine's verdict as text: heading, the drifts, IFToMM, the table."""
+    word, note = label_of(v)
     print(f"== {v.case} / {v.engine} (free motion, {v.duration:g} s): "
-          f"{'PASS' if v.passed else 'FAIL'}")
+          f"{word.upper() if word != 'FAIL' else word}")
+    if isinstance(v, EngineCrash):
+        _say(f"engine crashed: {v.cause}")
+        return
+    if word == "known limit":
+        _say(f"known engine limit (reports/comparison/free_limits.py; not counted in the "
+             f"exit status): {note}")
+    elif note:
+        _say(f"note: {note}")
     _say(f"settings: {v.settings}")
     if not v.run_ok:
         _say(f"run ended at t = {v.t_fail:.4g} s: {v.reason}; the quantities are not "
@@ -181,7 +262,11 @@ def ci_case(run, v, file: str = ""):
         if v.near_event:
             msg += f" ({v.near_event})"
     details = [str(c) for c in v.judged] + [f"settings: {v.engine} {v.settings}"]
-    return CiCase(case=v.case, engine=v.engine, status="pass" if v.passed else "fail",
+    word, note = label_of(v)
+    if word == "known limit":  # the report's rule: reported, not a failure
+        kind, msg = "known engine limit", f"{msg}; known engine limit: {note}"
+    return CiCase(case=v.case, engine=v.engine,
+                  status={"pass": "pass", "known limit": "limit"}.get(word, "fail"),
                   quantity=w.quantity, error=w.normalised,
                   at=f"t = {w.at:.4g} s" if math.isfinite(w.at) else "",
                   tolerance=w.tolerance, kind=kind, message=msg, details="\n".join(details),
@@ -196,5 +281,10 @@ def write_ci(args, mech, results) -> None:
 
     given = str(getattr(args, "case", "") or "")
     file = Path(given).as_posix() if given.endswith(".toml") else ""
-    write_outputs(f"xval simulate {mech.name}", [ci_case(r, v, file) for r, v in results],
+    write_outputs(f"xval simulate {mech.name}",
+                  [ci_case(r, v, file) if r is not None else
+                   CiCase(case=v.case, engine=v.engine, status="fail", kind="crashed",
+                          message=f"engine crashed: {v.cause}",
+                          details=f"engine crashed: {v.cause}", file=file)
+                   for r, v in results],
                   args.junit, args.summary, command="simulate", error_label="error / scale")

@@ -13,18 +13,20 @@ reads its reference there, and the tree comes back in the :class:`Verdict`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
-from analytic import Mechanism
+from analytic import LinkageError, Mechanism
 from analytic.sweep import input_values
 from reports.comparison import quantities
 from reports.comparison.compare import Comparison, compare_run, near_event, verdict
 from sim_models import SimTree, compile_linkage
 from sim_models.engines.registry import available_engines, get_engine, settings_from_options
-from sim_models.runs.driven import has_instantaneous, instantaneous, run
+from sim_models.engines.settings import EngineRefusal
+from sim_models.runs.driven import has_instantaneous, instantaneous, not_run, run
 from sim_models.runs.engine_run import EngineRun, RunRequest
 
 
@@ -88,6 +90,46 @@ def run_verdict(linkage: Mechanism | SimTree, engine: str, settings=None,
     return Verdict(tree, r, tuple(compare_run(r)))  # against r.linkage, tree.linkage itself
 
 
+def crash_text(e: BaseException) -> str:
+    """One line naming an exception: its type and the first line of its message."""
+    msg = str(e).strip().splitlines()
+    return f"{type(e).__name__}: {msg[0]}" if msg else type(e).__name__
+
+
+def run_verdicts(tree: SimTree, engines: Sequence[str], settings: Mapping[str, object],
+                 request: RunRequest, progress=None) -> list[Verdict]:
+    """:func:`run_verdict` of each engine in turn (``xval compare``, ``--engine all``).
+
+    One engine's crash never ends the others: an engine that raises anything but a
+    refusal of the input is a failed verdict whose run says ``engine crashed: TYPE:
+    message`` (every sample "not measured").  Of several engines, one that refuses
+    (:class:`EngineRefusal`: it cannot build or run this model) is a failed verdict
+    saying so; a refusal by the only engine, or by every engine (the input's fault),
+    stays the one-line error of status 2.  ``progress(engine)``: a context manager
+    around each run (the terminal's progress line), or None."""
+    out: list[Verdict] = []
+    refusals: list[EngineRefusal] = []
+    for eng in engines:
+        with progress(eng) if progress else contextlib.nullcontext():
+            try:
+                out.append(run_verdict(tree, eng, settings.get(eng), request))
+                continue
+            except EngineRefusal as e:
+                if len(engines) == 1:
+                    raise
+                refusals.append(e)
+                why = f"refused: {crash_text(e).split(': ', 1)[-1]}"
+            except LinkageError:
+                raise  # bad input: one line, status 2
+            except Exception as e:  # noqa: BLE001 - an engine's crash is its failed verdict
+                why = f"engine crashed: {crash_text(e)}"
+        r = not_run(tree, eng, settings.get(eng), why, request.revolutions, request.samples)
+        out.append(Verdict(tree, r, tuple(compare_run(r))))
+    if refusals and len(refusals) == len(engines):
+        raise refusals[0]
+    return out
+
+
 def engine_list(choice: str, mode: str = "run") -> list[str]:
     """``"all"`` -> every registered engine whose module is present (in the instantaneous
     mode, those with a forward-dynamics call); else the one named."""
@@ -119,5 +161,5 @@ def run_comparison(tree, engine: str, settings=None, mode: str = RunRequest.mode
     return v.run, list(v.comparisons)
 
 
-__all__ = ["Verdict", "engine_list", "request_of", "run_comparison", "run_verdict",
-           "settings_for"]
+__all__ = ["Verdict", "crash_text", "engine_list", "request_of", "run_comparison",
+           "run_verdict", "run_verdicts", "settings_for"]

@@ -64,7 +64,9 @@ def error_figure(verdicts, title: str) -> bytes:
         kin = [c.error for c in v.comparisons if c.family in ("joint angle", "slider", "angle")]
         if not kin:
             continue
-        env = np.nanmax(np.vstack(kin), axis=0)
+        # fmax skips NaN without a warning; NaN where no quantity was measured (a run that
+        # stopped: nanmax printed "All-NaN slice" into the report's console)
+        env = np.fmax.reduce(np.vstack(kin), axis=0)
         arrays.append(env)
         ax.semilogy(v.times, np.maximum(env, LOG_FLOOR), color=_colour(v.engine), lw=1.0,
                     label=v.engine)

@@ -60,11 +60,17 @@ GRID = {
                  + [{"erp": 0.2}, {"solver_iterations": 100}]),
     "exudyn": [{"timestep": h, "spectral_radius": r} for h in (4e-3, 1e-3, 2.5e-4)
                for r in (0.6, 0.95)],
+    # Pinocchio: its two integrators over the step, and the loop's Baumgarte gain
+    # (a fraction of 1/h: 0 leaves the drift uncorrected)
+    "pinocchio": ([{"integrator": i, "timestep": h} for i in ("rk4", "euler")
+                   for h in (4e-3, 1e-3, 2.5e-4)]
+                  + [{"baumgarte": b} for b in (0.0, 0.2)]),
     # MuJoCo Warp (float32): the step, and the two choices its settings' docstring
-    # measured against (Newton at the prescribed runs' inverse weights; CG at 1e-2)
+    # measured against (Newton at the prescribed runs' inverse weights; CG at 1e-2 and
+    # at stock weights)
     "mujoco_warp": ([{"timestep": h} for h in (2e-3, 5e-4)]
                     + [{"solver": "Newton", "invweight_scale": 1e-2},
-                       {"invweight_scale": 1e-2}]),
+                       {"invweight_scale": 1e-2}, {"invweight_scale": 1.0}]),
 }
 #: Tolerances of the cheapest-setting table (error at the end, of the range).
 TOLERANCES = (1e-2, 1e-3, 1e-4)

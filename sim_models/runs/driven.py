@@ -95,6 +95,36 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         return drive(session, plan, request)
 
 
+def not_run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None,
+            reason: str, revolutions: int = RunRequest.revolutions,
+            samples: int = RunRequest.samples) -> EngineRun:
+    """The :class:`EngineRun` of an engine that could not run at all (it raised while
+    building or stepping): ``ok = False``, ``reason``, every sample NaN, so that it is
+    compared, printed and counted as a failed run ("not measured" from the first
+    sample) beside the engines that did run."""
+    tree = compile_linkage(mech)
+    plan = plan_samples(tree, revolutions, samples)
+    stand_in = _NoSession(tree, engine, settings)
+    rec = Recorder(tree, plan)  # every sample NaN: not reached
+    return finish(stand_in, plan, rec, RunRequest(revolutions, samples), reason,
+                  float(tree.driver_path(0.0)[0]), 0.0, 0.0, 0)
+
+
+class _NoSession:
+    """What :func:`finish` reads of a session, for :func:`not_run` (no engine built)."""
+
+    engine_readings = False
+
+    def __init__(self, tree: SimTree, engine: str, settings: EngineSettings | None):
+        self.tree, self.name = tree, engine
+        self.settings = settings if settings is not None else \
+            get_engine(engine).settings_class()
+        self.notes: list[str] = []
+
+    def extra(self) -> dict:
+        return {}
+
+
 def rerun(r: EngineRun) -> EngineRun:
     """Run ``r`` again from its own record (mechanism, settings object, request), on
     the compiled :class:`~analytic.Linkage` it carries (not a rebuilt one)."""
@@ -161,5 +191,5 @@ def mujoco_instantaneous(mech: Mechanism | SimTree, settings=None, values=None) 
 
 
 __all__ = ["EngineRefusal", "EngineRun", "has_instantaneous", "instantaneous",
-           "mujoco_instantaneous",
+           "mujoco_instantaneous", "not_run",
            "open_session", "rerun", "run", "time_engine"]

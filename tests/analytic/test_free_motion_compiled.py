@@ -54,7 +54,7 @@ def _seed(elements: bool):
 
 
 def _cases():
-    from sim_models.free_cases import released
+    from sim_models.builders.free_cases import released
 
     from .test_free_motion import _rocker_mech
     a02 = mechanism_from_dict(tomllib.loads(n_four_bar_toml(8)), "A02")  # chain only
@@ -142,7 +142,7 @@ def test_first_call_waits_for_no_compile(tmp_path):
         "from analytic import load_case\n"
         "from analytic.free_motion import simulate, compiled\n"
         "from analytic import fused\n"
-        "from sim_models.free_cases import released\n"
+        "from sim_models.builders.free_cases import released\n"
         "m = released(load_case('seed-four-bar'), duration=0.2)\n"
         "tr = simulate(m, duration=0.2)\n"
         "assert tr.nfev > 0\n"

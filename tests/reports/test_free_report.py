@@ -130,3 +130,37 @@ def test_a_mechanism_without_a_loop_has_no_loop_drift_not_a_zero():
     v = compare_free(run, traj, ref)
     assert not v.has_loop and v.as_json()["loop_drift"] is None
     assert math.isnan(_loop_drift(run, v))
+
+
+def test_every_free_engine_has_a_work_precision_grid():
+    """The full report's grid tasks run every installed free engine on
+    :data:`FS.GRID_CASES`: with Pinocchio installed both tasks ended in ``KeyError:
+    'pinocchio'`` (no grid for it), counted as two failed verdicts.  Every engine with a
+    free run has a grid, and Pinocchio's runs (a short A01, three of its settings)."""
+    from sim_models.runs.free import FREE_SESSIONS
+    assert set(FS.GRID) == set(FREE_SESSIONS)
+    pytest.importorskip("pinocchio")
+    rows = FS.grid_task("iftomm-a01-pendulum", 0.2, "pinocchio", samples=20,
+                        grid=FS.GRID["pinocchio"][:2])
+    assert [r.settings for r in rows][0] == "recommended" and len(rows) == 3
+    assert all(r.ok for r in rows), [r.reason for r in rows]
+
+
+def test_error_figure_of_a_stopped_run_warns_nothing():
+    """A run that stopped has no values from its stop on: the error figure printed numpy's
+    "All-NaN slice encountered" RuntimeWarning into the full report's console."""
+    import warnings
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from reports.figures.free_report_plots import error_figure
+    t = np.linspace(0.0, 1.0, 11)
+    err = np.where(t < 0.5, 1e-4, np.nan)
+    c = SimpleNamespace(family="joint angle", error=err)
+    v = SimpleNamespace(comparisons=[c, c], times=t, engine="mujoco", horizon=0.5,
+                        lost_by=None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        png = error_figure([v], "stopped")
+    assert png[:4] == b"\x89PNG"

@@ -167,3 +167,43 @@ def test_simulate_prints_table_and_events(tmp_path, capsys):
     assert code == 0
     assert "work-energy balance" in out and "turn" in out
     assert csv.read_text().count("\n") == 6  # header + 5 samples
+
+
+def _crash(*_a, **_k):
+    raise IndexError("too many indices for array")
+
+
+def test_engine_all_one_crash_is_a_failed_verdict_and_a_summary_closes(monkeypatch):
+    """``simulate --engine all``: one engine's exception ended the whole command; and 99
+    lines of verdicts ended without a summary.  Now the crashed engine is a FAIL with its
+    one-line cause, every other engine's verdict is printed, and one line closes the
+    output with the counts and the exit status."""
+    from sim_models.engines.pybullet.free import PybulletFreeSession
+    monkeypatch.setattr(PybulletFreeSession, "advance", _crash)
+    monkeypatch.setattr("reports.cli.simulate_engines.free_engine_names",
+                        lambda: ("mujoco", "pybullet"))
+    code, out = run("simulate", "iftomm-a01-pendulum", "--duration", "0.2", "--samples", "11",
+                    "--engine", "all")
+    assert code == 1
+    assert "/ mujoco (free motion, 0.2 s): PASS" in out
+    assert "/ pybullet (free motion, 0.2 s): FAIL" in out
+    assert "engine crashed: IndexError: too many indices for array" in out
+    last = out.strip().splitlines()[-1]
+    assert last == ("simulate iftomm-a01-pendulum: 1 of 2 engines pass, 1 failed (pybullet); "
+                    "exit status 1")
+
+
+def test_simulate_labels_and_exits_as_the_report_does(monkeypatch):
+    """The report calls PyBullet's released seed four-bar over 1 s a known engine limit
+    and exits 0; ``simulate`` exited 1 on the same run.  Both now use one rule
+    (reports.comparison.free_limits.label)."""
+    monkeypatch.setattr("reports.cli.simulate_engines.free_engine_names",
+                        lambda: ("mujoco", "pybullet"))
+    code, out = run("simulate", "seed-four-bar", "--duration", "1", "--samples", "101",
+                    "--engine", "all")
+    assert "/ pybullet (free motion, 1 s): KNOWN LIMIT" in out, out
+    assert "known engine limit (reports/comparison/free_limits.py" in out
+    assert out.strip().splitlines()[-1] == (
+        "simulate seed-four-bar-released: 1 of 2 engines pass, 1 known engine limit "
+        "(pybullet; not counted); exit status 0")
+    assert code == 0

@@ -77,3 +77,40 @@ def test_near_a_limit_is_one_decision():
     assert MAX_CONDITION == LIMITED_RANGE_CONDITION == 100.0
     np.testing.assert_array_equal(near_limit([1.0, 99.9, 100.0, 100.1, np.inf, np.nan]),
                                   [False, False, False, True, True, True])
+
+
+def _crash(*_a, **_k):
+    raise IndexError("too many indices for array: array is 1-dimensional, but 2 were "
+                     "indexed")
+
+
+def test_one_engines_crash_is_its_failed_verdict_and_the_others_run(monkeypatch):
+    """turn4/warp-rocker-load.toml with ``--engine all``: MuJoCo Warp's IndexError ended
+    the whole command in a traceback, no engine's verdict printed.  Now the crashed
+    engine is a failed verdict whose run names the exception in one line, and every
+    other engine's verdict is printed; the exit status is that of a failed verdict."""
+    from sim_models.engines.pybullet.driven import PybulletSession
+
+    from .cli_run import run as xval
+    monkeypatch.setattr(PybulletSession, "advance", _crash)
+    monkeypatch.setattr("reports.cli.compare.engine_list",
+                        lambda *_a: ["pybullet", "mujoco"])
+    code, out = xval("compare", "seed-four-bar", "--engine", "all", "--revolutions", "1")
+    assert code == 1
+    assert "== seed-four-bar / mujoco (run) : PASS" in out
+    assert "== seed-four-bar / pybullet (run) : FAIL" in out
+    line = next(ln for ln in out.splitlines() if ln.startswith("run failed:"))
+    assert "engine crashed: IndexError: too many indices" in line
+
+
+def test_a_lone_engines_crash_is_one_line_and_status_1(monkeypatch):
+    from sim_models.engines.mujoco.driven import MujocoSession
+
+    from .cli_run import run as xval
+    monkeypatch.setattr(MujocoSession, "advance", _crash)
+    code, out = xval("compare", "seed-four-bar", "--engine", "mujoco", "--json")
+    assert code == 1
+    import json
+    (v,) = json.loads(out)
+    assert v["verdict"] == "fail" and not v["run_ok"]
+    assert v["reason"].startswith("engine crashed: IndexError: too many indices")

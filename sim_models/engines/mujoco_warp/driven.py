@@ -152,7 +152,8 @@ class _WorldView:
         self.xipos = d.xipos.numpy()[0]
         self.xpos = d.xpos.numpy()[0]
         self.xmat = d.xmat.numpy()[0]
-        self.xfrc_applied = np.zeros(d.xfrc_applied.shape[1:], dtype=np.float32)
+        # (nbody, 6): Warp's array is (nworld, nbody) of spatial vectors, 1-D a world
+        self.xfrc_applied = np.zeros_like(d.xfrc_applied.numpy()[0])
 
     def commit(self) -> None:
         self._d.xfrc_applied.assign(self.xfrc_applied[None])
