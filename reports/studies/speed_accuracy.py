@@ -193,6 +193,7 @@ def grid_plan(case: str, quick: bool) -> list[dict]:
                              settings=dict(steps_per_rev=spr, spectral_radius=rho,
                                            timestep=T / spr)))
     plan += _pinocchio_plan(T, quick)
+    plan += _warp_plan(T, quick)
     return plan
 
 
@@ -206,6 +207,17 @@ def _pinocchio_plan(T: float, quick: bool) -> list[dict]:
                  label=f"rk4/b{b:g}/{spr}",
                  settings=dict(steps_per_rev=spr, baumgarte=b, timestep=min(T / spr, 0.1)))
             for b in (0.0, 0.05) for spr in spr_all]
+
+
+def _warp_plan(T: float, quick: bool) -> list[dict]:
+    """MuJoCo Warp's family (float32 MuJoCo at its recommended solver, steps per
+    revolution), when its optional library is installed: its error stops falling with
+    the step at its float32 floor (:mod:`sim_models.runs.precision`), which the grid shows."""
+    if "mujoco_warp" not in available_engines():
+        return []
+    spr_all = (300, 1000) if quick else (100, 300, 1000, 3000)
+    return [dict(engine="mujoco_warp", family="float32", integrator="", spr=spr,
+                 label=f"f32/{spr}", settings=dict(timestep=T / spr)) for spr in spr_all]
 
 
 # ============================================================================ errors

@@ -136,7 +136,11 @@ def test_released_a02_keeps_every_loop_row():
     mech = _a02(22)
     traj = simulate(mech, duration=0.15)
     req = FreeRequest(duration=0.15, samples=3)
-    r = run_free(mech, "mujoco_warp", free_settings("mujoco_warp"), req, traj)
+    # at stock inverse weights, as when the rows were dropped: the recommended free
+    # invweight_scale 3e-2 (the released slider-cranks' setting) softens A02's 66 loop
+    # rows, an error of another kind (kinetic energy 6e-4 of its peak at 0.15 s, measured)
+    s = free_settings("mujoco_warp").with_overrides({"invweight_scale": 1.0})
+    r = run_free(mech, "mujoco_warp", s, req, traj)
     assert r.ok, r.reason
     want = traj.at(req.times(), forces=False).kinetic
     assert np.abs(r.kinetic - want).max() <= A02_KINETIC * np.abs(want).max()
@@ -154,7 +158,7 @@ def test_dropped_constraint_rows_end_the_run(monkeypatch):
     assert not r.ok and "dropped constraint rows" in r.reason and "njmax 3" in r.reason
 
 
-BUGS4 = __import__("pathlib").Path(__file__).parents[1] / "data" / "bugs" / "turn4"
+BUGS4 = __import__("pathlib").Path(__file__).parents[3] / "data" / "bugs" / "turn4"
 
 
 def test_load_on_a_revolute_body_is_applied_as_in_mujoco():
