@@ -30,7 +30,7 @@ from reports.comparison.runs import crash_text
 from reports.regression.baseline import versions
 from reports.regression.ci_formats import CiCase, write_outputs
 from sim_models.engines.ranges import WALL_LIMIT
-from sim_models.engines.registry import settings_from_options
+from sim_models.engines.registry import settings_from_options, split_overrides
 from sim_models.runs.free import free_engine_names, free_session_class, run_free
 from sim_models.runs.free_run import FreeRequest
 
@@ -78,6 +78,14 @@ def free_settings_for(engines, args) -> dict:
         classes={e: free_session_class(e).settings_class for e in engines})
 
 
+def step_set_by_user(engines, args) -> dict[str, bool]:
+    """Per engine: whether ``--timestep`` or a ``--set`` item gives its step (then that
+    step wins over the one chosen from the motion, :mod:`sim_models.runs.free_step`)."""
+    per = split_overrides(list(args.set or ()), engines,
+                          {e: free_session_class(e).settings_class for e in engines})
+    return {e: args.timestep is not None or "timestep" in per.get(e, {}) for e in engines}
+
+
 @dataclass(frozen=True)
 class EngineCrash:
     """An engine whose free run raised (a bug of the harness or the engine, never the
@@ -106,11 +114,13 @@ def run_engines(mech, traj, args, samples: int):
     request = FreeRequest(duration=traj.duration, samples=max(1, samples - 1),
                           wall_limit=args.wall_limit or FreeRequest.wall_limit)
     ref = reference_samples(traj, request.times())
+    set_step = step_set_by_user(engines, args)
     out = []
     for eng in engines:
         with engine_progress(f"{eng}: {mech.name}, free motion {traj.duration:g} s"):
             try:
-                run = run_free(mech, eng, settings[eng], request, traj)
+                run = run_free(mech, eng, settings[eng], request, traj,
+                               step_from_motion=not set_step[eng])
             except LinkageError as e:
                 if len(engines) == 1:
                     raise

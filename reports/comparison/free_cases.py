@@ -171,15 +171,17 @@ def release_and_judge(mech: Mechanism, engine: str, duration: float | None = Non
     one, released by :func:`free_case`'s rule) judged against the exact trajectory:
     ``(FreeEngineRun, FreeVerdict)``.  ``samples``: sample intervals; ``settings``:
     overrides of the engine's recommended free settings (typed values or
-    ``key=value`` strings).  ``duration`` and ``samples + 1`` (sample times) within
-    :data:`FREE_DURATION` and :data:`FREE_SAMPLES`, the command line's ranges
+    ``key=value`` strings); without a ``timestep`` among them the step is chosen from
+    the motion (:mod:`sim_models.runs.free_step`).  ``duration`` and ``samples + 1``
+    (sample times) within :data:`FREE_DURATION` and :data:`FREE_SAMPLES`, the command line's ranges
     (:class:`SettingsError` otherwise, before anything runs)."""
     check_free_request(duration, samples)
     if mech.motion is None:
         mech = released(mech, RELEASE_DURATION if duration is None else duration)
     traj = simulate(mech, duration, wall_limit=FreeRequest.wall_limit)  # bounded, as the CLI
     req = FreeRequest(duration=traj.duration, samples=samples)
-    run = run_free(mech, engine, free_settings(engine, settings), req, traj)
+    run = run_free(mech, engine, free_settings(engine, settings), req, traj,
+                   step_from_motion="timestep" not in (settings or {}))  # a set step wins
     return run, compare_free(run, traj, reference_samples(traj, req.times()))
 
 

@@ -433,12 +433,20 @@ def compare_free(run, traj, ref=None) -> FreeVerdict:
     v = FreeVerdict(run.case, run.engine, float(t[-1]) if len(t) else 0.0, t, tuple(comps),
                     energy, loop, iftomm_accuracy(run, ref, mech), bool(run.ok), run.reason,
                     run.t_fail, float(run.cpu_per_simulated_second), float(run.timestep),
-                    str(run.integrator), run.settings.describe(), None, None,
+                    str(run.integrator), settings_text(run), None, None,
                     tuple(not_read), len(mech.joints) > len(mech.bodies) - 1)
     if v.passed:
         return v
     return replace(v, near_event=near_free_event(v, traj.events),
                    step_note=free_step_note(run, ref, mech))
+
+
+def settings_text(run) -> str:
+    """The run's settings line: the engine's settings, and where the step was chosen
+    from the motion, that and why (:class:`sim_models.runs.free_step.StepChoice`)."""
+    choice = getattr(run, "step_choice", None)
+    text = run.settings.describe()
+    return f"{text}; {choice.text}" if choice is not None else text
 
 
 def near_free_event(v: FreeVerdict, events) -> str | None:

@@ -199,7 +199,8 @@ def grid_task(case: str, duration: float, engine: str, samples: int = 200,
     for over in [{}, *(GRID[engine] if grid is None else grid)]:
         label = " ".join(f"{k}={_fmt(v)}" for k, v in over.items()) or "recommended"
         try:
-            run = run_free(mech, engine, free_settings(engine, over), req, traj)
+            run = run_free(mech, engine, free_settings(engine, over), req, traj,
+                           step_from_motion="timestep" not in over)
         except Exception as e:  # noqa: BLE001 - a setting the engine refuses is a row
             rows.append(FreeRow(case, engine, duration, label, "", math.nan, False, False,
                                 f"{type(e).__name__}: {e}", "", math.inf, math.inf, 0.0, "",

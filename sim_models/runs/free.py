@@ -12,9 +12,11 @@ the run loop, readout and energy are :mod:`sim_models.engines.free_protocol` (on
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 
 from analytic import Mechanism
+from analytic.free_motion import simulate
 
 from ..builders.tree import SimTree
 from ..engines.free_protocol import FreeSession, drive_free
@@ -22,6 +24,7 @@ from ..engines.protocol import compile_linkage
 from ..engines.registry import UnknownEngineError, skipped_engines
 from ..engines.settings import EngineRefusal, EngineSettings
 from .free_run import FreeEngineRun, FreeRequest
+from .free_step import choose_step
 
 #: engine name -> (module, free session class)
 FREE_SESSIONS: dict[str, tuple[str, str]] = {
@@ -65,24 +68,40 @@ def open_free_session(mech: Mechanism | SimTree, engine: str,
 
 
 def run_free(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None = None,
-             request: FreeRequest | None = None, reference=None) -> FreeEngineRun:
+             request: FreeRequest | None = None, reference=None,
+             step_from_motion: bool | None = None) -> FreeEngineRun:
     """Release ``mech`` (its ``[motion]``) in ``engine`` from the reference's state at
     t = 0 and read it at ``request.times()`` (default: the description's duration and
     samples).  ``reference``: the :class:`analytic.free_motion.FreeTrajectory` if already
     computed (else it is computed here, for the initial state and energy scale).  A
     diverging run returns ``ok = False`` with ``t_fail`` and ``reason``; an engine that
-    cannot build the model raises :class:`EngineRefusal`."""
+    cannot build the model raises :class:`EngineRefusal`.
+
+    ``step_from_motion``: shorten the step where the exact motion turns a body further
+    in one step than :data:`sim_models.runs.free_step.MAX_TURN_PER_STEP` (the run's
+    ``step_choice`` says so); default: only when ``settings`` is None (the recommended
+    ones).  A caller whose user set the step passes False: a set step always wins."""
     tree = compile_linkage(mech)
     fm = tree.mech.motion
     if fm is None:
         raise EngineRefusal(f"mechanism {tree.mech.name!r} has no [motion] table: nothing "
                             "to release")
     request = request or FreeRequest(duration=fm.duration, samples=max(1, fm.samples - 1))
+    choice = None
+    if settings is None if step_from_motion is None else step_from_motion:
+        settings = settings if settings is not None else free_settings(engine)
+        if reference is None:
+            reference = simulate(tree.mech, duration=request.duration)
+        choice = choose_step(reference, request.times(), float(settings.timestep))
+        if choice is not None:
+            settings = dataclasses.replace(settings, timestep=choice.chosen)
     session = open_free_session(tree, engine, settings)
     try:
-        return drive_free(session, request, reference)
+        run = drive_free(session, request, reference)
     finally:
         session.close()
+    run.step_choice = choice
+    return run
 
 
 __all__ = ["FREE_SESSIONS", "free_engine_names", "free_session_class", "free_settings",

@@ -44,6 +44,7 @@ from analytic import Mechanism
 
 from ..engines.ranges import WALL_LIMIT, free_interval_problem
 from ..engines.settings import EngineSettings, SettingsError
+from .free_step import StepChoice
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,9 @@ class FreeEngineRun:
     precision: str = "float64"
     notes: tuple[str, ...] = ()
     extra: dict = field(default_factory=dict)
+    #: the step chosen from the motion (:mod:`sim_models.runs.free_step`), or None: the
+    #: engine's recommended or the user's step
+    step_choice: StepChoice | None = None
 
     @property
     def cpu_per_simulated_second(self) -> float:
