@@ -41,6 +41,8 @@ COMMANDS = {
                 "(GIF, MP4, HTML)"),
     "view": ("reports.cli.view", "MuJoCo's viewer on the linkage (needs a display)"),
     "simulate": ("reports.cli.simulate", "free motion: the exact released trajectory"),
+    "tune": ("reports.cli.tune", "the cheapest engine settings that pass a tolerance, "
+             "verified (writes settings files and tuned MJCF)"),
 }
 
 
