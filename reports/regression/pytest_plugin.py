@@ -142,6 +142,9 @@ class Xval:
         name = os.fspath(model) if isinstance(model, (str, os.PathLike)) else None
         mech = model if name is None else free_case(
             name if name in free_case_names() else os.fspath(self.resolve(name)))
+        if isinstance(settings, (str, os.PathLike)):  # a free settings file (xval tune)
+            from reports.comparison.settings_file import read_settings_file
+            settings = read_settings_file(settings, "free").overrides(engine)
         _, v = free_verdict(mech, engine, duration, samples, settings)
         if v.passed:
             return v

@@ -64,13 +64,18 @@ def summary_lines(res: TuneResult) -> list[str]:
         v = res.verification
         word = "PASS" if res.passed else "FAIL"
         reason = "" if v.ok else f" (run failed: {v.reason})"
+        of = "of its scale" if res.case.free else "of peak"
         out.append(f"verification (a fresh run): {word}, worst {res.verify_quantity} "
-                   f"{res.verify_error:.3g} of peak (tolerance {res.tolerance:g}){reason}")
+                   f"{res.verify_error:.3g} {of} (tolerance {res.tolerance:g}){reason}")
         u = "simulated s" if res.case.free else "revolution"
         out.append(f"CPU: {res.cpu_tuned * 1e3:.3g} ms per {u} (process CPU of the run), "
                    f"recommended {res.cpu_recommended * 1e3:.3g} ms: ratio "
                    f"{res.cpu_ratio:.3g} (medians of 3 alternated runs each in one process; "
                    f"spread {res.cpu_spread:.0%})")
+        if res.recommended is not None:
+            a, r = res.cost(res.answer), res.cost(res.recommended)
+            out.append(f"stepping only (cost model, steps x per-step CPU of the bare loop): "
+                       f"{a * 1e3:.3g} ms against {r * 1e3:.3g} ms, ratio {a / r:.3g}")
     out.append(f"knob: {res.knob_text}")
     return out
 
