@@ -37,11 +37,14 @@ FREE_FAMILIES = ("joint angle", "joint rate", "slider", "slider rate", "angle",
 @dataclass(frozen=True)
 class TuneCase:
     """What is tuned: ``case`` (a built-in name or an absolute file path), ``free``
-    (released under gravity for ``duration`` s, or its own ``[motion]``) or prescribed."""
+    (released under gravity for ``duration`` s, or its own ``[motion]``, judged at
+    ``samples`` times) or prescribed."""
 
     case: str
     free: bool = False
     duration: float | None = None
+    #: free runs: samples judged (None: the description's, as ``xval simulate``)
+    samples: int | None = None
 
 
 @dataclass(frozen=True)
@@ -92,16 +95,18 @@ def prescribed_tree(case: str):
 
 
 @functools.lru_cache(maxsize=4)
-def free_reference(case: str, duration: float | None):
+def free_reference(case: str, duration: float | None, samples: int | None = None):
     """``(mech, traj, request, reference samples)`` of a free case as ``xval simulate
-    --engine`` runs it (once per worker process)."""
+    --engine`` runs it (``samples``: judged times, None: the description's; once per
+    worker process)."""
     from analytic.free_motion import simulate
     from reports.comparison.free_cases import command_case
     from reports.comparison.free_compare import reference_samples
     from sim_models.free_run import FreeRequest
     mech, _release = command_case(case, duration)
     traj = simulate(mech, duration)
-    req = FreeRequest(duration=traj.duration, samples=max(1, mech.motion.samples - 1))
+    n = samples or mech.motion.samples
+    req = FreeRequest(duration=traj.duration, samples=max(1, n - 1))
     return mech, traj, req, reference_samples(traj, req.times())
 
 
@@ -172,7 +177,7 @@ def _prescribed(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> M
 def _free(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> Measured:
     from reports.comparison.free_compare import compare_free
     from sim_models.free_engine import run_free
-    mech, traj, req, ref = free_reference(tc.case, tc.duration)
+    mech, traj, req, ref = free_reference(tc.case, tc.duration, tc.samples)
     t0 = time.process_time()
     r = run_free(mech, engine, s, req, traj)
     cpu = time.process_time() - t0
