@@ -26,9 +26,10 @@ Cost model (deterministic, for ranking): a family's per-step CPU is the median o
 its runs of run CPU / steps; a candidate's cost is that times its steps per unit
 (revolution or simulated second).  Families whose per-step costs lie within
 :data:`COST_CLASS` (25 %, above the timing noise on this shared machine) of each other
-share one cost class; candidates are ranked by class cost x steps, then by fewer steps,
-then by the knobs' declared order, so a rerun with the same seed and budget gives the
-same answer unless a family's per-step cost sits at a class edge.
+share one cost class; candidates are ranked by class cost x steps, then by fewer
+steps, then by the lower error, then by the knobs' declared order, so a rerun with the
+same seed and budget gives the same answer unless a family's per-step cost sits at a
+class edge.
 """
 
 from __future__ import annotations
@@ -211,7 +212,7 @@ class Tuner:
 
     def rank_key(self, p: Point):
         order = tuple(k.levels.index(lv) for k, lv in zip(self.knobs, p.family, strict=True))
-        return (self.class_cost(p.family) * p.m.unit_steps, p.steps, order)
+        return (self.class_cost(p.family) * p.m.unit_steps, p.steps, p.error, order)
 
     def passing(self) -> list[Point]:
         return sorted((p for p in self.s.points.values() if p.passed and p.steps is not None),

@@ -234,8 +234,13 @@ def limit_text(tuner: Tuner, reached: Point | None) -> str:
     floor = (f"; the engine's float32 error floor there is {fl:.2g}" if fl >= tuner.tol
              else "")
     budget = "; the budget was spent" if tuner.s.budget_hit else ""
-    return (f"best reached {reached.error:.3g} of peak ({reached.worst_quantity}) at "
-            f"{reached.m.settings_text}; limit: {why}{floor}{budget}")
+    of = "of its scale" if tuner.tc.free else "of peak"
+    tried = ", ".join(k.name for k in tuner.knobs)
+    knobs = f"; knobs tried besides the step: {tried} ({len(tuner.s.families)} families)" \
+        if tried else ""
+    return (f"best reached {reached.error:.3g} {of} ({reached.worst_quantity}) at "
+            f"{reached.m.settings_text}; limit: {why} (the most common stop over the "
+            f"families){floor}{budget}{knobs}")
 
 
 def front(tuner: Tuner) -> list[Point]:
