@@ -29,7 +29,8 @@ its runs of run CPU / steps; a candidate's cost is that times its steps per unit
 share one cost class; candidates are ranked by class cost x steps, then by fewer
 steps, then by the lower error, then by the knobs' declared order, so a rerun with the
 same seed and budget gives the same answer unless a family's per-step cost sits at a
-class edge.
+class edge.  The answer (:meth:`Tuner.best`) is the candidate with the fewest steps, then
+the fewest knobs moved, among those within :data:`COST_TIE` of the least model cost.
 """
 
 from __future__ import annotations
@@ -55,6 +56,9 @@ ERROR_MATTERS = 2.0
 COST_MATTERS = 1.25
 #: Families whose per-step costs are within this factor share a cost class (ranking).
 COST_CLASS = 1.25
+#: Candidates whose model costs are within this factor of the least are equally cheap
+#: (the per-step timings of one family spread by about 5 % on this shared machine).
+COST_TIE = 1.15
 #: Branch and bound: a family is searched on while it might cost less than this factor
 #: times the best found.
 COST_BIN = 1.1
@@ -219,8 +223,20 @@ class Tuner:
                       key=self.rank_key)
 
     def best(self) -> Point | None:
+        """The answer: among the passing candidates whose model cost is within
+        :data:`COST_TIE` of the least (timing noise cannot order them), the one with the
+        fewest steps, then the fewest knobs moved from the recommended levels, then the
+        lower error."""
         ps = self.passing()
-        return ps[0] if ps else None
+        if not ps:
+            return None
+        least = min(self.cost(p) for p in ps)
+        tie = [p for p in ps if self.cost(p) <= least * COST_TIE]
+        return min(tie, key=lambda p: (p.steps, self.moved(p), p.error, self.rank_key(p)))
+
+    def moved(self, p: Point) -> int:
+        """How many knobs ``p`` moves from their recommended levels."""
+        return sum(lv != r for lv, r in zip(p.family, self.rec_family, strict=True))
 
     # ------------------------------------------------------------------ step search
     def step_search(self, family, start: int, cost_cap: float = math.inf) -> FamilyResult:
@@ -379,5 +395,5 @@ class Tuner:
                 improved = True
 
 
-__all__ = ["COST_BIN", "COST_CLASS", "ERROR_MATTERS", "FamilyResult", "Point", "STEP_MATTERS",
-           "STEP_RESOLUTION", "Search", "Tuner"]
+__all__ = ["COST_BIN", "COST_CLASS", "COST_TIE", "ERROR_MATTERS", "FamilyResult", "Point",
+           "STEP_MATTERS", "STEP_RESOLUTION", "Search", "Tuner"]
