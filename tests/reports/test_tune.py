@@ -20,6 +20,9 @@ from reports.tune.model import MARK, attribute_differences, tuned_model_text
 from sim_models import compile_linkage
 from sim_models.registry import available_engines
 
+from ..sim_models.test_settings_ranges import ENGINES as RANGE_ENGINES
+from ..sim_models.test_settings_ranges import IMPOSSIBLE
+
 #: The tolerance of the per-engine tests: 1e-3 of peak, the report's first column.
 TOL = 1e-3
 CASE = "seed-four-bar"
@@ -216,3 +219,19 @@ def test_pytest_fixture_settings_accepts_a_file(tmp_path):
                  '{"iterations": 0}}}')
     with pytest.raises(SettingsFileError, match="iterations"):
         settings_of("mujoco", str(f))
+
+
+@pytest.mark.parametrize("engine, key, value, words", [
+    pytest.param(*r, id=f"{r[0]}.{r[1]}={r[2]}") for r in IMPOSSIBLE if r[0] in RANGE_ENGINES])
+def test_settings_file_door_has_the_ranges_of_set(engine, key, value, words, tmp_path, capsys,
+                                                  monkeypatch):
+    """Every impossible value of the ranges table (the one --set is checked against), in
+    a settings file: one line naming the file, engine and key, status 2, no engine run."""
+    import reports.comparison.runs as vr
+    monkeypatch.setattr(vr, "run_verdict", lambda *a, **k: pytest.fail("an engine ran"))
+    f = tmp_path / "s.json"
+    f.write_text(json.dumps({"xval_settings": 1, "mode": "run",
+                             "engines": {engine: {key: value}}}))
+    assert main(["compare", CASE, "--engine", engine, "--settings", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and f"engine {engine!r} key {key!r}" in err
