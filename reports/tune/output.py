@@ -44,14 +44,17 @@ def summary_lines(res: TuneResult) -> list[str]:
     """The lines ``xval tune`` prints (see :mod:`reports.cli.tune`)."""
     s, t = res.search, res.tuner
     fam = res.family or "all judged quantities"
+    of = "of its scale" if res.case.free else "of peak"
     out = [f"== tune {s_case(res)} / {res.engine} ({mode_text(res)}): tolerance "
-           f"{res.tolerance:g} of peak on {fam}"]
+           f"{res.tolerance:g} {of} on {fam}"]
     knobs = ", ".join(["step"] + [k.name for k in t.knobs])
     out.append(f"search: {s.runs} runs, {s.spent:.3g} s CPU of a {res.budget:g} s budget"
                f"{' (spent: stopped)' if s.budget_hit else ''}, {res.search_wall:.3g} s "
                f"wall; knobs: {knobs}")
     if s.not_mattering:
         out.append(f"stopped mattering (kept recommended): {', '.join(s.not_mattering)}")
+    if s.not_tried:
+        out.append(f"not tried (the budget was spent first): {', '.join(s.not_tried)}")
     if res.answer is None:
         out.append(f"NO SETTING PASSES: {res.limit_text}")
         return out

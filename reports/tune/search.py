@@ -104,6 +104,7 @@ class Search:
     families: dict = field(default_factory=dict)       # family -> FamilyResult
     not_mattering: list = field(default_factory=list)  # knob names
     mattering: list = field(default_factory=list)
+    not_tried: list = field(default_factory=list)      # knobs the budget left unscreened
 
 
 class Tuner:
@@ -332,17 +333,20 @@ class Tuner:
         error nor the per-step cost are dropped (:attr:`Search.not_mattering`)."""
         base = self.rec_family
         ref_err = {p.steps: p.error for (f, _n), p in self.s.points.items() if f == base}
-        matters = set()
+        matters, tried = set(), set()
         for i, fam in self._neighbours(base, range(len(self.knobs))):
             if self.left() <= 0:
                 self.s.budget_hit = True
                 break
             start, cap = self._start_and_cap()
             self.step_search(fam, start, cap)
+            tried.add(i)
             if self._differs(fam, base, ref_err):
                 matters.add(i)
         self.s.mattering = [self.knobs[i].name for i in sorted(matters)]
-        self.s.not_mattering = [k.name for i, k in enumerate(self.knobs) if i not in matters]
+        self.s.not_mattering = [k.name for i, k in enumerate(self.knobs)
+                                if i in tried and i not in matters]
+        self.s.not_tried = [k.name for i, k in enumerate(self.knobs) if i not in tried]
         self._matters = sorted(matters)
 
     def _differs(self, fam, base, ref_err) -> bool:

@@ -233,11 +233,15 @@ def limit_text(tuner: Tuner, reached: Point | None) -> str:
     fl = reached.m.floor(tuner.qfamily)
     floor = (f"; the engine's float32 error floor there is {fl:.2g}" if fl >= tuner.tol
              else "")
+    arith = getattr(settings_of(tuner.tc, tuner.engine, {}), "arithmetic", None)
+    if not floor and arith is not None and arith.name != "float64":
+        floor = f"; the engine computes in {arith.name} (an error floor no step removes)"
     budget = "; the budget was spent" if tuner.s.budget_hit else ""
     of = "of its scale" if tuner.tc.free else "of peak"
-    tried = ", ".join(k.name for k in tuner.knobs)
-    knobs = f"; knobs tried besides the step: {tried} ({len(tuner.s.families)} families)" \
-        if tried else ""
+    tried = ", ".join(k.name for k in tuner.knobs if k.name not in tuner.s.not_tried)
+    n = len(tuner.s.families)
+    knobs = (f"; knobs tried besides the step: {tried} ({n} "
+             f"famil{'y' if n == 1 else 'ies'} of levels)") if tried else ""
     return (f"best reached {reached.error:.3g} {of} ({reached.worst_quantity}) at "
             f"{reached.m.settings_text}; limit: {why} (the most common stop over the "
             f"families){floor}{budget}{knobs}")
