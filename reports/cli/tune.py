@@ -101,8 +101,9 @@ def _run(args, tc) -> int:
         return 1
     if args.out:
         output.write_settings(res, args.out)
+        dur = f" --duration {tc.duration:g}" if tc.free and tc.duration else ""
         print(f"wrote {args.out} (use it: xval {'simulate' if tc.free else 'compare'} "
-              f"{tc.case} --engine {args.engine} --settings {args.out})")
+              f"{tc.case}{dur} --engine {args.engine} --settings {args.out})")
     if args.write_model:
         text, changes = output.model_text(res)
         Path(args.write_model).write_text(text)

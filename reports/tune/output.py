@@ -176,15 +176,16 @@ def _why(res: TuneResult, fld: str) -> str:
     """Why a setting changed: the knob that moved it and what the answer measured."""
     t, a = res.tuner, res.answer
     if fld == "timestep":
+        of = "of its scale" if res.case.free else "of peak"
         return (f"the step: {a.steps} steps per "
                 f"{'simulated s' if res.case.free else 'revolution'}, the least that passes "
-                f"{res.tolerance:g} of peak in this family (verified {res.verify_error:.3g})")
+                f"{res.tolerance:g} {of} in this family (verified {res.verify_error:.3g})")
     moved = [f"{k.name} {k.levels[0]} -> {lv}" for k, lv in zip(t.knobs, a.family, strict=True)
              if lv != k.levels[0] and any(f in k.apply(lv) or f == "solref" and
                                           any(x.startswith("_solref") for x in k.apply(lv))
                                           for f in (fld,))]
     return (f"knob {'; '.join(moved)}: the cheapest passing family found "
-            f"(verified {res.verify_error:.3g} of peak)") if moved else "tuned"
+            f"(verified {res.verify_error:.3g})") if moved else "tuned"
 
 
 __all__ = ["figure", "full_text", "model_text", "summary_lines", "table", "tuned_document",

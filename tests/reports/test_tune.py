@@ -235,3 +235,13 @@ def test_settings_file_door_has_the_ranges_of_set(engine, key, value, words, tmp
     assert main(["compare", CASE, "--engine", engine, "--settings", str(f)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err and f"engine {engine!r} key {key!r}" in err
+
+
+def test_simulate_refuses_a_prescribed_settings_file(tmp_path, capsys):
+    """A settings file of prescribed runs given to the free runs: one line, status 2."""
+    f = tmp_path / "s.json"
+    f.write_text('{"xval_settings": 1, "mode": "run", "engines": {"mujoco": {}}}')
+    assert main(["simulate", CASE, "--duration", "0.1", "--engine", "mujoco",
+                 "--settings", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'run' settings" in err
