@@ -212,7 +212,8 @@ def knob_text(tuner: Tuner, best: Point | None, sens: list[Sensitivity]) -> str:
     if step_sets:
         order = math.log2(step.before / step.after) if step.after > 0 else math.inf
         rest = (f"; no other knob lowers it (best: {low.change}, x{low.ratio:.2g})"
-                if low else "; no other knob lowers it")
+                if low else "; no other knob lowers it" if tuner.knobs
+                else " (the step alone searched)")
         return (f"{eng}: error set by the step ({best.steps} steps per "
                 f"{'simulated s' if tuner.tc.free else 'revolution'}): halving it moves "
                 f"the worst error {step.before:.2g} -> {step.after:.2g} (order "
