@@ -26,9 +26,9 @@ CASES = {True: (("seed-four-bar", False, None), ("iftomm-a01-pendulum", True, 2.
 #: free_studies.SAMPLES[True]): A01's own 4001 make each run seconds of readout.
 FREE_SAMPLES = 100
 #: Knobs searched besides the step (quick: none; full: all) and CPU s per search.
-#: Measured (quick: 16 searches in 2 tasks, one per case, on 2 workers with one core
-#: busy elsewhere): 13.8 CPU s, 13.4 s wall; the seed four-bar's full searches take 2-6
-#: CPU s (prescribed) and 8-23 CPU s (free) each.
+#: Measured (quick: 8 searches in 2 tasks, one per case, the 1e-3 rows read from the
+#: 1e-4 searches, on 2 workers, load 1.4-1.8): 8.5 CPU s, 7.9 s wall; the seed
+#: four-bar's full searches take 2-6 CPU s (prescribed) and 8-23 CPU s (free) each.
 QUICK_KNOBS, QUICK_BUDGET, FULL_BUDGET = 0, 3.0, 15.0
 #: Engines of the table (MuJoCo Warp left out: its float32 floor is the free section's).
 ENGINES = ("mujoco", "pybullet", "exudyn", "pinocchio")
@@ -40,10 +40,12 @@ COLUMNS = ["case", "mode", "engine", "tolerance", "verdict", "steps per unit",
 
 
 def tune_task(case: str, free: bool, duration, engine: str, tolerance: float,
-              knob_limit, budget: float) -> dict:
+              knob_limit, budget: float, also=()) -> list[dict]:
     """One search, serial in this worker (``verify=False``: the answer is a measured run
-    that passed); a row of the table, never an exception."""
+    that passed): its row, then one row per tolerance of ``also`` read from the same
+    runs (:func:`reports.tune.tune.retarget`); never an exception."""
     from reports.tune import TuneCase, tune
+    from reports.tune.tune import retarget
     row = {"case": case, "mode": "free" if free else "prescribed", "engine": engine,
            "tolerance": tolerance}
     try:
@@ -51,7 +53,22 @@ def tune_task(case: str, free: bool, duration, engine: str, tolerance: float,
                    tolerance, budget=budget,
                    pool=False, knob_limit=knob_limit, verify=False)
     except Exception as e:  # noqa: BLE001 - a study failure is a row of the report
-        return {**row, "verdict": "not run", "note": f"{type(e).__name__}: {e}"}
+        return [{**row, "verdict": "not run", "note": f"{type(e).__name__}: {e}"}]
+    rows = [_row(row, res)]
+    for tol in also:
+        try:
+            rows.append({**_row({**row, "tolerance": tol}, retarget(res, tol)),
+                         "note": f"read from the {tolerance:g} search's runs: the "
+                                 "cheapest of them that passes; a coarser step, not run, "
+                                 "may pass too"})
+        except Exception as e:  # noqa: BLE001 - a study failure is a row of the report
+            rows.append({**row, "tolerance": tol, "verdict": "not run",
+                         "note": f"{type(e).__name__}: {e}"})
+    return rows
+
+
+def _row(row: dict, res) -> dict:
+    """The table's row of one :class:`reports.tune.tune.TuneResult`."""
     s = res.search
     row.update({"search runs": s.runs, "search CPU s": s.spent})
     if res.answer is None:
@@ -69,9 +86,15 @@ def tune_task(case: str, free: bool, duration, engine: str, tolerance: float,
 def case_task(case: str, free: bool, duration, engines, tolerances, knob_limit,
               budget: float) -> list[dict]:
     """Every engine's and tolerance's search of one case in this worker (a free case's
-    exact reference is computed once per worker, seconds for A01's 4001 samples)."""
-    return [tune_task(case, free, duration, e, t, knob_limit, budget)
-            for e in engines for t in tolerances]
+    exact reference is computed once per worker).  Quick (``knob_limit`` 0): one search
+    per engine at the tightest tolerance, the others read from its runs."""
+    if knob_limit == 0:
+        tight = min(tolerances)
+        return [r for e in engines
+                for r in tune_task(case, free, duration, e, tight, knob_limit, budget,
+                                   [t for t in tolerances if t != tight])]
+    return [r for e in engines for t in tolerances
+            for r in tune_task(case, free, duration, e, t, knob_limit, budget)]
 
 
 def _fmt(v) -> str:
@@ -116,7 +139,9 @@ def section(doc, rows: list[dict], quick: bool) -> None:
           "simulated second (free) times the per-step process CPU of the bare stepping "
           "loop, against the recommended settings' cost by the same model. "
           + ("Quick report: the step alone is searched, "
-             f"{QUICK_BUDGET:g} CPU s per search; the full report searches every knob. "
+             f"{QUICK_BUDGET:g} CPU s per search, at {min(TOLERANCES):g}; the other "
+             "tolerance's rows are read from its runs (see their note); the full report "
+             "searches every knob at each tolerance. "
              if quick else f"Every knob searched, {FULL_BUDGET:g} CPU s per search. ")
           + "Reproduce one row, with its verification run and Pareto table: xval tune "
           "CASE --engine NAME --tolerance T [--free --duration 2].", intro=True)

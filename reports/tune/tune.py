@@ -11,6 +11,7 @@ sets its error named.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import statistics
 import time
@@ -165,6 +166,25 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
         front(tuner), alts[:4], s, wall, tuner)
 
 
+def retarget(res: TuneResult, tolerance: float) -> TuneResult:
+    """The answer at another ``tolerance`` read from the same search's runs, without a
+    new search: the cheapest of those runs that passes it (a coarser step the search
+    never ran may pass too: an upper bound on the cost); the sensitivity runs at the new
+    answer are new (serial).  Takes over ``res``'s search: use ``res`` no more."""
+    t = res.tuner
+    t.tol = tolerance
+    t.s.points = {k: dataclasses.replace(p, passed=bool(
+        p.m.ok and math.isfinite(p.error) and p.error <= tolerance))
+        for k, p in t.s.points.items()}
+    with executor(False) as ex:
+        t.ex = ex
+        best = t.best()
+        sens = sensitivities(t, best) if best is not None else []
+    rec = next((p for (f, n), p in t.s.points.items() if n is None), None)
+    return _result(res.case, res.engine, tolerance, res.family, res.budget, res.seed, t,
+                   best, rec, sens, res.search_wall)
+
+
 # ============================================================================ explain
 def sensitivities(tuner: Tuner, best: Point) -> list[Sensitivity]:
     """The worst error at the answer with the step halved and with each knob at each of
@@ -287,4 +307,4 @@ def _verify(res: TuneResult) -> None:
 
 __all__ = ["MAX_BUDGET", "MAX_TOLERANCE", "MIN_BUDGET", "MIN_TOLERANCE", "Sensitivity",
            "TuneInputError", "TuneResult", "check_inputs", "front", "knob_text",
-           "limit_text", "sensitivities", "tune"]
+           "limit_text", "retarget", "sensitivities", "tune"]
