@@ -245,3 +245,16 @@ def test_simulate_refuses_a_prescribed_settings_file(tmp_path, capsys):
                  "--settings", str(f)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "'run' settings" in err
+
+
+def test_an_answer_read_from_a_tighter_search_meets_its_tolerance():
+    """The quick report reads the 1e-3 row from the 1e-4 search's runs: that answer
+    passes 1e-3 in a fresh verdict run and costs no more steps than the 1e-4 one."""
+    from reports.tune.tune import retarget
+    res = tune(TuneCase(CASE), "mujoco", 1e-4, budget=5, pool=False, knob_limit=0,
+               verify=False)
+    tight = res.answer.steps
+    loose = retarget(res, TOL)
+    assert loose.answer is not None and loose.answer.steps <= tight
+    tree = compile_linkage(load_case(CASE))
+    assert _worst(tree, "mujoco", loose.settings) <= TOL
