@@ -24,6 +24,7 @@ from reports.comparison.free_cases import (
     RELEASE_DURATION,
     command_case,
 )
+from reports.comparison.settings_file import apply_settings_file, given_keys, read_settings_file
 from reports.regression import baseline as bl
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
@@ -39,6 +40,14 @@ from sim_models.runs.free import free_engine_names, free_session_class
 
 
 # ============================================================================ record
+def _with_file(settings: dict, args, engines, mode: str, classes=None) -> dict:
+    """``settings`` with ``--settings FILE`` applied (keys ``--set`` does not give)."""
+    if not getattr(args, "settings", None):
+        return settings
+    return apply_settings_file(settings, read_settings_file(args.settings, mode),
+                               given_keys(engines, list(args.set or ()), None, classes))
+
+
 def cmd_record(args) -> int:
     free = bool(getattr(args, "free", False))
     _free_options(args, free)
@@ -47,9 +56,9 @@ def cmd_record(args) -> int:
     for m in args.models:
         models += list(case_names()) if m == "all" else [m]
     if free:
-        settings = settings_from_options(
-            engines, args.set or (),
-            classes={e: free_session_class(e).settings_class for e in engines})
+        classes = {e: free_session_class(e).settings_class for e in engines}
+        settings = _with_file(settings_from_options(engines, args.set or (), classes=classes),
+                              args, engines, "free", classes)
         req = free_request(args.duration or RELEASE_DURATION, args.samples)
         for m in dict.fromkeys(models):  # one line, status 2, before any run
             if own.is_model_file(m):  # a user's model: released from its own state
@@ -57,7 +66,8 @@ def cmd_record(args) -> int:
             mech, _ = command_case(m, req["duration"])  # a file without [motion]: refused
             free_mechanism(mech, req)
     else:
-        settings = settings_from_options(engines, args.set or ())
+        settings = _with_file(settings_from_options(engines, args.set or ()), args, engines,
+                              "run")
         req = br.request_dict(args.revolutions, args.samples)
     base = br.record(list(dict.fromkeys(models)), engines, args.out, settings, req,
                      args.tolerance, own_options=_own_options(args, models))
@@ -228,6 +238,9 @@ def register(sub) -> None:
                    help="the baseline file to write (JSON)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (ENGINE.KEY=VALUE for one engine only)")
+    r.add_argument("--settings", metavar="FILE",
+                   help="engine settings from a settings file (xval tune --out; a --free "
+                        "file with --free)")
     r.add_argument("--revolutions", type=opt.revolutions, default=None,
                    help=f"1 to {opt.MAX_REVOLUTIONS} (default {RunRequest.revolutions})")
     r.add_argument("--samples", default=None,  # its range depends on --free: _free_options

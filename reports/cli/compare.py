@@ -20,6 +20,7 @@ from reports.comparison.compare import FAIL, PASS, json_safe, step_note, verdict
 from reports.comparison.progress import engine_progress
 from reports.comparison.quantities import is_engine_reading
 from reports.comparison.runs import engine_list, settings_for
+from reports.comparison.settings_file import apply_settings_file, given_keys, read_settings_file
 from reports.regression.ci_formats import write_compare_outputs  # --junit, --summary
 from sim_models import compile_linkage
 from sim_models.engines.registry import engine_names, skipped_engines
@@ -33,9 +34,13 @@ def cmd_compare(args) -> int:
         return cmd_compare_own(args, _print_compare_text, _verdict_json)
     mech = load_case(args.case)
     engines = engine_list(args.engine, args.mode)
-    settings = settings_for(engines, list(args.set or ()),
-                            {"--timestep": ("timestep", args.timestep),
-                             "--integrator": ("integrator", args.integrator)})
+    flags = {"--timestep": ("timestep", args.timestep),
+             "--integrator": ("integrator", args.integrator)}
+    settings = settings_for(engines, list(args.set or ()), flags)
+    if args.settings:  # a settings file (xval tune --out): the options may not repeat it
+        settings = apply_settings_file(
+            settings, read_settings_file(args.settings, "run"),
+            given_keys(engines, list(args.set or ()), flags))
     if args.engine == "all":  # after every input is checked: bad input stays one line
         note_skipped_engines()
     tree = compile_linkage(mech)  # the analytic solution, once, for every engine
@@ -162,6 +167,9 @@ def register(sub) -> None:
     s.add_argument("--integrator", type=opt.word_choice(opt.MUJOCO_INTEGRATORS),
                    metavar="{" + ",".join(opt.MUJOCO_INTEGRATORS) + "}",
                    help="MuJoCo's integrator (same as --set mujoco.integrator=...)")
+    s.add_argument("--settings", metavar="FILE",
+                   help="engine settings from a settings file (xval tune --out); the "
+                        "options may not set the same keys again")
     s.add_argument("--revolutions", type=opt.revolutions, default=RunRequest.revolutions,
                    help=f"1 to {opt.MAX_REVOLUTIONS}")
     s.add_argument("--samples", type=opt.samples, default=RunRequest.samples,

@@ -27,6 +27,7 @@ from reports.comparison.free_compare import compare_free, reference_samples
 from reports.comparison.free_limits import verdict_of_free
 from reports.comparison.progress import engine_progress
 from reports.comparison.runs import crash_text
+from reports.comparison.settings_file import apply_settings_file, given_keys, read_settings_file
 from reports.regression.baseline import versions
 from reports.regression.ci_formats import CiCase, write_outputs
 from sim_models.engines.ranges import WALL_LIMIT
@@ -53,6 +54,9 @@ def add_options(s) -> None:
     s.add_argument("--timestep", type=opt.timestep,
                    help=f"every engine's largest step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s (needs --engine)")
+    s.add_argument("--settings", metavar="FILE",
+                   help="engine settings from a free-motion settings file (xval tune --free "
+                        "--out; needs --engine)")
     s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
                    help="end the exact integration and each engine's run after this "
                         f"much wall-clock time, {WALL_LIMIT.text()} (default "
@@ -65,17 +69,21 @@ def add_options(s) -> None:
 def engine_options_given(args) -> list[str]:
     """The engine-only options given without ``--engine`` (for the one-line refusal)."""
     named = {"--set": args.set, "--integrator": args.integrator, "--timestep": args.timestep,
-             "--junit": args.junit, "--summary": args.summary}
+             "--settings": args.settings, "--junit": args.junit, "--summary": args.summary}
     return [k for k, v in named.items() if v]
 
 
 def free_settings_for(engines, args) -> dict:
-    """Each engine's free-motion settings: recommended, then the flags, then ``--set``."""
-    return settings_from_options(
-        engines, list(args.set or ()),
-        {"--timestep": ("timestep", args.timestep),
-         "--integrator": ("integrator", args.integrator)},
-        classes={e: free_session_class(e).settings_class for e in engines})
+    """Each engine's free-motion settings: recommended, then the flags, then ``--set``,
+    then ``--settings FILE`` (keys the options do not give)."""
+    flags = {"--timestep": ("timestep", args.timestep),
+             "--integrator": ("integrator", args.integrator)}
+    classes = {e: free_session_class(e).settings_class for e in engines}
+    out = settings_from_options(engines, list(args.set or ()), flags, classes=classes)
+    if getattr(args, "settings", None):
+        out = apply_settings_file(out, read_settings_file(args.settings, "free"),
+                                  given_keys(engines, list(args.set or ()), flags, classes))
+    return out
 
 
 def step_set_by_user(engines, args) -> dict[str, bool]:

@@ -46,6 +46,8 @@ COMMANDS = {
                  "optionally judged in the engines"),
     "import": ("reports.cli.own_import", "read your own MJCF or URDF model and write its "
                "description"),
+    "tune": ("reports.cli.tune", "the cheapest engine settings that pass a tolerance, "
+             "verified (writes settings files and tuned MJCF)"),
 }
 
 #: ``xval --help``'s groups of commands, in the order listed; every command of
@@ -53,7 +55,7 @@ COMMANDS = {
 GROUPS = (
     ("the analytic solver", ("cases", "solve", "sweep", "explain")),
     ("free motion", ("simulate",)),
-    ("the engines against the solver", ("compare", "baseline", "report", "models")),
+    ("the engines against the solver", ("compare", "baseline", "report", "tune", "models")),
     ("your own engine model", ("import",)),
     ("figures and viewing", ("plot", "animate", "view")),
 )

@@ -38,6 +38,7 @@ from analytic.errors import LinkageError
 from analytic.tolerances import ENGINE_RELATIVE
 from reports.comparison.free_cases import command_case, free_case
 from reports.comparison.quantities import judged
+from reports.comparison.settings_file import read_settings_file
 from reports.regression import baseline_check as bc
 from reports.regression import baseline_record as br
 from reports.regression import baseline_store as bs
@@ -189,6 +190,8 @@ class Xval:
             else:
                 _no_own_read(model, own_read)
                 mech = self._free_mechanism(model, duration)
+                if isinstance(settings, (str, os.PathLike)):  # a free settings file (tune)
+                    settings = read_settings_file(settings, "free").overrides(engine)
                 _, v = free_verdict(mech, engine, duration, samples, settings)
         if v.passed:
             return v

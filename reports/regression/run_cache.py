@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import os
 import time
 
 from analytic.errors import LinkageError
@@ -35,10 +36,15 @@ def mech_digest(mech) -> str:
 
 
 def settings_of(engine: str, settings):
-    """A settings object from None (recommended), a dict of overrides, or an object."""
+    """A settings object from None (recommended), a dict of overrides, a settings file's
+    path (``xval tune --out``: the engine's entry, recommended where it has none), or an
+    object."""
     eng = get_engine(engine)
     if settings is None:
         return eng.settings()
+    if isinstance(settings, (str, os.PathLike)):
+        from reports.comparison.settings_file import read_settings_file
+        return eng.settings(read_settings_file(settings, "run").overrides(engine))
     if isinstance(settings, dict):
         return eng.settings(settings)
     return settings

@@ -39,6 +39,7 @@ from reports.comparison import runs as verdict_runs
 from reports.figures.case_figures import render_case
 from reports.figures.study_plots import pareto_frontier_plot
 from reports.report import free_section as report_free
+from reports.report import tune_section as report_tune
 from reports.report.document import Document, file_stem, md_escape  # noqa: F401 - re-exported
 from reports.report.layout import write_page
 from reports.report.tables import (  # noqa: F401 - re-exported
@@ -320,6 +321,7 @@ def build_report(cfg: ReportConfig, progress=None) -> Path:
             per_case[t[0]] += 1
         if cfg.studies and not cfg.cases:  # free motion: its own cases (report_free)
             pending.update(report_free.submit(ex, cfg.quick, ph))
+            pending.update(report_tune.submit(ex, cfg.quick, ph))  # xval tune's table
         if cfg.studies:
             grid_futs, studies["grid_sizes"] = _submit_grids(cfg, ex, cases, ph)
             pending.update(grid_futs)
@@ -356,6 +358,9 @@ def _collect(f, kind, label, src, cfg, ex, ph, results, figures, studies, grid_r
     its runs are in; a grid's Pareto plot once its rows are in)."""
     if kind in ("free", "freegrid"):
         report_free.collect(kind, f, label, studies, ph)
+        return
+    if kind == "tune":
+        report_tune.collect(f, label, studies, ph)
         return
     if kind == "run":
         res = _result_or_error(f)

@@ -26,6 +26,7 @@ from reports.report.tables import (
     verdict_table,
     verdicts_for_reading,
 )
+from reports.report.tune_section import section as tune_section
 
 #: Figures of a case, in page order, with what each shows.
 CASE_FIGURES = {
@@ -131,6 +132,8 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
         doc.table(seeds, "seed_comparison", digits=7, wide=("why the notes differ",))
     if studies.get("free"):
         free_section(doc, studies["free"], cfg.quick)
+    if studies.get("tune"):
+        tune_section(doc, studies["tune"], cfg.quick)
     if studies.get("grids"):
         _speed_section(doc, studies["grids"], cfg)
     if "hard" in studies:

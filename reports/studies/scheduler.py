@@ -95,4 +95,24 @@ class PriorityExecutor(Executor):
             self._thread.join()
 
 
-__all__ = ["PRIORITY", "PriorityExecutor"]
+__all__ = ["PRIORITY", "PriorityExecutor", "dask_executor"]
+
+
+def dask_executor(address: str) -> Executor:
+    """The executor of a Dask distributed client connected to the scheduler at
+    ``address`` (its ``client_to_close`` attribute: the client, to close after); a
+    missing ``distributed`` package or an unreachable scheduler is one line
+    (:class:`analytic.LinkageError`)."""
+    from analytic import LinkageError
+    try:
+        from distributed import Client
+    except ImportError:
+        raise LinkageError("--dask needs the 'distributed' package "
+                           "(pip install 'dask[distributed]')") from None
+    try:
+        client = Client(address)
+    except OSError as e:  # no scheduler there: a user error, one line
+        raise LinkageError(f"--dask: cannot reach a scheduler at {address!r}: {e}") from None
+    ex = client.get_executor()
+    ex.client_to_close = client
+    return ex

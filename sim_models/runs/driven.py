@@ -169,12 +169,14 @@ def instantaneous(mech: Mechanism | SimTree, engine: str,
 
 
 def time_engine(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None,
-                h: float, n: int, repeats: int = 3) -> float:
+                h: float, n: int, repeats: int = 3, clock=None) -> float:
     """Steps per second of ``n`` bare steps of ``h`` s (the session's own
     :meth:`~sim_models.engines.protocol.Session.advance`, the loop the runs use, without
-    readout), best of ``repeats``: :func:`sim_models.runs.timing.time_steps`."""
+    readout), best of ``repeats``: :func:`sim_models.runs.timing.time_steps` (``clock``:
+    its clock, None for wall time)."""
     with open_session(mech, engine, settings) as session:
-        return time_steps(session, h, n, repeats)
+        return time_steps(session, h, n, repeats) if clock is None else \
+            time_steps(session, h, n, repeats, clock)
 
 
 def has_instantaneous(name: str) -> bool:

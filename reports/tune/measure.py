@@ -1,0 +1,217 @@
+"""One measured candidate of the search: an engine run at one setting, judged as the
+verdict judges it, with the process CPU time of the run.
+
+The run and the judging are the verdicts' own: prescribed runs are
+:func:`sim_models.engines.run` with :class:`~sim_models.runs.engine_run.RunRequest`'s
+defaults (what ``xval compare`` runs) compared by
+:func:`reports.comparison.compare.compare_run`; free runs are
+:func:`sim_models.runs.free.run_free` over the case as ``xval simulate --engine``
+releases and samples it, judged by :func:`reports.comparison.free_compare.compare_free`.
+The CPU time is :func:`time.process_time` around the engine run alone (building the
+engine model, stepping, reading out; not the comparison, not the exact reference).
+
+:func:`measure_task` is a picklable top-level function of plain values, so the studies'
+executor (local processes or a Dask cluster) runs it anywhere; it never raises (a
+setting the engine refuses is a result with ``ok = False``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from dataclasses import dataclass, field
+
+from reports.comparison.quantities import judged
+
+#: Prescribed quantity families, by a quantity name's last part (``rocker.alpha``).
+PRESCRIBED_FAMILY = {"alpha": "acceleration", "a": "acceleration", "effort": "force",
+                     "force": "force", "normal": "force", "moment": "force"}
+PRESCRIBED_FAMILIES = ("acceleration", "force")
+#: Free-motion families (:class:`reports.comparison.free_compare.FreeComparison.family`).
+FREE_FAMILIES = ("joint angle", "joint rate", "slider", "slider rate", "angle",
+                 "angular rate", "angular acceleration", "reaction", "energy", "loop")
+
+
+@dataclass(frozen=True)
+class TuneCase:
+    """What is tuned: ``case`` (a built-in name or an absolute file path), ``free``
+    (released under gravity for ``duration`` s, or its own ``[motion]``, judged at
+    ``samples`` times) or prescribed."""
+
+    case: str
+    free: bool = False
+    duration: float | None = None
+    #: free runs: samples judged (None: the description's, as ``xval simulate``)
+    samples: int | None = None
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One candidate's run: ``errors`` quantity -> (family, normalised error, floor);
+    ``unit_steps``: steps per revolution (prescribed) or per simulated second (free);
+    ``steps``: steps the run took; ``cpu``: process CPU seconds of the run; ``units``:
+    revolutions or simulated seconds run."""
+
+    overrides: dict
+    ok: bool
+    reason: str
+    errors: dict = field(default_factory=dict)
+    unit_steps: float = math.nan
+    steps: int = 0
+    cpu: float = math.nan
+    units: float = 1.0
+    settings_text: str = ""
+    #: s per step of the bare stepping loop (best of a few; NaN: not timed)
+    step_cost: float = math.nan
+    #: process CPU s of the whole task (run, judging, timing): what the budget counts
+    task_cpu: float = 0.0
+
+    def worst(self, family: str | None = None) -> tuple[str, float]:
+        """The judged quantity of ``family`` (None: all) with the largest error, and it
+        (``("", inf)`` for a run that failed)."""
+        if not self.ok:
+            return "", math.inf
+        sel = [(q, e) for q, (f, e, _fl) in self.errors.items() if family in (None, f)]
+        if not sel:
+            return "", math.nan
+        q, e = max(sel, key=lambda x: x[1] if math.isfinite(x[1]) else math.inf)
+        return q, (e if math.isfinite(e) else math.inf)
+
+    def floor(self, family: str | None = None) -> float:
+        """The largest arithmetic error floor of the family's quantities (0: float64)."""
+        return max((fl for f, _e, fl in self.errors.values() if family in (None, f)),
+                   default=0.0)
+
+
+# ============================================================================ cases
+@functools.lru_cache(maxsize=8)
+def prescribed_tree(case: str):
+    """The compiled linkage of ``case`` (once per worker process)."""
+    from analytic import load_case
+    from sim_models import compile_linkage
+    return compile_linkage(load_case(case))
+
+
+@functools.lru_cache(maxsize=4)
+def free_reference(case: str, duration: float | None, samples: int | None = None):
+    """``(mech, traj, request, reference samples)`` of a free case as ``xval simulate
+    --engine`` runs it (``samples``: judged times, None: the description's; once per
+    worker process)."""
+    from analytic.free_motion import simulate
+    from reports.comparison.free_cases import command_case
+    from reports.comparison.free_compare import reference_samples
+    from sim_models.runs.free_run import FreeRequest
+    mech, _release = command_case(case, duration)
+    traj = simulate(mech, duration)
+    n = samples or mech.motion.samples
+    req = FreeRequest(duration=traj.duration, samples=max(1, n - 1))
+    return mech, traj, req, reference_samples(traj, req.times())
+
+
+def unit_time(tc: TuneCase) -> float:
+    """One revolution's duration (prescribed) or 1 s (free): what ``unit_steps`` counts
+    steps per."""
+    if tc.free:
+        return 1.0
+    from sim_models.engines.protocol import travel_time
+    return float(travel_time(prescribed_tree(tc.case).mech.driver, 2 * math.pi))
+
+
+def settings_of(tc: TuneCase, engine: str, overrides: dict):
+    """The engine's settings for the case's mode with ``overrides``."""
+    from reports.comparison.settings_file import settings_class
+    return settings_class(engine, "free" if tc.free else "run").from_overrides(overrides,
+                                                                               engine)
+
+
+# ============================================================================ the task
+#: Steps of the bare-loop timing of a candidate (at most; the run's own count if fewer)
+#: and its repeats (the best is kept: a shared machine's load only adds time).
+TIMING_STEPS, TIMING_REPEATS = 2000, 3
+
+
+def measure_task(tc: TuneCase, engine: str, overrides: dict, timed: bool = False) -> Measured:
+    """Run ``engine`` on ``tc`` at ``overrides`` of its recommended settings and judge it
+    (see the module docstring); ``timed``: also time the bare stepping loop at these
+    settings (the studies' timing, :func:`sim_models.engines.time_engine`, free runs
+    :func:`sim_models.runs.timing.time_free_steps`, on the process CPU clock) for the
+    cost model.  Never raises."""
+    t0 = time.process_time()
+    try:
+        s = settings_of(tc, engine, overrides)
+        m = _free(tc, engine, s, overrides, timed) if tc.free else \
+            _prescribed(tc, engine, s, overrides, timed)
+    except Exception as e:  # noqa: BLE001 - a refused setting is a measured result
+        m = Measured(dict(overrides), False, f"{type(e).__name__}: {e}")
+    return dataclasses.replace(m, task_cpu=time.process_time() - t0)
+
+
+def _prescribed(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> Measured:
+    from reports.comparison.compare import compare_run
+    from sim_models.runs.driven import run
+    from sim_models.runs.engine_run import RunRequest
+    tree = prescribed_tree(tc.case)
+    req = RunRequest()
+    t0 = time.process_time()
+    r = run(tree, engine, s, revolutions=req.revolutions, samples=req.samples,
+            max_violation=req.max_violation, max_speed_error=req.max_speed_error)
+    cpu = time.process_time() - t0
+    comps = judged(compare_run(r)) if r.ok else []
+    errs = {c.quantity: (PRESCRIBED_FAMILY.get(c.quantity.rsplit(".", 1)[-1],
+                                               c.quantity.rsplit(".", 1)[-1]),
+                         float(c.normalised) if c.measured else math.inf, float(c.floor))
+            for c in comps}
+    cost = math.nan
+    if timed and r.ok and r.steps > 0:
+        from sim_models.runs.driven import time_engine
+        sps = time_engine(tree, engine, s, r.timestep, TIMING_STEPS, TIMING_REPEATS,
+                          time.process_time)
+        cost = 1.0 / sps if sps > 0 else math.nan
+    return Measured(dict(overrides), bool(r.ok), r.reason or "", errs,
+                    float(r.steps_per_rev), int(r.steps), cpu, float(req.revolutions),
+                    s.describe(), cost)
+
+
+def _free(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> Measured:
+    from reports.comparison.free_compare import compare_free
+    from sim_models.runs.free import run_free
+    mech, traj, req, ref = free_reference(tc.case, tc.duration, tc.samples)
+    t0 = time.process_time()
+    r = run_free(mech, engine, s, req, traj)
+    cpu = time.process_time() - t0
+    v = compare_free(r, traj, ref)
+    errs = {c.quantity: (c.family, float(c.normalised) if c.measured else math.inf, 0.0)
+            for c in v.judged}
+    if not v.has_loop:
+        errs.pop("loop.gap", None)
+    dur = float(req.duration)
+    cost = math.nan
+    if timed and r.ok and r.steps > 0:
+        cost = _free_step_cost(mech, engine, r, traj)
+    return Measured(dict(overrides), bool(r.ok), r.reason or "", errs,
+                    float(r.steps) / dur, int(r.steps), cpu, dur, s.describe(), cost)
+
+
+def _free_step_cost(mech, engine: str, r, traj) -> float:
+    """s per step of the bare free stepping loop from the released state (the free
+    grid's timing, :func:`sim_models.runs.timing.time_free_steps`, over TIMING_STEPS)."""
+    import numpy as np
+
+    from sim_models.engines.free_protocol import free_start
+    from sim_models.runs.free import open_free_session
+    from sim_models.runs.timing import time_free_steps
+    session = open_free_session(mech, engine, r.settings)
+    try:
+        start = free_start(session.tree, traj.at(np.array([0.0]), forces=False))
+        sps = time_free_steps(session, start, float(r.timestep), TIMING_STEPS,
+                              TIMING_REPEATS, time.process_time)
+    finally:
+        session.close()
+    return 1.0 / sps if sps > 0 else math.nan
+
+
+__all__ = ["FREE_FAMILIES", "Measured", "PRESCRIBED_FAMILIES", "PRESCRIBED_FAMILY",
+           "TuneCase", "free_reference", "measure_task", "prescribed_tree", "settings_of",
+           "unit_time"]
