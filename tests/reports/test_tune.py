@@ -20,8 +20,8 @@ from reports.tune.model import MARK, attribute_differences, tuned_model_text
 from sim_models import compile_linkage
 from sim_models.engines.registry import available_engines
 
-from ..sim_models.test_settings_ranges import ENGINES as RANGE_ENGINES
-from ..sim_models.test_settings_ranges import IMPOSSIBLE
+from ..sim_models.engines.test_settings_ranges import ENGINES as RANGE_ENGINES
+from ..sim_models.engines.test_settings_ranges import IMPOSSIBLE
 
 #: The tolerance of the per-engine tests: 1e-3 of peak, the report's first column.
 TOL = 1e-3
