@@ -5,14 +5,10 @@ in one engine step (:func:`free_step_note`)."""
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from analytic.mechanism import Revolute
-
-if TYPE_CHECKING:
-    from reports.comparison.free_compare import FreeVerdict
 
 #: A failed verdict names a reference event within this fraction of the run's duration
 #: of the time the trust was lost (the first tolerance excess): an error that starts
@@ -26,11 +22,12 @@ NEAR_EVENT_FRACTION = 0.05
 EVENT_KINDS = ("switch", "singular", "limit")
 
 
-def near_free_event(v: FreeVerdict, events) -> str | None:
-    """For a failed verdict: the reference event (:data:`EVENT_KINDS`) nearest the time
-    the trust was lost (its trusted horizon), when within :data:`NEAR_EVENT_FRACTION`
-    of the duration and nearer than halfway to the event's neighbours (the events
-    before and after it, or the run's start and end); else None."""
+def near_free_event(v, events) -> str | None:
+    """For a failed verdict ``v`` (a :class:`~reports.comparison.free_compare.FreeVerdict`):
+    the reference event (:data:`EVENT_KINDS`) nearest the time the trust was lost (its
+    trusted horizon), when within :data:`NEAR_EVENT_FRACTION` of the duration and nearer
+    than halfway to the event's neighbours (the events before and after it, or the run's
+    start and end); else None."""
     t_lost = v.horizon
     if not math.isfinite(t_lost):
         return None

@@ -13,6 +13,7 @@ import pytest
 
 from analytic import load_case
 from analytic.free_motion import simulate
+from reports.comparison import free_advice
 from reports.comparison import free_compare as fc
 from reports.comparison.iftomm import grounded_point
 from sim_models.builders.free_cases import released
@@ -122,7 +123,7 @@ def test_constant_quantity_is_judged_on_its_family_scale():
 def test_failed_verdict_names_the_nearest_reference_event():
     mech = released(load_case("seed-four-bar"), 1.0)
     traj = simulate(mech)
-    ev = next(e for e in traj.events if e.kind in fc.EVENT_KINDS)
+    ev = next(e for e in traj.events if e.kind in free_advice.EVENT_KINDS)
     # a joint angle that leaves the reference at the event, fast: the trust is lost
     # within a few ms of it
     run = synthetic_run(traj, 1.0, 200, x_drift=(0, 50.0, ev.t))
@@ -167,7 +168,7 @@ def test_an_event_is_named_only_nearer_than_halfway_to_its_neighbours():
 
     def named(t_lost):
         v = SimpleNamespace(horizon=t_lost, duration=20.0, lost_by=lost)
-        return fc.near_free_event(v, events)
+        return free_advice.near_free_event(v, events)
     assert named(0.10) is None                      # 0.62 s before, 0.72 s from the start
     assert named(0.30) is None                      # 0.42 s before, 0.30 s from the start
     msg = named(1.244 - 0.05)
