@@ -41,7 +41,7 @@ from ..engines.pybullet.driven import (
 )
 from ..engines.pybullet.free import PybulletFreeSession, PybulletFreeSettings
 from ..runs.engine_run import Recorder
-from ..runs.newton_euler import reconstruct
+from ..runs.newton_euler import joint_readout
 from .describe import Imported
 from .mujoco_own import Mapping
 
@@ -193,16 +193,8 @@ class OwnPybulletSession(PybulletSession):
         qdd = (tv1 - tv) / h[:, None]
         vm = 0.5 * (tv + tv1) if s.midpoint_velocity else tv
         prop, gap, rate = rec.put_motions(rows, times, tq, vm, qdd)
-        th, om, al, org, _, a_org = prop
-        K, J = len(raws), len(self.jnames)
-        F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf)
-        force = np.full((K, J, 2), np.nan)
-        for name, val in F.items():
-            force[:, self.jnames.index(name)] = val
-        names = [st.mech.joints[k].name for k in st.prismatic]
-        normal = np.array([Nn[n] for n in names]).reshape(len(names), K).T
-        moment = np.array([M[n] for n in names]).reshape(len(names), K).T
-        rec.put_forces_many(rows, force, eff, normal, moment)
+        jr = joint_readout(st, prop, cf, self.jnames)
+        rec.put_forces_many(rows, jr.force, jr.effort, jr.normal, jr.moment)
         return gap, rate
 
 

@@ -14,6 +14,7 @@ dynamics, not the analytic solution.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -53,6 +54,34 @@ def reconstruct(st: SimTree, theta, omega, alpha, origin, a_origin, chord_force)
     for i, ch in enumerate(st.chords):
         force[ch.name] = chord_force[:, i]
     return force, normal, moment, effort
+
+
+@dataclass(frozen=True)
+class JointReadout:
+    """:func:`reconstruct`'s forces as a recorder takes them, for K records: ``force``
+    (K, J, 2) by body_a on body_b at each joint of ``joint_names`` (NaN where none is
+    reconstructed), ``effort`` (K,) the drive's, ``normal`` and ``moment`` (K, P) at the
+    prismatic tree joints (``st.prismatic`` order)."""
+
+    force: np.ndarray
+    effort: np.ndarray
+    normal: np.ndarray
+    moment: np.ndarray
+
+
+def joint_readout(st: SimTree, prop, chord_force, joint_names: list[str]) -> JointReadout:
+    """:func:`reconstruct` on the propagated motion ``prop`` (the recorder's
+    ``(theta, omega, alpha, origin, _, a_origin)`` of K records), laid out per joint."""
+    th, om, al, org, _, a_org = prop
+    F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, chord_force)
+    K, J = len(th), len(joint_names)
+    force = np.full((K, J, 2), np.nan)
+    for name, val in F.items():
+        force[:, joint_names.index(name)] = val
+    names = [st.mech.joints[k].name for k in st.prismatic]
+    normal = np.array([Nn[n] for n in names]).reshape(len(names), K).T
+    moment = np.array([M[n] for n in names]).reshape(len(names), K).T
+    return JointReadout(force, eff, normal, moment)
 
 
 def _body_wrenches(st: SimTree, theta, omega, alpha, origin, a_origin):

@@ -48,7 +48,7 @@ import numpy as np
 
 from ...builders.tree import SimModelError, SimTree
 from ...builders.urdf import build_urdf, link_offsets
-from ...runs.newton_euler import reconstruct
+from ...runs.newton_euler import joint_readout
 from .. import ranges
 from ..protocol import (
     EngineRefusal,
@@ -382,21 +382,13 @@ class PybulletSession(PybulletModel, Session):
         # velocity at the sample is the mean of v_n and v_{n+1} (second order)
         vm = 0.5 * (v + v1) if s.midpoint_velocity else v
         prop, gap, rate = rec.put_motions(rows, times, q, vm, qdd)
-        th, om, al, org, _, a_org = prop
-        K, J = len(raws), len(self.jnames)
-        F, Nn, M, eff = reconstruct(st, th, om, al, org, a_org, cf)
-        force = np.full((K, J, 2), np.nan)
-        for name, val in F.items():
-            force[:, self.jnames.index(name)] = val
-        names = [st.mech.joints[k].name for k in st.prismatic]
-        normal = np.array([Nn[n] for n in names]).reshape(len(names), K).T
-        moment = np.array([M[n] for n in names]).reshape(len(names), K).T
-        engine = np.full_like(force, np.nan)
+        jr = joint_readout(st, prop, cf, self.jnames)
+        engine = np.full_like(jr.force, np.nan)
         for ti, tj in enumerate(st.joints):
             engine[:, tj.joint] = self.sig[ti] * rf1[:, ti]
         for ci, ch in enumerate(st.chords):
             engine[:, ch.joint] = cf1[:, ci]
-        rec.put_forces_many(rows, force, eff, normal, moment, force_engine=engine,
+        rec.put_forces_many(rows, jr.force, jr.effort, jr.normal, jr.moment, force_engine=engine,
                             effort_engine=st.driver_sigma * tau)
         return gap, rate
 
