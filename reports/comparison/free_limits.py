@@ -61,10 +61,11 @@ _PYBULLET_STEP = (
 #: :data:`sim_models.runs.free_step.MAX_TURN_PER_STEP`); Pinocchio at the step chosen
 #: from the motion, 6.56e-4 s (run as 6.25e-4 s: 8 steps a 5 ms sample interval; at its
 #: 1e-3 s a body turned 0.229 rad a step and it stopped by its loop gap at 0.385 s).
-#: MuJoCo Warp completes at that step too (it stopped at 1e-3 s, at 1.935 s) but is not
-#: listed: its worst error (10.8 at 6.25e-4 s, 0.18 at 3.3e-4 s, 0.88 at 1.6e-4 s) does
-#: not fall with the step as a second-order integrator's does (float32 arithmetic), so
-#: its cause is not measured and it stays a FAIL.
+#: MuJoCo Warp completes at that step too (it stopped at 1e-3 s, at 1.935 s): its worst
+#: error is 10.8-11 at 6.25e-4 s (0.18 at 3.3e-4 s, 0.88 at 1.6e-4 s), and MuJoCo float64
+#: with Warp's free settings (invweight_scale 3e-2, 1000 iterations, tolerance 1e-10) at
+#: the same step gives 10.4 (0.99 at 3.3e-4 s): the step and the soft loop at the limit
+#: positions, not float32 (tests/reports/test_free_limits.py measures the float64 run).
 _QUICK_RETURN = (
     ("mujoco", 2.24,
      "the step and MuJoCo's soft loop constraint: worst 2.24 at 5e-4 s (6.6 deg of the "
@@ -79,6 +80,10 @@ _QUICK_RETURN = (
      "the step of Exudyn's generalized-alpha: worst 0.983 at 5e-4 s, 0.254 at 1.25e-4 s "
      "(horizon 0.155 -> 0.771 s); passes at 3.125e-5 s (0.41 deg of the crank a step at "
      "its 229 rad/s)"),
+    ("mujoco_warp", 11.0,
+     "the step and the soft loop, not float32: worst 11 at 6.25e-4 s, the step chosen "
+     "from the motion (0.18 at 3.3e-4 s); MuJoCo float64 with Warp's free settings at the "
+     "same step gives 10.4, through the simultaneous limit positions at 0.1566 s"),
     ("pinocchio", 5.73,
      "the step of Pinocchio's RK4 with its Baumgarte loop closure: worst 5.73 (A.x) at "
      "6.25e-4 s, the step chosen from the motion, 2.18 at 5e-4 s, 0.98 at 2.5e-4 s, "
