@@ -29,7 +29,8 @@ from sim_models.runs.engine_run import RunRequest
 
 def cmd_compare(args) -> int:
     """``xval compare``: verdict runs of the chosen engines on one compiled linkage."""
-    if str(args.case).lower().endswith((".xml", ".urdf")):  # the user's own engine model
+    # a user's engine model (an SDF file is refused there, in one line)
+    if str(args.case).lower().endswith((".xml", ".urdf", ".sdf")):
         from reports.cli.own_compare import cmd_compare_own
         return cmd_compare_own(args, _print_compare_text, _verdict_json)
     mech = load_case(args.case)

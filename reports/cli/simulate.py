@@ -77,7 +77,8 @@ def _frame(mech, smp):
 
 
 def cmd_simulate(args) -> int:
-    if str(args.case).lower().endswith((".xml", ".urdf")):  # the user's own engine model
+    # a user's engine model (an SDF file is refused there, in one line)
+    if str(args.case).lower().endswith((".xml", ".urdf", ".sdf")):
         from reports.cli.own_simulate import cmd_simulate_own
         return cmd_simulate_own(args, _print_table)
     if args.json and args.csv == "-":

@@ -51,3 +51,16 @@ def test_out_is_not_the_model(tmp_path, capsys):
     p.write_text(um.four_bar_xml())
     code, _ = run("import", str(p), "--out", str(p))
     assert code == 2 and "overwrite the input" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", [("import", "--out", "m.toml"), ("compare",),
+                                     ("simulate", "--engine", "mujoco")])
+def test_an_sdf_model_is_refused_in_one_line_at_every_door(tmp_path, capsys, monkeypatch,
+                                                             command):
+    """SDF has no maintained parser installed: every command that takes a user's model
+    says so in one line (compare and simulate read it as a malformed TOML before)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.sdf").write_text('<sdf version="1.7"><model name="m"></model></sdf>')
+    code, _ = run(command[0], "m.sdf", *command[1:])
+    err = capsys.readouterr().err
+    assert code == 2 and "SDF models are not read" in err and err.count("\n") == 1, err
