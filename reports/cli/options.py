@@ -89,18 +89,24 @@ def _shown(v: float) -> str:
     return f"{v:g}" if float(f"{v:g}") == v else f"{v:.12g}"
 
 
+def finite_number(text: str) -> float:
+    """An argparse type: any finite float (its range checked where it is used)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text} is not a finite number")
+    return v
+
+
 def finite_float(limit: float, unit: str, lo: float | None = None, why: str = "",
                  scale: float = 1.0):
     """An argparse type: a finite float with ``|x| <= limit`` (or ``lo <= x <= limit``).
 
     ``limit``/``lo`` are SI; ``scale`` converts the typed value to SI (degrees)."""
     def parse(text: str) -> float:
-        try:
-            v = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{text} is not a finite number")
+        v = finite_number(text)
         si = v * scale
         top = limit * (1 + RANGE_ROUND_OFF)  # the printed bound itself is accepted
         if (abs(si) <= top) if lo is None else (lo <= si <= top):

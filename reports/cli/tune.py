@@ -9,8 +9,6 @@ run fails; 2 a bad input (one line)."""
 
 from __future__ import annotations
 
-import argparse
-import math
 from pathlib import Path
 
 from analytic.motion_spec import MAX_DURATION
@@ -18,20 +16,6 @@ from reports.cli import options as opt
 from reports.cli.paths import check_outputs
 from reports.comparison.free_cases import MIN_DURATION
 from sim_models.engines.registry import engine_names
-
-
-def _number(option: str):
-    """An argparse type: a finite number (its range is checked by the search, one line
-    naming ``option``)."""
-    def parse(text: str) -> float:
-        try:
-            v = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        if not math.isfinite(v):
-            raise argparse.ArgumentTypeError(f"{text} is not a finite number")
-        return v
-    return parse
 
 
 def cmd_tune(args) -> int:
@@ -117,7 +101,7 @@ def register(sub) -> None:
     s = sub.add_parser("tune", help="the cheapest engine settings that pass a tolerance")
     s.add_argument("case", type=opt.case_or_file, help="built-in case name or TOML file")
     s.add_argument("--engine", required=True, choices=engine_names())
-    s.add_argument("--tolerance", type=_number("--tolerance"), default=1e-3,
+    s.add_argument("--tolerance", type=opt.finite_number, default=1e-3,
                    help="largest normalised error (of peak) on every judged quantity "
                         "(default 1e-3)")
     s.add_argument("--quantity", metavar="FAMILY", default=None,
@@ -131,7 +115,7 @@ def register(sub) -> None:
                    default=None,
                    help="free run duration, s (default: the release rule's 2 s, or the "
                         "file's)")
-    s.add_argument("--budget", type=_number("--budget"), default=60.0,
+    s.add_argument("--budget", type=opt.finite_number, default=60.0,
                    help="CPU seconds the search's runs may take (default 60)")
     s.add_argument("--seed", type=opt.int_range(0, 2 ** 31 - 1), default=0,
                    help="orders the search's waves (same seed and budget: same answer)")
