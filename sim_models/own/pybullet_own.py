@@ -21,10 +21,7 @@ and drive effort by Newton-Euler from the loop forces, projected on the plane).
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import os
-import sys
 
 import numpy as np
 
@@ -36,7 +33,7 @@ from ..engines.pybullet.driven import (
     PybulletSession,
     PybulletSettings,
     PybulletSim,
-    _quiet_stderr,
+    _quiet_fd,
     _require_pybullet,
 )
 from ..engines.pybullet.free import PybulletFreeSession, PybulletFreeSettings
@@ -44,21 +41,6 @@ from ..runs.engine_run import Recorder
 from ..runs.newton_euler import joint_readout
 from .describe import Imported
 from .mujoco_own import Mapping
-
-
-@contextlib.contextmanager
-def _quiet_stdout():
-    """File descriptor 1 to /dev/null for the block: PyBullet's URDF importer prints its
-    warnings (b3Warning) there, into xval's output."""
-    sys.stdout.flush()
-    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(null, 1)
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(null)
 
 
 class OwnPybulletSim(PybulletSim):
@@ -78,7 +60,7 @@ class OwnPybulletSim(PybulletSim):
                                     numSolverIterations=int(s.solver_iterations),
                                     solverResidualThreshold=float(s.residual_threshold),
                                     erp=float(s.erp), physicsClientId=cid)
-        with _quiet_stdout(), _quiet_stderr():  # its importer prints (a link without inertia)
+        with _quiet_fd(1), _quiet_fd(2):  # its importer prints (b3Warning: a link without inertia)
             self.body = b = p.loadURDF(str(c.path), useFixedBase=True,
                                        flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
         by_joint, by_link = {}, {p.getBodyInfo(b, physicsClientId=cid)[0].decode(): -1}

@@ -403,19 +403,25 @@ def _require_pybullet():
 
 
 @contextlib.contextmanager
-def _quiet_stderr():
-    """File descriptor 2 to /dev/null for the block (a C library's own prints), so that
-    xval's standard error holds only its messages (one line for an error)."""
+def _quiet_fd(fd: int):
+    """File descriptor ``fd`` (1 standard output, 2 standard error) to /dev/null for the
+    block: a C library's own prints (PyBullet's importer warnings, its solver notes), so
+    that xval's output holds only its own lines (one line for an error)."""
     import sys
-    sys.stderr.flush()
-    saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    (sys.stdout if fd == 1 else sys.stderr).flush()
+    saved, null = os.dup(fd), os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(null, 2)
+        os.dup2(null, fd)
         yield
     finally:
-        os.dup2(saved, 2)
+        os.dup2(saved, fd)
         os.close(saved)
         os.close(null)
+
+
+def _quiet_stderr():
+    """:func:`_quiet_fd` on standard error."""
+    return _quiet_fd(2)
 
 
 __all__ = ["PybulletSession", "PybulletSettings", "PybulletSim"]
