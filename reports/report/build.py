@@ -54,7 +54,7 @@ from reports.studies import speed_accuracy as S
 from reports.studies import speed_accuracy as studies
 from reports.studies.hard_cases import hard_cases
 from reports.studies.scene import scene_economy, scene_figure
-from reports.studies.scheduler import PriorityExecutor
+from reports.studies.scheduler import PriorityExecutor, dask_executor
 from sim_models import compile_linkage, make_settings
 from sim_models.engines.registry import available_engines
 from sim_models.runs.engine_run import RunRequest
@@ -129,19 +129,7 @@ def make_executor(cfg: ReportConfig) -> Executor:
     """A process pool (workers silenced on standard output), or the executor of a Dask
     distributed client."""
     if cfg.dask:
-        try:
-            from distributed import Client
-        except ImportError:
-            from analytic import LinkageError
-            raise LinkageError("--dask needs the 'distributed' package "
-                               "(pip install 'dask[distributed]')") from None
-        try:
-            client = Client(cfg.dask)
-        except OSError as e:  # no scheduler there: a user error, one line
-            raise LinkageError(f"--dask: cannot reach a scheduler at {cfg.dask!r}: {e}") from None
-        ex = client.get_executor()
-        ex.client_to_close = client
-        return ex
+        return dask_executor(cfg.dask)
     return ProcessPoolExecutor(max_workers=cfg.workers or os.cpu_count() or 2,
                                initializer=_quiet_worker)
 
