@@ -23,11 +23,6 @@ from sim_models.own.pybullet_own import run_prescribed_pybullet
 from sim_models.runs.engine_run import RunRequest
 
 
-def is_model_file(path: str | None) -> bool:
-    """Whether ``path`` names a user's engine model (MJCF, ``.xml``)."""
-    return bool(path) and str(path).lower().endswith(".xml")
-
-
 def cmd_compare_own(args, print_text, verdict_json) -> int:
     """``xval compare MODEL.xml``: see the module.  ``print_text`` and ``verdict_json``
     are ``xval compare``'s table printer and JSON object (handed over: no import cycle)."""

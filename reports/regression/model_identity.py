@@ -23,10 +23,8 @@ _NOT_MODEL = frozenset({"description", "source"})
 
 
 def _value(v):
-    """A JSON value: tuples as lists, non-finite floats as text (JSON has none), a
-    dataclass inside a tuple (a [motion]'s springs, dampers, motors) as its fields."""
-    if dataclasses.is_dataclass(v) and not isinstance(v, type):
-        return {f.name: _value(getattr(v, f.name)) for f in dataclasses.fields(v)}
+    """A JSON value: tuples as lists, non-finite floats as text (JSON has none).  (A
+    tuple of records, a [motion]'s force elements, is flattened by :func:`_flatten`.)"""
     if isinstance(v, (tuple, list)):
         return [_value(x) for x in v]
     if isinstance(v, float) and not math.isfinite(v):
