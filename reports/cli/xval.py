@@ -37,17 +37,17 @@ COMMANDS = {
     "compare": ("reports.cli.compare", "run engines and compare with the analytic solution"),
     "baseline": ("reports.cli.baseline", "record engine errors, later check them for drift"),
     "report": ("reports.cli.report", "the validation report (HTML, Markdown, CSV)"),
-    "plot": ("reports.cli.plot", "full-cycle curves of one linkage (engines optional), or "
-             "its free motion"),
-    "animate": ("reports.cli.animate", "the linkage moving through a cycle, or in free "
-                "motion (GIF, MP4, HTML)"),
+    "plot": ("reports.cli.plot", "curves over a cycle (engines optional), or of the free "
+             "motion"),
+    "animate": ("reports.cli.animate", "the linkage moving over a cycle or in free motion "
+                "(GIF, MP4, HTML)"),
     "view": ("reports.cli.view", "MuJoCo's viewer on the linkage (needs a display)"),
-    "simulate": ("reports.cli.simulate", "the exact trajectory of a released linkage, "
-                 "optionally judged in the engines"),
+    "simulate": ("reports.cli.simulate", "the exact released trajectory, optionally judged "
+                 "in the engines"),
     "import": ("reports.cli.own_import", "read your own MJCF or URDF model and write its "
                "description"),
     "tune": ("reports.cli.tune", "the cheapest engine settings that pass a tolerance, "
-             "verified (writes settings files and tuned MJCF)"),
+             "verified"),
 }
 
 #: ``xval --help``'s groups of commands, in the order listed; every command of
@@ -67,11 +67,12 @@ ABOUT = ("xval: cross-validation of planar linkage dynamics: the analytic vector
 #: ``xval --help``'s text after the command list.
 EXIT_STATUS = (
     "Run 'xval COMMAND --help' for a command's options.\n\n"
-    "Exit status: 0 done; 1 a failed verdict; 2 a user error (a bad file, case, option or\n"
-    "input value, an angle where the loops cannot close, a singular position, an output\n"
-    "file that cannot be written), reported as one line on standard error that names the\n"
-    "problem and where it is; 141 when the reader of the output stops reading\n"
-    "(xval sweep ... | head).  Any other failure is a bug in xval.")
+    "Exit status: 0 done; 1 a failed verdict; 2 a user error (a bad file, case,\n"
+    "option or input value, an angle where the loops cannot close, a singular\n"
+    "position, an output file that cannot be written), reported as one line on\n"
+    "standard error that names the problem and where it is; 141 when the reader of\n"
+    "the output stops reading (xval sweep ... | head).  Any other failure is a bug\n"
+    "in xval.")
 
 
 def commands_text() -> str:

@@ -57,6 +57,8 @@ def test_help_is_plain_text_and_lists_every_command_in_a_group():
             assert re.search(rf"^  {n} +{re.escape(COMMANDS[n][1])}$", out, re.M), n
     for n in ("compare", "report", "simulate", "baseline", "explain"):
         assert re.search(rf"^  {n} ", out, re.M)
+    wide = [ln for ln in out.splitlines() if len(ln) > 80]
+    assert not wide, f"wider than an 80-column terminal: {wide}"
 
 
 def test_command_help_names_its_command():
