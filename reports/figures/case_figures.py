@@ -7,7 +7,8 @@ so a test can recompute from them what a reader sees and hold it against the ver
 at, through every sample); the engine markers sit at the samples, and each engine's
 error panel is :func:`reports.comparison.reference.sample_errors` of
 :func:`reports.comparison.reference.reference_of`, the reference the verdict compares with.
-Angles: the analytic line is unwrapped along the input; an engine's angle is drawn at
+Angles: the analytic line is unwrapped along the input and moved by whole turns to start
+in the tables' range, (-180, 180] deg (:func:`table_turn`); an engine's angle is drawn at
 the line's value plus the engine-minus-analytic difference wrapped to [-180, 180) deg.
 """
 
@@ -143,7 +144,7 @@ def _motion_figures(linkage, lu, lkin, runs, refs, idx) -> list[tuple]:
     # the engine at the line plus the wrapped difference at its own sample)
     curves = []
     for b in moving:
-        y = np.degrees(np.unwrap(lkin.theta[:, b]))
+        y = table_turn(np.degrees(np.unwrap(lkin.theta[:, b])))
         mk = {}
         for e, r in runs.items():
             at = y[idx[e]]
@@ -169,6 +170,19 @@ def _motion_figures(linkage, lu, lkin, runs, refs, idx) -> list[tuple]:
             curves.append(Curve(jn, lu, lkin.slider(jn)[2], mk, f"{jn}.a"))
         out.append(("slider", "slider accelerations", "s'' (m/s^2)", curves))
     return out
+
+
+def table_turn(y: np.ndarray) -> np.ndarray:
+    """An unwrapped body-angle line (deg, along the plotted input) moved by whole turns
+    so that it starts in (-180, 180] deg, the range of the tables' ``angle_deg``
+    (:func:`analytic.sweep.to_frame`): a crank sampled on its second turn (an
+    accelerating input's verdict turn) reads 0 to 360 deg, as its input does on the
+    axis, not 360 to 720."""
+    y = np.asarray(y, float)
+    finite = y[np.isfinite(y)]
+    if not finite.size:
+        return y
+    return y - 360.0 * math.ceil((float(finite[0]) - 180.0) / 360.0)
 
 
 def _extra_figures(linkage, lu, lkin, runs, refs, extra, tree) -> list[tuple]:
@@ -358,4 +372,5 @@ def render_case(label: str, runs: dict, comparisons: dict, mech, tolerance: floa
 
 __all__ = ["Curve", "CurveFigure", "ErrorFigure", "FAMILIES", "case_figure_data",
            "motion_text",
-           "curve_figures", "error_figure", "linkage_figure", "render", "render_case"]
+           "curve_figures", "error_figure", "linkage_figure", "render", "render_case",
+           "table_turn"]

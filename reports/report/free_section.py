@@ -131,16 +131,15 @@ def section(doc, free: dict, quick: bool) -> None:
               "recommended setting for a reason in the engine (reports/comparison/free_limits.py "
               "lists each with its measurement); it is reported, and not counted in the "
               "exit status while its run completes with its error within the measured "
-              "bound. Every other failed verdict makes `xval report` exit with status 1.")
+              "bound. Every other failed verdict makes xval report exit with status 1.")
     for case, res in free["cases"].items():
         if not res.get("png"):
             continue
-        doc.h(2, f"{case} (free)")
-        for key, cap in (("trajectory", "released joint: exact line, engine markers"),
-                         ("error", "error against time, tolerance and trusted horizon"),
-                         ("drift", "energy and loop-closure drift")):
-            if key in res["png"]:
-                doc.image(res["png"][key], f"free-{case}-{key}", f"{case}: {cap}")
+        rows = vt[vt["case"] == case]
+        ok = int((rows["verdict"] == "pass").sum())
+        page = doc.page(f"free-{case}", f"{case} (free motion): case details",
+                        f"{case} (free)", f"- {ok}/{len(rows)} pass")
+        _case_page(page, case, res, rows)
     rows = [r for res in free["cases"].values() for r in res["rows"]] + list(free["grid"])
     if free["grid"]:
         _grid(doc, FS.frame(free["grid"]))
@@ -156,6 +155,19 @@ def section(doc, free: dict, quick: bool) -> None:
             doc.table(ift, "free_iftomm", "IFToMM-style rows", fold=None)
     for e in free["errors"]:
         doc.p(f"not run: {e}")
+
+
+def _case_page(page, case: str, res: dict, rows: pd.DataFrame) -> None:
+    """A free case's page: its verdict rows and its three figures."""
+    page.h(1, f"{case} (free)")
+    page.table(rows.drop(columns=["settings"]), "free_verdicts", f"{case}: free-motion "
+               "verdicts", wide=("note", "run", "not read (not judged)"), fold=None,
+               whole="free_verdicts")
+    for key, cap in (("trajectory", "released joint: exact line, engine markers"),
+                     ("error", "error against time, tolerance and trusted horizon"),
+                     ("drift", "energy and loop-closure drift")):
+        if key in res["png"]:
+            page.image(res["png"][key], f"free-{case}-{key}", f"{case}: {cap}")
 
 
 def _grid(doc, g: pd.DataFrame) -> None:

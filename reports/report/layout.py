@@ -1,8 +1,13 @@
-"""The report page, top-down: title, summary card, contents, then one section per
-subject, each opening with a paragraph that says what it shows and how to read it.
+"""The report's pages, top-down: title, the first screen (what passed, what failed and
+why, prescribed and free, one overview figure, links to the details:
+:mod:`reports.report.first_screen`), then one section per subject, each opening with a
+paragraph that says what it shows and how to read it.  Each case's figures are on a
+page of their own (``cases/<case>.html``), linked from the "Cases" and "Free motion"
+sections, so that ``index.html`` opens fast.
 
 Called by :func:`reports.report.build.build_report` with the task results; writes
-``index.html``, ``report.md`` and the CSV files (all under the output directory).
+``index.html``, ``cases/*.html``, ``report.md`` (one file: the case pages in place),
+the figures in ``img/`` and the CSV files (all under the output directory).
 """
 
 from __future__ import annotations
@@ -13,9 +18,11 @@ import pandas as pd
 
 from analytic import Linkage, load_case
 from reports.figures.case_figures import motion_text
-from reports.report.console import counts_line
+from reports.report import first_screen
+from reports.report.console import margin_rows, sig2
 from reports.report.document import Document
 from reports.report.free_section import section as free_section
+from reports.report.free_section import verdict_frame as free_verdict_frame
 from reports.report.tables import (
     accepted,
     input_unit,
@@ -115,13 +122,15 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
     verdicts = verdict_table(runs)
     summary = summary_table(verdicts, units) if len(verdicts) else pd.DataFrame()
     meta["wall_seconds"] = round(time.perf_counter() - ph.t0, 1)
-    _card(doc, summary, cases, engines, meta, cfg)
+    free = studies.get("free")
+    first_screen.lead(doc, summary, free_verdict_frame(free) if free else None, free,
+                      len(cases), engines)
     _verdict_section(doc, verdicts, summary, runs, revolute, cfg)
     times = {}  # each case's sample times (one plan per case: every engine's is the same)
     for r in runs:
         if r["run"] is not None:
             times.setdefault(r["case"], r["run"].times)
-    _cases_section(doc, cases, mechs, figures, times)
+    _cases_section(doc, cases, mechs, figures, times, summary)
     seeds = seed_comparison(runs, engines)
     if len(seeds):
         doc.h(1, "Seed comparison (course notes)")
@@ -152,29 +161,16 @@ def write_page(out, cfg, cases, engines, results, figures, studies, meta, ph) ->
         doc.table(floors, "instantaneous_floors", "regularisation floor per case and variant")
     _run_section(doc, meta, ph)
     title = f"linkage-xval validation report ({meta['mode']}, {meta['date']})"
-    (out / "index.html").write_text(doc.html(title))
+    doc.write_html(title, _run_line(meta, engines, cfg))
     (out / "report.md").write_text(doc.markdown(title))
 
 
-def _card(doc, summary, cases, engines, meta, cfg):
-    items = []
-    if len(summary):
-        line = counts_line(summary)
-        passed = accepted(summary)  # a precision limit is not a failure
-        items.append(("verdict", f"{int(passed.sum())} of {len(summary)} (case, engine) "
-                                 "runs pass"))
-        for e in engines:
-            sel = summary["engine"] == e
-            items.append((e, f"{int(passed[sel].sum())}/{int(sel.sum())} pass"))
-        items.append(("smallest margin" if "smallest margin" in line else "worst",
-                      line.split(": ", 1)[1] if ": " in line else line))
-    items.append(("cases", str(len(cases))))
-    items.append(("engines", ", ".join(engines)))
+def _run_line(meta, engines, cfg) -> str:
+    """The line under the title: the engines and how the run went."""
     load = meta.get("load average at start (1, 5, 15 min)", "")
-    items.append(("run", f"{meta['mode']}, {cfg.samples} samples per revolution, "
-                         f"{meta['wall_seconds']:.0f} s on {meta['cpu']}, {meta['cores']} "
-                         f"cores" + (f" (load at start {load.split()[0]})" if load else "")))
-    doc.card(items)
+    return (f"Engines {', '.join(engines)}; {meta['mode']} report, {cfg.samples} samples per "
+            f"revolution, {meta['wall_seconds']:.0f} s on {meta['cpu']}, {meta['cores']} "
+            f"cores" + (f" (load at start {load.split()[0]})" if load else "") + ".")
 
 
 def _verdict_section(doc, verdicts, summary, runs, revolute, cfg):
@@ -208,27 +204,48 @@ def _verdict_section(doc, verdicts, summary, runs, revolute, cfg):
                   "engine settings of the verdict runs", wide=("settings",), fold=None)
 
 
-def _cases_section(doc, cases, mechs, figures, times=None):
+def _cases_section(doc, cases, mechs, figures, times=None, summary=None):
     doc.h(1, "Cases")
-    doc.p("For each case: the linkage, then each quantity over the sampled input range "
-          "(lines: the analytic solution along the motion the engines were driven at; "
-          "markers: each engine's samples, grey where the verdict does not judge them), "
-          "then the error panels, which are the verdict's numbers sample by sample. A "
-          "limited-range input shows the range the engines covered, the rest shaded, and "
-          "its limit positions as dashed lines; an axis clipped around a spike says so on "
-          "the figure.", intro=True)
+    doc.p("Each case has a page of its own: how its input moves, its verdict rows, the "
+          "linkage, then each quantity over the sampled input range (lines: the analytic "
+          "solution along the motion the engines were driven at; markers: each engine's "
+          "samples, grey where the verdict does not judge them), then the error panels, "
+          "which are the verdict's numbers sample by sample. A limited-range input shows "
+          "the range the engines covered, the rest shaded, and its limit positions as "
+          "dashed lines; an axis clipped around a spike says so on the figure.", intro=True)
     for label, _ in cases:
-        doc.h(2, label)
-        m = mechs[label]
-        # in the figures' units (deg), with the rate reached over the plotted samples
-        doc.p(motion_text(Linkage(m), (times or {}).get(label, [])) + ".")
-        figs = figures.get(label, {})
-        if "error" in figs and isinstance(figs["error"], str):
-            doc.p(f"figures failed: {figs['error']}")
-            continue
-        for name, cap in CASE_FIGURES.items():
-            if name in figs:
-                doc.image(figs[name], f"{label}-{name}", f"{label}: {cap}")
+        rows = (summary[summary["case"] == label] if summary is not None and len(summary)
+                else pd.DataFrame())
+        page = doc.page(label, f"{label}: case details", label, _case_about(rows))
+        _case_page(page, label, mechs[label], figures.get(label, {}),
+                   (times or {}).get(label, []), rows)
+
+
+def _case_about(rows: pd.DataFrame) -> str:
+    """A case's line in the list of case pages: passes, and its smallest margin."""
+    if not len(rows):
+        return "(no engine ran)"
+    ok = accepted(rows)
+    w = margin_rows(rows).sort_values("ratio", kind="stable").iloc[-1]
+    worst = (f"worst {sig2(w['ratio'])} of tolerance ({w['engine']} "
+             f"{w['worst quantity'] or 'run'})")
+    return f"- {int(ok.sum())}/{len(rows)} pass; {worst}"
+
+
+def _case_page(page, label, mech, figs, times, rows):
+    """One case's page: its motion, verdict rows and figures."""
+    page.h(1, label)
+    # in the figures' units (deg), with the rate reached over the plotted samples
+    page.p(motion_text(Linkage(mech), times) + ".")
+    if len(rows):
+        page.table(summary_for_reading(rows), "verdict_summary", f"{label}: verdict per "
+                   "engine", fold=None, wide=("note",), digits=2, whole="verdict_summary")
+    if "error" in figs and isinstance(figs["error"], str):
+        page.p(f"figures failed: {figs['error']}")
+        return
+    for name, cap in CASE_FIGURES.items():
+        if name in figs:
+            page.image(figs[name], f"{label}-{name}", f"{label}: {cap}")
 
 
 def _speed_section(doc, grids, cfg):
