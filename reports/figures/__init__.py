@@ -16,6 +16,9 @@ Modules:
   joint's trajectory with engine markers on the exact curve, the error against time with the
   tolerance and each engine's trusted horizon, the energy and loop-closure drift, and the
   work-precision plot.
+* :mod:`reports.figures.overview`: The report's overview figure: one cell per case and
+  engine, prescribed and free runs, coloured by the verdict and labelled with the worst
+  error over its tolerance.
 * :mod:`reports.figures.plots`: Figures of the validation report (matplotlib, Agg backend,
   PNG bytes out).
 * :mod:`reports.figures.poses`: What an animation shows, frame by frame: the bodies' poses

@@ -1,7 +1,7 @@
 """Figures of the validation report (matplotlib, Agg backend, PNG bytes out).
 
-Every function takes arrays already computed elsewhere and returns PNG bytes, so
-the report can embed them (base64) and also write them to files.
+Every function takes arrays already computed elsewhere and returns PNG bytes, which
+the report writes to files (``img/``) that its pages and its Markdown refer to.
 """
 
 from __future__ import annotations

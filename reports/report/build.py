@@ -7,8 +7,10 @@ helper (:func:`reports.comparison.compare.compare_run`, whose reference is
 :func:`reports.comparison.reference.analytic_reference`; the case figures read the same
 reference), adds the studies of :mod:`reports.studies.speed_accuracy` (speed against error on the
 requested cases; hard cases and scene economy with the built-in set), and writes
-``index.html`` (plots embedded), ``report.md`` (plots as PNG files in ``img/``) and one
-CSV per table, all under the output directory and nowhere else.
+``index.html`` (its first screen: what passed, what failed and why, one overview
+figure), one page per case in ``cases/``, ``report.md``, the figures as PNG files in
+``img/`` (which both the pages and the Markdown refer to) and one CSV per table, all
+under the output directory and nowhere else (:mod:`reports.report.layout`).
 
 Every task (engine runs, study runs, the figures of each case, the Pareto plots) runs on
 one process pool, or on an existing Dask distributed scheduler with ``--dask ADDRESS``,
