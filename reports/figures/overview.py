@@ -101,7 +101,8 @@ def overview_figure(rows: list[str], engines: list[str], cells: list[OverviewCel
                   "grey: not run", fontsize=7.5, color="#444")
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": None})
+    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight", pad_inches=0.05,
+                metadata={"Software": None})
     plt.close(fig)
     return buf.getvalue()
 

@@ -165,7 +165,8 @@ def lead(doc, summary: pd.DataFrame, vt: pd.DataFrame | None, free: dict | None,
     figure = None
     if cells:
         png = overview_figure(rows, cols, cells, split, "worst error / tolerance per case "
-                              "and engine (prescribed above the line, free below)")
+                              "and engine" + (" (free motion below the line)"
+                                              if len(rows) > split else ""))
         figure = (png, FIGURE_NAME, "every run's worst error over its tolerance: green "
                   "pass, amber at a known or precision limit, red FAIL, grey not run")
     doc.lead(_headline(summary, vt), lines, items, figure)

@@ -71,7 +71,9 @@ def free_runs():
                rows=[dataclasses.replace(res["rows"][0], case="iftomm-a01-copy",
                                          passed=False)],
                verdicts=[dataclasses.replace(res["verdicts"][0], case="iftomm-a01-copy")])
-    return {"cases": {"iftomm-a01-pendulum": res, "iftomm-a01-copy": bad}, "grid": [],
+    # keyed by its task's name, not the case's own (as seed-four-bar runs released as
+    # seed-four-bar-released)
+    return {"cases": {"iftomm-a01-pendulum": res, "a01-task": bad}, "grid": [],
             "errors": ["iftomm-a03-andrews / pybullet: task failed: RuntimeError: boom"]}
 
 
@@ -97,7 +99,7 @@ def test_first_screen_lists_free_runs_and_failures_with_reasons(tmp_path, free_r
     assert "prescribed seed-four-bar / pybullet: O4.force 3e-3 of peak over the " \
            "tolerance 1e-3 at 20 deg" in text
     assert "precision limit (float32) prescribed six-bar / mujoco_warp: link.alpha" in text
-    w = free_runs["cases"]["iftomm-a01-copy"]["verdicts"][0].worst
+    w = free_runs["cases"]["a01-task"]["verdicts"][0].worst
     ratio = w.normalised / w.tolerance
     assert re.search(r"FAIL free iftomm-a01-copy / mujoco \(0\.5 s\): \S+ "
                      + re.escape(sig2(ratio)) + " x its tolerance", text), text
@@ -137,3 +139,20 @@ def test_pages_are_relative_unique_and_in_place_in_markdown(tmp_path):
     md = doc.markdown("t")
     assert "## Cases" in md and "### a/b" in md and "![a figure](img/fig.png)" in md
     assert md.index("## Cases") < md.index("### a/b")
+
+
+def test_free_case_pages_hold_their_own_rows(tmp_path, free_runs):
+    """Each free case's page is named after its rows' case and shows those rows and its
+    figures; its line in the section says how many pass and which did not."""
+    from reports.report.free_section import section
+    doc = Document(tmp_path)
+    section(doc, free_runs, quick=True)
+    doc.write_html("t")
+    index = (tmp_path / "index.html").read_text()
+    assert ("<a href='cases/free-iftomm-a01-copy.html'>iftomm-a01-copy (free)</a> "
+            "- 0/1 pass (mujoco FAIL)") in index
+    assert "<a href='cases/free-iftomm-a01-pendulum.html'>iftomm-a01-pendulum (free)</a> " \
+           "- 1/1 pass<" in index
+    page = (tmp_path / "cases" / "free-iftomm-a01-copy.html").read_text()
+    assert page.count("<tr>") == 2 and "iftomm-a01-copy" in page and "FAIL" in page
+    assert page.count("<img") == 3 and "href='../free_verdicts.csv'" in page
