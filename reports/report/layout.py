@@ -8,6 +8,11 @@ sections, so that ``index.html`` opens fast.
 Called by :func:`reports.report.build.build_report` with the task results; writes
 ``index.html``, ``cases/*.html``, ``report.md`` (one file: the case pages in place),
 the figures in ``img/`` and the CSV files (all under the output directory).
+
+Measured on ``xval report --quick`` (10 cases, 5 engines, 2 free cases; 2 cores, load
+6.6-9.8): ``index.html`` 251 kB and 321 kB with what it loads first (the overview
+figure), 15,400 px tall at 1280 px wide, the folder 11.1 MB with 84 figures on 13 pages;
+before the case pages (figures inline as base64): 14.1 MB, 37,300 px, folder 24.7 MB.
 """
 
 from __future__ import annotations
