@@ -156,3 +156,44 @@ def test_free_case_pages_hold_their_own_rows(tmp_path, free_runs):
     page = (tmp_path / "cases" / "free-iftomm-a01-copy.html").read_text()
     assert page.count("<tr>") == 2 and "iftomm-a01-copy" in page and "FAIL" in page
     assert page.count("<img") == 3 and "href='../free_verdicts.csv'" in page
+
+
+def test_known_limit_text_has_no_markdown_markup(tmp_path, free_runs):
+    """The free section's known-limit paragraph (shown only when a run is at a listed
+    limit) and the first screen's line for it carry no raw Markdown into the HTML
+    (the paragraph said `xval report` before)."""
+    from html.parser import HTMLParser
+
+    from reports.report.free_section import section
+    res = free_runs["cases"]["iftomm-a01-pendulum"]
+    row = dataclasses.replace(res["rows"][0], case="seed-four-bar-released",
+                              engine="pybullet", duration=1.0, passed=False,
+                              worst_error=3.5e-2)
+    free = {"cases": {"seed-four-bar": dict(res, rows=[row])}, "grid": [], "errors": []}
+    vt = verdict_frame(free)
+    assert list(vt["verdict"]) == ["known limit"]
+    doc = Document(tmp_path)
+    first_screen.lead(doc, _summary([]), vt, free, 0, ["pybullet"])
+    section(doc, free, quick=True)
+
+    class Text(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.chunks, self.skip = [], False
+
+        def handle_starttag(self, tag, attrs):
+            self.skip = tag == "style"
+
+        def handle_endtag(self, tag):
+            self.skip = False
+
+        def handle_data(self, data):
+            if not self.skip:
+                self.chunks.append(data)
+
+    t = Text()
+    t.feed(doc.html("t"))
+    text = "".join(t.chunks)
+    assert "A 'known limit' is a case" in text and "known limit" in text
+    assert "free seed-four-bar-released / pybullet (1 s)" in text
+    assert "`" not in text and "**" not in text
