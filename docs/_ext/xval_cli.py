@@ -12,6 +12,8 @@ sub-command and option the parser has is on the page.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 from dataclasses import dataclass, field
 
 from docutils import nodes
@@ -99,6 +101,26 @@ def cli_model() -> tuple[Command, list[Command]]:
     """``xval`` itself and each command of ``COMMANDS``, each from its own parser."""
     from reports.cli.xval import COMMANDS, build_parser
 
+    # argparse wraps usage lines at the terminal's width: the page is 80 columns wide
+    # whatever terminal builds it, as xval's help is in an 80-column terminal
+    with _columns(80):
+        return _model(COMMANDS, build_parser)
+
+
+@contextlib.contextmanager
+def _columns(width: int):
+    old = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = str(width)
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = old
+
+
+def _model(COMMANDS, build_parser) -> tuple[Command, list[Command]]:  # noqa: N803
     top = build_parser(None)
     root = Command((), top.format_usage().strip(), top.description or "", top.epilog or "",
                    ())

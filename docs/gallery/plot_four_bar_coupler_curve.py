@@ -24,8 +24,9 @@ doc["bodies"]["coupler"]["points"]["P"] = [150, 80]
 linkage = Linkage(mechanism_from_dict(doc, "seed-four-bar with P"))
 
 # %%
-# One call solves the whole cycle (kinematics and forces) at 361 crank angles; the
-# table has a column per quantity, in SI.
+# One call solves the whole cycle (kinematics and forces) at 361 crank angles, from
+# the description's 60 deg; the table has a column per quantity, in SI (the input in
+# degrees).
 sweep = linkage.sweep(361)
 table = sweep.frame
 print(sweep.grashof)
@@ -38,7 +39,7 @@ ax1.plot(table["rocker.B.x"] * 1e3, table["rocker.B.y"] * 1e3, label="B (on the 
 ax1.plot([0, 400], [0, 0], "ks")
 ax1.set(xlabel="x (mm)", ylabel="y (mm)", aspect="equal", title="coupler curve")
 ax1.legend()
-ax2.plot(table["input"].to_numpy() * 180 / 3.141592653589793, table["drive.torque"])
+ax2.plot(table["input"], table["drive.torque"])  # the input column is in degrees
 ax2.set(xlabel="crank angle (deg)", ylabel="drive torque (N m)",
         title="torque at 15 rad/s, no gravity")
 ax2.grid(True)

@@ -19,7 +19,16 @@ mech = released(load_case("seed-four-bar"), duration=2.0)
 trajectory = simulate(mech)
 times = np.linspace(0.0, 2.0, 401)
 s = trajectory.at(times)
-print(f"{len(trajectory.events)} events, e.g. {trajectory.events[:2]}")
+for event in trajectory.events[:4]:
+    print(f"{event.t:.6f} s  {event.kind:8s} {event.detail}")
+print(f"... {len(trajectory.events)} events in all")
+
+# %%
+# The energy scale (the largest kinetic energy plus the range of the potential one)
+# and the largest work-energy residual against it:
+scale = s.kinetic.max() + np.ptp(s.potential)
+print(f"largest residual {np.abs(s.energy_residual).max():.1e} J, "
+      f"{np.abs(s.energy_residual).max() / scale:.1e} of the energy scale {scale:.3g} J")
 
 # %%
 fig, (ax1, ax2, ax3) = plt.subplots(3, 1, figsize=(8, 7), sharex=True, layout="constrained")

@@ -14,7 +14,7 @@ from analytic import Linkage, load_case
 
 linkage = Linkage(load_case("seed-slider-crank"))
 table = linkage.sweep(361).frame
-angle = np.degrees(table["input"].to_numpy())
+angle = table["input"].to_numpy()  # deg
 
 # %%
 # Each joint's force is by the joint's first body on its second, in world axes; its
