@@ -16,8 +16,8 @@ import contextlib
 import os
 from dataclasses import dataclass, field
 
-from docutils import nodes
-from sphinx.util.docutils import SphinxDirective
+# docutils and Sphinx are imported where the page is built (the 'docs' extra), so that
+# the model of the parser (cli_model) and its test run without them
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,9 @@ def _model(COMMANDS, build_parser) -> tuple[Command, list[Command]]:  # noqa: N8
 
 
 # ------------------------------------------------------------------------------ nodes
-def _section(title: str, document) -> nodes.section:
+def _section(title: str, document):
+    from docutils import nodes
+
     sec = nodes.section()
     sec["ids"].append(nodes.make_id(title))
     sec["names"].append(nodes.fully_normalize_name(title))
@@ -138,13 +140,17 @@ def _section(title: str, document) -> nodes.section:
     return sec
 
 
-def _text_block(text: str) -> nodes.literal_block:
+def _text_block(text: str):
+    from docutils import nodes
+
     block = nodes.literal_block(text, text)
     block["language"] = "text"
     return block
 
 
-def _options_table(cmd: Command) -> nodes.table:
+def _options_table(cmd: Command):
+    from docutils import nodes
+
     table = nodes.table()
     group = nodes.tgroup(cols=3)
     table += group
@@ -169,7 +175,7 @@ def _options_table(cmd: Command) -> nodes.table:
     return table
 
 
-def command_nodes(cmd: Command, document) -> nodes.section:
+def command_nodes(cmd: Command, document):
     """One command's section: usage, description, examples (the epilog), options table,
     then a section per sub-command."""
     sec = _section(cmd.name, document)
@@ -185,25 +191,26 @@ def command_nodes(cmd: Command, document) -> nodes.section:
     return sec
 
 
-def cli_nodes(document) -> list[nodes.Node]:
+def cli_nodes(document) -> list:
     """The whole reference: ``xval --help``'s text, then a section per command."""
     root, commands = cli_model()
-    out: list[nodes.Node] = [_text_block("\n\n".join(
+    out: list = [_text_block("\n\n".join(
         t for t in (root.usage, root.description, root.epilog) if t))]
     out += [command_nodes(c, document) for c in commands]
     return out
 
 
-class XvalCliDirective(SphinxDirective):
-    """``xval-cli``: the command-line reference, from the parser."""
-
-    has_content = False
-
-    def run(self) -> list[nodes.Node]:
-        self.env.note_dependency(__file__)
-        return cli_nodes(self.state.document)
-
-
 def setup(app):
+    from sphinx.util.docutils import SphinxDirective
+
+    class XvalCliDirective(SphinxDirective):
+        """``xval-cli``: the command-line reference, from the parser."""
+
+        has_content = False
+
+        def run(self) -> list:
+            self.env.note_dependency(__file__)
+            return cli_nodes(self.state.document)
+
     app.add_directive("xval-cli", XvalCliDirective)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}

@@ -1,7 +1,8 @@
 """The generated command-line reference (docs/_ext/xval_cli.py, the page
 docs/reference/cli.md) lists every command, sub-command and option that ``xval``'s parser
 has: read from the parser here, independently of the extension's own walk, and looked
-for in the text of the nodes the extension puts on the page."""
+for under each command of the extension's model of the page (no Sphinx needed) and in the
+text of the nodes it puts on the page (with docutils, from the 'docs' extra)."""
 
 from __future__ import annotations
 
@@ -12,13 +13,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("sphinx")  # the 'docs' extra
-
-from docutils.frontend import get_default_settings  # noqa: E402
-from docutils.parsers.rst import Parser  # noqa: E402
-from docutils.utils import new_document  # noqa: E402
-
-from reports.cli.xval import COMMANDS, build_parser  # noqa: E402
+from reports.cli.xval import COMMANDS, build_parser
 
 EXT = Path(__file__).resolve().parents[2] / "docs" / "_ext" / "xval_cli.py"
 
@@ -32,7 +27,13 @@ def _extension():
 
 
 def _page_text(ext) -> str:
-    """The text of every node the ``xval-cli`` directive returns, as the page shows it."""
+    """The text of every node the ``xval-cli`` directive returns, as the page shows it
+    (needs docutils, which comes with the 'docs' extra's Sphinx)."""
+    pytest.importorskip("docutils")
+    from docutils.frontend import get_default_settings
+    from docutils.parsers.rst import Parser
+    from docutils.utils import new_document
+
     document = new_document("cli.md", get_default_settings(Parser))
     return "\n".join(n.astext() for n in ext.cli_nodes(document))
 
