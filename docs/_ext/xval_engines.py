@@ -12,6 +12,7 @@ listed with the line that says how to install it.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 
 from docutils import nodes
 from sphinx.util.docutils import SphinxDirective
@@ -50,22 +51,21 @@ def settings_rows(cls) -> list[tuple[str, str, str, str]]:
 
 
 def engine_settings() -> list[tuple[str, str, object, object, str]]:
-    """``(name, description, prescribed settings class, free settings class, missing)``
-    per registered engine; the classes are ``None`` and ``missing`` says how to install
-    the library when an optional engine is not installed."""
-    from sim_models.engines.registry import BUILTIN, get_engine, skipped_engines
-    from sim_models.runs.free import FREE_SESSIONS, free_session_class
+    """``(name, description, prescribed settings class, free settings class, install)``
+    per registered engine; ``install`` says how to install an optional engine's library.
+    The settings live in the engine's own modules, which import the library only when a
+    session starts, so an optional engine is listed whether or not it is installed."""
+    from sim_models.engines.registry import BUILTIN
+    from sim_models.runs.free import FREE_SESSIONS
 
-    skipped = skipped_engines()
     out = []
     for entry in BUILTIN:
-        if entry.name in skipped:
-            out.append((entry.name, entry.description, None, None, entry.install))
-            continue
-        free = free_session_class(entry.name).settings_class \
-            if entry.name in FREE_SESSIONS else None
-        out.append((entry.name, entry.description, get_engine(entry.name).settings_class,
-                    free, ""))
+        driven = getattr(importlib.import_module(entry.module), entry.session).settings_class
+        free = None
+        if entry.name in FREE_SESSIONS:
+            module, session = FREE_SESSIONS[entry.name]
+            free = getattr(importlib.import_module(module), session).settings_class
+        out.append((entry.name, entry.description, driven, free, entry.install))
     return out
 
 
@@ -106,14 +106,12 @@ HEADER = ("setting", "recommended", "accepted", "why")
 
 def engine_nodes(document) -> list[nodes.Node]:
     out = []
-    for name, description, driven, free, missing in engine_settings():
+    for name, description, driven, free, install in engine_settings():
         sec = _section(name, document)
         sec += nodes.paragraph(text=description)
-        if driven is None:
-            sec += nodes.paragraph(text=f"Not installed where these pages were built: "
-                                        f"{missing}.")
-            out.append(sec)
-            continue
+        if install:
+            sec += nodes.paragraph("", "", nodes.Text("Optional: "),
+                                   nodes.literal(install, install))
         sec += nodes.paragraph("", "", nodes.Text("Prescribed (driven) runs: "),
                                nodes.literal(driven.__name__, driven.__name__))
         sec += _table(settings_rows(driven), HEADER)
