@@ -1,15 +1,17 @@
-"""Put a report run's headline figures into the README (between marker comments).
+"""Put a report run's headline figures into the documentation (between marker comments).
 
     python scripts/readme_figures.py reports/out/<timestamp>
 
 A maintainer script, run from a checkout (with linkage-xval installed in it, ``pip
-install -e .``): it edits this checkout's ``README.md`` and ``docs/``, so it is not part
+install -e .``): it edits this checkout's ``docs/``, so it is not part
 of the installed package (``pyproject.toml`` installs ``analytic``, ``sim_models`` and
 ``reports`` only).
 
-Rewrites the blocks between ``<!-- verdict:start -->`` / ``<!-- verdict:end -->`` and
-``<!-- cheapest:start -->`` / ``<!-- cheapest:end -->`` from the run's CSV files and
-copies its speed-against-error plot to ``docs/``; nothing is typed in by hand.
+Rewrites the block between ``<!-- verdict:start -->`` / ``<!-- verdict:end -->`` (the
+headline verdict, ``docs/explanation/engine-findings.md``) and between
+``<!-- cheapest:start -->`` / ``<!-- cheapest:end -->`` (the cheapest settings,
+``docs/explanation/speed.md``) from the run's CSV files and copies its speed-against-error
+plot to ``docs/``; nothing is typed in by hand.
 """
 
 from __future__ import annotations
@@ -26,6 +28,9 @@ from analytic.input_display import input_number
 #: The checkout: the folder above ``scripts/``.
 ROOT = Path(__file__).resolve().parents[1]
 PLOT = "pareto-seed-slider-crank.png"
+#: The page each marked block lives on.
+PAGES = {"verdict": ROOT / "docs" / "explanation" / "engine-findings.md",
+         "cheapest": ROOT / "docs" / "explanation" / "speed.md"}
 
 
 def verdict_block(run: Path) -> str:
@@ -60,10 +65,10 @@ def cheapest_block(run: Path) -> str:
     return "\n".join(lines)
 
 
-def replace_block(text: str, name: str, body: str) -> str:
+def replace_block(text: str, name: str, body: str, where: str = "the page") -> str:
     pat = re.compile(rf"(<!-- {name}:start -->\n).*?(<!-- {name}:end -->)", re.S)
     if not pat.search(text):
-        raise SystemExit(f"README has no {name} markers")
+        raise SystemExit(f"{where} has no {name} markers")
     return pat.sub(lambda m: m.group(1) + body + "\n" + m.group(2), text)
 
 
@@ -72,14 +77,12 @@ def main(argv=None) -> int:
     if len(argv) != 1:
         raise SystemExit(__doc__)
     run = Path(argv[0])
-    readme = ROOT / "README.md"
-    text = readme.read_text()
-    text = replace_block(text, "verdict", verdict_block(run))
-    text = replace_block(text, "cheapest", cheapest_block(run))
-    readme.write_text(text)
-    (ROOT / "docs").mkdir(exist_ok=True)
+    blocks = {"verdict": verdict_block(run), "cheapest": cheapest_block(run)}
+    for name, page in PAGES.items():
+        page.write_text(replace_block(page.read_text(), name, blocks[name],
+                                      str(page.relative_to(ROOT))))
     shutil.copy(run / "img" / PLOT, ROOT / "docs" / PLOT)
-    print(f"README updated from {run}")
+    print(f"{', '.join(str(p.relative_to(ROOT)) for p in PAGES.values())} updated from {run}")
     return 0
 
 

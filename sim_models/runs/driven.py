@@ -81,9 +81,13 @@ def run(mech: Mechanism | SimTree, engine: str, settings: EngineSettings | None 
         Seconds of stepping after which the run ends as a failed run that says so
         (None: no limit).
 
-    Raises :class:`EngineRefusal` when the engine cannot run this motion and
-    :class:`SettingsError` for a request outside :mod:`sim_models.engines.ranges`; a diverging
-    simulation is a run with ``ok = False``, never an exception.
+    Raises
+    ------
+    EngineRefusal
+        When the engine cannot run this motion.
+    SettingsError
+        For a request outside :mod:`sim_models.engines.ranges`.  A diverging simulation
+        is a run with ``ok = False``, never an exception.
     """
     # the request first: a value out of range is refused before anything is built
     request = RunRequest(revolutions, samples, max_violation, max_speed_error,
