@@ -111,7 +111,7 @@ def fenced_blocks(text: str) -> list[Fenced]:
     return blocks
 
 
-def _console_steps(block: Fenced, slow: bool) -> list[Command]:
+def console_steps(block: Fenced, slow: bool) -> list[Command]:
     """The commands of a console block, each with the output lines that follow it."""
     steps: list[Command] = []
     lines = block.text.splitlines()
@@ -140,6 +140,13 @@ def _console_steps(block: Fenced, slow: bool) -> list[Command]:
     return steps
 
 
+def file_target(block: Fenced) -> str | None:
+    """The NAME of a block whose first line is ``# file: NAME`` (``<!-- file: NAME -->``)."""
+    first = block.text.splitlines()[0] if block.text else ""
+    named = _FILE.match(first)
+    return named.group("name") if named else None
+
+
 def page_steps(path: Path) -> list[Step]:
     """The steps of one page, in page order (skipped blocks left out)."""
     steps: list[Step] = []
@@ -147,12 +154,11 @@ def page_steps(path: Path) -> list[Step]:
         if block.marker == "skip":
             continue
         slow = block.marker == "slow"
-        first = block.text.splitlines()[0] if block.text else ""
-        named = _FILE.match(first)
-        if named:
-            steps.append(FileWrite(block.line, named.group("name"), block.text + "\n", slow))
+        name = file_target(block)
+        if name:
+            steps.append(FileWrite(block.line, name, block.text + "\n", slow))
         elif block.lang == "console":
-            steps.extend(_console_steps(block, slow))
+            steps.extend(console_steps(block, slow))
         elif block.lang in ("python", "py", "pycon"):
             steps.append(PythonBlock(block.line, block.text + "\n", slow))
     return steps
