@@ -198,9 +198,41 @@ def output_matches(expected: str, actual: str) -> bool:
     return _pattern(want).fullmatch("".join(ln + "\n" for ln in got)) is not None
 
 
+def _line_matches(expected: str, actual: str) -> bool:
+    return _pattern([expected]).fullmatch(actual + "\n") is not None
+
+
+def _next_match(line: str, got: list[str], start: int) -> int:
+    """Where `line` matches in got[start:], else the most similar line (for the diff)."""
+    for j in range(start, len(got)):
+        if _line_matches(line, got[j]):
+            return j
+    ratios = [difflib.SequenceMatcher(None, line, g).ratio() for g in got[start:]]
+    return start + ratios.index(max(ratios)) if ratios and max(ratios) > 0.6 else start
+
+
+def _seen_through(want: list[str], got: list[str]) -> list[str]:
+    """The output as the page's pattern sees it: the lines a `...` line stands for become
+    that `...`, and a line that matches its pattern line becomes that line, so the diff
+    shows only the lines that drifted."""
+    out: list[str] = []
+    i = 0
+    for k, line in enumerate(want):
+        if line.strip() == "...":
+            following = next((w for w in want[k + 1:] if w.strip() != "..."), None)
+            i = len(got) if following is None else _next_match(following, got, i)
+            out.append(line)
+        elif i < len(got):
+            out.append(line if _line_matches(line, got[i]) else got[i])
+            i += 1
+    return out + got[i:]
+
+
 def drift_message(page: str, step: Command, actual: str, status: int) -> str:
-    """A readable failure: where, the command, the status, and a diff page -> actual."""
-    want, got = _normalise(step.expected), _normalise(actual)
+    """A readable failure: where, the command, the status, and a diff page -> actual (the
+    lines the page's `...` stands for shown as `...`; the whole output follows)."""
+    want, full = _normalise(step.expected), _normalise(actual)
+    got = _seen_through(want, full)
     diff = difflib.unified_diff(want, got, f"{page}:{step.line} (the page)",
                                 "the command's output", lineterm="", n=2)
     head = f"{page}:{step.line}: `$ {step.command}`"
@@ -208,4 +240,5 @@ def drift_message(page: str, step: Command, actual: str, status: int) -> str:
         head += f" exited with status {status}, the page expects {step.status}"
     else:
         head += " printed other output than the page shows"
-    return "\n".join([head, *diff]) if want != got else head + "\n" + "\n".join(got)
+    body = [*diff] if want != got else []
+    return "\n".join([head, *body, "the whole output:", *full])
