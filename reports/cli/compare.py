@@ -138,7 +138,7 @@ def _print_compare_text(mech, mode: str, out, revolute: bool) -> None:
             if any(is_engine_reading(c.quantity) for c in comps):
                 say("rows marked [engine] are the engine's own readings, reported but not "
                     "judged: PyBullet's jointReactionForces are known wrong for links with "
-                    "a moving parent or children (README, Engines)")
+                    "a moving parent or children (docs/explanation/engine-findings.md)")
             for n in r.notes:
                 say(f"note: {n}")
             print(f"wall time {r.wall_per_rev * 1e3:.1f} ms per revolution, "

@@ -57,7 +57,7 @@ def is_free(mech, free: bool, driven: bool) -> bool:
     if free and mech.motion is None:
         raise FreeOptionError(f"--free: {mech.source or mech.name}: the description has no "
                               "[motion] table (initial joint, value, rate, duration); see "
-                              "the README, Free motion")
+                              "docs/tutorials/free-motion.md")
     return bool(free or (mech.motion is not None and not driven))
 
 
