@@ -101,18 +101,20 @@ class ClosedForm:
                 b = topo.body_names.index(bn)
                 self.at[j, b] = cplx(topo.attach(j, b))
 
-    def run(self, values: np.ndarray, signs):
-        """Place every body.
+    def run(self, values: np.ndarray, signs, steps: int | None = None):
+        """Place every body (or those of the plan's first ``steps`` steps: the rest
+        stay at the origin, unrotated).
 
-        Returns ``theta (N, B)``, ``E = exp(i theta) (N, B)``, origins ``O (N, B)``
-        (complex), ``disc (N, n_steps)`` (the dyads' relative discriminants: negative
-        where a dyad cannot close) and the transmission data
-        ``[(joint name, vector 1, vector 2)]``.
+        ``signs``: one branch sign per branching dyad, or per dyad an ``(N,)`` array
+        of signs (each input value with its own).  Returns ``theta (N, B)``, ``E =
+        exp(i theta) (N, B)``, origins ``O (N, B)`` (complex), ``disc (N, n_steps)``
+        (the dyads' relative discriminants: negative where a dyad cannot close) and
+        the transmission data ``[(joint name, vector 1, vector 2)]``.
         """
         N, B = len(values), len(self.topo.body_names)
         p = _Placement(N, B)
         si = iter(signs)
-        for st in self.plan:
+        for st in self.plan[:steps]:
             if st.kind == "driven_revolute":
                 self._driven_revolute(p, st, values)
             elif st.kind == "driven_prismatic":
