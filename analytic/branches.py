@@ -29,7 +29,7 @@ from functools import cached_property
 import numpy as np
 
 from .mechanism import Revolute
-from .positions import ClosedForm, input_span, size_of
+from .positions import ClosedForm, Placement, input_span, size_of
 from .tolerances import CHANGE_POINT_DISC, CONTINUITY_RATIO, TOGGLE_SNAP
 from .topology import Topology
 
@@ -79,6 +79,16 @@ class Crossing:
                    self.rule, "continuity of velocity cannot decide here; signs held "
                               "(branch_rule 'switch' takes the other branch)")
         return f"change point at {fmt(self.value)}: {what}; {how}"
+
+
+def _keep(p: Placement, rows: tuple[int, int]) -> None:
+    """The placement's two samples ``rows`` (a dyad's chosen sign) copied over all four,
+    for the next dyad's two signs."""
+    src = [rows[0], rows[1], rows[0], rows[1]]
+    for a in (p.theta, p.E, p.O):
+        a[:] = a[src]
+    for c in p.discs:
+        c[:] = c[src]
 
 
 def _signs(s) -> str:
@@ -314,26 +324,35 @@ class BranchSchedule:
         slope_l = (left[1] - left[0]) / h
         s = list(signs)
         rules = []
-        # both signs of dyad k at once (samples 0, 1 held; 2, 3 the other), through the
-        # plan's steps up to dyad k's only: its bodies' poses depend on no later dyad
+        # both signs of dyad k at once (samples 0, 1 held; 2, 3 the other), placed on
+        # the bodies the dyads before it placed with their decided signs (its bodies'
+        # poses depend on no later dyad): each step of the plan evaluated once
         right4 = t + d * np.array([h, 2 * h, h, 2 * h])
-        upto = [i + 1 for i, st in enumerate(self.topo.plan) if st.kind in BRANCHING]
+        p = Placement(4, B)
+        plan = self.topo.plan
+        ends = [i + 1 for i, st in enumerate(plan) if st.kind in BRANCHING]
+        done = 0
         # every dyad, not only those found touching: past a change point the held
         # branch of a later dyad is not the linkage's (a folded rhombus window may sit
         # at zero base all along it), so its own touches say nothing
         for k in range(len(steps)):
+            self.cf.place(p, right4, iter([np.array([1, 1, -1, -1]) * s[k]]),
+                          plan[done:ends[k]])
+            done = ends[k]
             cols = [c for b in steps[k].bodies for c in (b, B + b, 2 * B + b)]
-            sg = np.repeat(np.array(s, float)[:, None], 4, axis=1)
-            sg[k, 2:] = -s[k]
-            right, disc = self._pose(right4, sg, upto[k])
+            right = np.concatenate([p.theta, p.O.real / self.size, p.O.imag / self.size],
+                                   axis=1)
+            disc = p.discs[self._branch_cols[k]]
             jumps = []
             for r in (slice(0, 2), slice(2, 4)):
                 dr = right[r][1] - right[r][0]
                 dr[:B] = (dr[:B] + math.pi) % (2 * math.pi) - math.pi
-                bad = disc.size and np.any(disc[r, k] < -TOGGLE_SNAP)
+                bad = np.any(disc[r] < -TOGGLE_SNAP)
                 jumps.append(math.inf if bad else
                              float(np.max(np.abs(dr[cols] / h - slope_l[cols]))))
-            if jumps[1] < CONTINUITY_RATIO * jumps[0]:
+            flip = jumps[1] < CONTINUITY_RATIO * jumps[0]
+            _keep(p, (2, 3) if flip else (0, 1))
+            if flip:
                 s[k], rule = -s[k], "velocity"
             else:
                 rule = "velocity" if jumps[0] <= CONTINUITY_RATIO * jumps[1] else \

@@ -76,3 +76,17 @@ def test_closed_form_signs_per_value_and_part_of_the_plan(case, n8):
                                    equal_nan=True)
         np.testing.assert_allclose(d2, disc[:, :d2.shape[1]], rtol=0, atol=SAME,
                                    equal_nan=True)
+
+
+@pytest.mark.parametrize("case", ["seed-four-bar", "six-bar", "seed-slider-crank", "a02-n8"])
+def test_loop_determinant_from_positions_alone(case, n8, monkeypatch):
+    """:meth:`Linkage.loop_determinant` (no rates, no condition number) is the numpy
+    path's ``Kinematics.determinant``, near singular positions too (the N four-bar's
+    change points at a horizontal crank)."""
+    monkeypatch.setenv("XVAL_FUSED", "0")
+    lk = n8 if case == "a02-n8" else Linkage(load_case(case))
+    v0 = lk.mech.driver.value
+    x = v0 + np.linspace(-0.5, 0.5, 9) if case == "seed-slider-crank" else \
+        np.concatenate([np.linspace(0.05, 6.2, 13), [math.pi + 1e-9, math.pi - 1e-6]])
+    want = lk.kinematics(x, 1.0, 0.0, on_singular="flag").determinant
+    np.testing.assert_allclose(lk.loop_determinant(x), want, rtol=SAME, atol=SAME)
