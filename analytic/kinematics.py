@@ -174,19 +174,8 @@ class Linkage:
         A, _ = eqs.split(J)
         n = A.shape[-1]
         if n:
-            colnorm = np.ones(N)
-            cmax, cmin = np.zeros(N), np.full(N, np.inf)
             cs = self.column_scale
-            # column norms, short axes unrolled (a long one, as in a chain of 40 loops,
-            # in one reduction)
-            norms = np.sqrt(np.einsum("nrc,nrc->nc", A, A)) if n > 8 else None
-            for c in range(n):
-                cn = norms[:, c] if norms is not None else \
-                    np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
-                colnorm *= cn
-                cn = cn * cs[c]  # the bound is on the condition with sliders in sizes
-                cmax, cmin = np.maximum(cmax, cn), np.minimum(cmin, cn)
-            det = det_small(A) / np.where(colnorm > 0, colnorm, 1.0)
+            det, cmax, cmin = self._normalised_det(A)
             # cond(A) <= n^(n/2) / |det of the column-normalised A| * (max/min column
             # norm): only where that bound reaches the threshold is the exact
             # condition number worth computing
@@ -216,6 +205,34 @@ class Linkage:
             from .singular import rate_limits
             rate_limits(self, kin, bad, branch)
         return kin
+
+    def _normalised_det(self, A: np.ndarray):
+        """The determinant of ``A (N, n, n)`` with unit columns (``Kinematics.determinant``),
+        and per sample the largest and smallest column norm, sliders' in sizes."""
+        N, n = A.shape[0], A.shape[-1]
+        colnorm = np.ones(N)
+        cmax, cmin = np.zeros(N), np.full(N, np.inf)
+        cs = self.column_scale
+        # column norms, short axes unrolled (a long one, as in a chain of 40 loops,
+        # in one reduction)
+        norms = np.sqrt(np.einsum("nrc,nrc->nc", A, A)) if n > 8 else None
+        for c in range(n):
+            cn = norms[:, c] if norms is not None else \
+                np.sqrt(sum(A[:, r, c] ** 2 for r in range(n)))
+            colnorm *= cn
+            cn = cn * cs[c]  # the bound is on the condition with sliders in sizes
+            cmax, cmin = np.maximum(cmax, cn), np.minimum(cmin, cn)
+        return det_small(A) / np.where(colnorm > 0, colnorm, 1.0), cmax, cmin
+
+    def loop_determinant(self, values, branch: str = "continued") -> np.ndarray:
+        """The loop Jacobian's normalised determinant at ``values`` (``(N,)``, the
+        numpy path's :attr:`Kinematics.determinant`; its sign changes where the linkage
+        passes a singular position), from the positions alone: no rates, no condition
+        number."""
+        values = np.atleast_1d(np.asarray(values, float))
+        q, _, _, _, _, pre = self.positions.solve(values, branch)
+        A, _ = self.eqs.split(self.eqs.jacobian(q, pre))
+        return self._normalised_det(A)[0] if A.shape[-1] else np.ones(len(values))
 
     def _group_rates(self, x: np.ndarray) -> np.ndarray:
         g = self.topo.group_of

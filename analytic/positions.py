@@ -59,7 +59,7 @@ def rrr_disc_factor(c1: complex, c2: complex) -> float:
     return (L1 + L2) / (L1 * L2 * max(L1, L2))
 
 
-class _Placement:
+class Placement:
     """The poses :meth:`ClosedForm.run` builds, step by step: angles ``theta (N, B)``,
     ``E = exp(i theta)`` and origins ``O`` (complex ``(N, B)``), the dyads'
     discriminants and the transmission data, in the plan's order."""
@@ -101,18 +101,27 @@ class ClosedForm:
                 b = topo.body_names.index(bn)
                 self.at[j, b] = cplx(topo.attach(j, b))
 
-    def run(self, values: np.ndarray, signs):
-        """Place every body.
+    def run(self, values: np.ndarray, signs, steps: int | None = None):
+        """Place every body (or those of the plan's first ``steps`` steps: the rest
+        stay at the origin, unrotated).
 
-        Returns ``theta (N, B)``, ``E = exp(i theta) (N, B)``, origins ``O (N, B)``
-        (complex), ``disc (N, n_steps)`` (the dyads' relative discriminants: negative
-        where a dyad cannot close) and the transmission data
-        ``[(joint name, vector 1, vector 2)]``.
+        ``signs``: one branch sign per branching dyad, or per dyad an ``(N,)`` array
+        of signs (each input value with its own).  Returns ``theta (N, B)``, ``E =
+        exp(i theta) (N, B)``, origins ``O (N, B)`` (complex), ``disc (N, n_steps)``
+        (the dyads' relative discriminants: negative where a dyad cannot close) and
+        the transmission data ``[(joint name, vector 1, vector 2)]``.
         """
         N, B = len(values), len(self.topo.body_names)
-        p = _Placement(N, B)
-        si = iter(signs)
-        for st in self.plan:
+        p = Placement(N, B)
+        self.place(p, values, iter(signs), self.plan[:steps])
+        disc = np.stack(p.discs, axis=1) if p.discs else np.ones((N, 0))
+        return p.theta, p.E, p.O, disc, p.trans
+
+    def place(self, p: Placement, values: np.ndarray, si, steps) -> None:
+        """Carry out the plan's ``steps`` on the placement ``p`` (the bodies of the steps
+        before them placed already), branching dyads taking their signs from the
+        iterator ``si``."""
+        for st in steps:
             if st.kind == "driven_revolute":
                 self._driven_revolute(p, st, values)
             elif st.kind == "driven_prismatic":
@@ -125,10 +134,8 @@ class ClosedForm:
                 self._rpr(p, st, si)
             elif st.kind == "PRP":
                 self._prp(p, st)
-        disc = np.stack(p.discs, axis=1) if p.discs else np.ones((N, 0))
-        return p.theta, p.E, p.O, disc, p.trans
 
-    def _on_slide(self, p: _Placement, x: int, j: int):
+    def _on_slide(self, p: Placement, x: int, j: int):
         """Orient body ``x``, one of prismatic joint ``j``'s bodies, from the other one
         ``k`` (the joint's fixed angle); returns ``k``, the line's direction in the world
         and whether ``x`` is the slider."""
@@ -140,7 +147,7 @@ class ClosedForm:
         p.place(x, p.theta[:, k] - jt.angle, p.E[:, k] * cmath.exp(-1j * jt.angle))
         return k, p.E[:, x] * cmath.exp(1j * jt.direction), False
 
-    def _driven_revolute(self, p: _Placement, st, values):
+    def _driven_revolute(self, p: Placement, st, values):
         """The driven link of a revolute driver: its angle is the input from the body
         it turns on."""
         topo, at = self.topo, self.at
@@ -150,7 +157,7 @@ class ClosedForm:
         p.place(x, p.theta[:, k] + sgn * values)
         p.O[:, x] = p.pt(k, at[j, k]) - p.E[:, x] * at[j, x]
 
-    def _driven_prismatic(self, p: _Placement, st, values):
+    def _driven_prismatic(self, p: Placement, st, values):
         """The driven body of a prismatic driver: the input is the slider's
         displacement along the line."""
         at = self.at
@@ -163,7 +170,7 @@ class ClosedForm:
             Q = p.pt(k, at[j, k]) - values * u
             p.O[:, x] = Q - p.E[:, x] * at[j, x]
 
-    def _rrr(self, p: _Placement, st, si):
+    def _rrr(self, p: Placement, st, si):
         """An RRR dyad: the inner joint at an intersection of two circles."""
         topo, at = self.topo, self.at
         x1, x2 = st.bodies
@@ -194,7 +201,7 @@ class ClosedForm:
         p.O[:, x2] = P2 - u2 * at[j2, x2]
         p.trans.append((self.mech.joints[j2].name, -e1, e2))
 
-    def _rrp(self, p: _Placement, st, si):
+    def _rrp(self, p: Placement, st, si):
         """An RRP dyad: the inner joint where a circle meets the slider's line."""
         topo, at = self.topo, self.at
         x1, x2 = st.bodies
@@ -221,7 +228,7 @@ class ClosedForm:
         p.O[:, x2] = P2 - p.E[:, x2] * at[j2, x2]
         p.trans.append((self.mech.joints[j2].name, -e1, 1j * u))
 
-    def _rpr(self, p: _Placement, st, si):
+    def _rpr(self, p: Placement, st, si):
         """An RPR dyad: the slot's angle from the distance of its two pins (no
         transmission angle: the slot's force is always normal to it)."""
         topo, at = self.topo, self.at
@@ -253,7 +260,7 @@ class ClosedForm:
         p.O[:, g] = PG - p.E[:, g] * aG
         p.O[:, s_] = PSr - p.E[:, s_] * aS
 
-    def _prp(self, p: _Placement, st):
+    def _prp(self, p: Placement, st):
         """A PRP dyad: the inner joint where the two sliders' lines cross (no branch)."""
         at = self.at
         x1, x2 = st.bodies
@@ -412,20 +419,21 @@ def branching_steps(topo: Topology) -> list:
 def _choose_one_by_one(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, ...]:
     """Dyad signs chosen in plan order, each by the hints on its own two bodies."""
     signs = [1] * cf.n_branch
-    v = np.array([value])
+    v = np.array([value, value])
     disc_steps = [st for st in topo.plan if st.kind in ("RRR", "RRP", "RPR", "PRP")]
     for k, st in enumerate(branching_steps(topo)):
         col = disc_steps.index(st)
         names = {topo.body_names[b] for b in st.bodies}
-        scores = []
-        for sg in (1, -1):
-            signs[k] = sg
-            th, E, O, disc, _ = cf.run(v, signs)
-            labels, d = hint_distances(topo, th, E, O)
-            mine = [i for i, lab in enumerate(labels)
-                    if lab.partition(".")[0].removesuffix(" angle") in names]
-            ok = not disc[0, col] < -TOGGLE_SNAP
-            scores.append(float(np.sum(d[0, mine] ** 2)) if ok else math.inf)
+        # both signs of dyad k at once (one per value), through the plan's steps up to
+        # dyad k's: the bodies it places depend on no later step
+        sg = np.repeat(np.array(signs, float)[:, None], 2, axis=1)
+        sg[k] = (1.0, -1.0)
+        th, E, O, disc, _ = cf.run(v, sg, topo.plan.index(st) + 1)
+        labels, d = hint_distances(topo, th, E, O)
+        mine = [i for i, lab in enumerate(labels)
+                if lab.partition(".")[0].removesuffix(" angle") in names]
+        scores = [float(np.sum(d[r, mine] ** 2)) if not disc[r, col] < -TOGGLE_SNAP
+                  else math.inf for r in (0, 1)]
         if not math.isfinite(min(scores)):
             raise _infeasible(topo, value)
         signs[k] = 1 if scores[0] <= scores[1] + 1e-12 else -1

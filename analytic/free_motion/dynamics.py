@@ -228,50 +228,64 @@ def terms(lk, co: Coefficients, x: np.ndarray, qd, t) -> Terms:
     return Terms(M, C, Qg + Ql + Qs + Qd + Qm, Qm * qd, Ql * qd, -Qd * qd, V, T)
 
 
-def element_forces(lk, co: Coefficients, x: np.ndarray, qd: float, t: float):
-    """The springs', dampers' and motors' actions at one state as
-    :class:`analytic.mechanism.Load` objects (force at a named point, couple), for the
-    solver's kinetostatics; also the motors' efforts by joint."""
-    from ..mechanism import Load
+@dataclass(frozen=True)
+class ElementLoad:
+    """A force element's action on one body at N states, as the solver's kinetostatics
+    takes a :class:`analytic.mechanism.Load`: ``force`` (N,) complex (N, world axes) at
+    the body point ``point`` (None: the centre of mass), ``torque`` (N,) N m ccw."""
+
+    body: str
+    point: str | None
+    force: np.ndarray
+    torque: np.ndarray
+
+
+def element_forces(lk, co: Coefficients, x: np.ndarray, qd, t) -> list[ElementLoad]:
+    """The springs', dampers' and motors' actions at N states ``(co, x, q', t)`` (``x``
+    ``(N, J)`` unwrapped joint coordinates; ``qd``, ``t`` scalars or ``(N,)``) as loads
+    on the moving bodies, in a fixed order (the same bodies and points at every state)."""
     mech, kin = lk.mech, co.kin
     fm = mech.motion
-    loads, efforts = [], {}
+    N = co.x.shape[0]
+    qd = np.broadcast_to(np.asarray(qd, float), (N,))
+    t = np.broadcast_to(np.asarray(t, float), (N,))
+    zero = np.zeros(N)
+    loads = []
     jidx = {j.name: k for k, j in enumerate(mech.joints)}
-    joint_effort: dict[str, float] = {}
+    joint_effort: dict[str, np.ndarray] = {}
     for el in fm.springs + fm.dampers:
         if isinstance(el, PointSpring | PointDamper):
             L, L_q, u = _point_pair(kin, el, _size(lk))
-            tension = (el.stiffness * (L[0] - el.free_length) if isinstance(el, PointSpring)
-                       else el.coefficient * L_q[0] * qd)
-            F = tension * u[0]  # pulls b towards a, a towards b
-            loads.append(Load(el.body_a, el.point_a, (F.real, F.imag)))
-            loads.append(Load(el.body_b, el.point_b, (-F.real, -F.imag)))
+            tension = (el.stiffness * (L - el.free_length) if isinstance(el, PointSpring)
+                       else el.coefficient * L_q * qd)
+            F = tension * u  # pulls b towards a, a towards b
+            loads.append(ElementLoad(el.body_a, el.point_a, F, zero))
+            loads.append(ElementLoad(el.body_b, el.point_b, -F, zero))
         else:
             k = jidx[el.joint]
-            e = (-el.stiffness * (x[0, k] - el.free_value) if isinstance(el, JointSpring)
-                 else -el.coefficient * co.x_q[0, k] * qd)
+            e = (-el.stiffness * (x[:, k] - el.free_value) if isinstance(el, JointSpring)
+                 else -el.coefficient * co.x_q[:, k] * qd)
             joint_effort[el.joint] = joint_effort.get(el.joint, 0.0) + e
     for mo in fm.motors:
-        e = mo.at(t)
-        efforts[mo.joint] = efforts.get(mo.joint, 0.0) + e
+        e = np.array([mo.at(ti) for ti in t])
         joint_effort[mo.joint] = joint_effort.get(mo.joint, 0.0) + e
     for name, e in joint_effort.items():
-        loads += _joint_effort_loads(lk, kin, mech.joint(name), e)
-    return [ld for ld in loads if ld.body != mech.ground], efforts
+        loads += _joint_effort_loads(lk, kin, mech.joint(name), e, zero)
+    return [ld for ld in loads if ld.body != mech.ground]
 
 
-def _joint_effort_loads(lk, kin, jt, e: float):
-    """An effort on a joint's coordinate as loads: a couple on body_b and the opposite on
-    body_a (revolute), or a force along the line on the slider point and the opposite
-    on the guide at the same world point (prismatic)."""
-    from ..mechanism import Load
+def _joint_effort_loads(lk, kin, jt, e: np.ndarray, zero: np.ndarray):
+    """An effort ``e`` (N,) on a joint's coordinate as loads: a couple on body_b and the
+    opposite on body_a (revolute), or a force along the line on the slider point and
+    the opposite on the guide at the same world point (prismatic)."""
     if isinstance(jt, Revolute):
-        return [Load(jt.body_b, None, (0.0, 0.0), e), Load(jt.body_a, None, (0.0, 0.0), -e)]
+        return [ElementLoad(jt.body_b, None, zero + 0j, e),
+                ElementLoad(jt.body_a, None, zero + 0j, -e)]
     gb = lk.body_index(jt.guide)
-    u = kin.E[0, gb] * complex(math.cos(jt.direction), math.sin(jt.direction))
-    P = kin.point_c(jt.slider, jt.point)[0][0]
-    O = kin.point_c(jt.guide, jt.origin)[0][0]
+    u = kin.E[:, gb] * complex(math.cos(jt.direction), math.sin(jt.direction))
+    P = kin.point_c(jt.slider, jt.point)[0]
+    O = kin.point_c(jt.guide, jt.origin)[0]
     F = e * u
     r = P - O
-    return [Load(jt.slider, jt.point, (F.real, F.imag)),
-            Load(jt.guide, jt.origin, (-F.real, -F.imag), -(r.real * F.imag - r.imag * F.real))]
+    return [ElementLoad(jt.slider, jt.point, F, zero),
+            ElementLoad(jt.guide, jt.origin, -F, -(r.real * F.imag - r.imag * F.real))]

@@ -110,9 +110,10 @@ class Chain:
 
     def _agrees(self, v: float) -> bool:
         mine = self.kinematics(np.array([v]))
-        kin = self.lk.kinematics(np.array([v]), 1.0, 0.0, on_singular="flag")
-        return bool(np.max(np.abs(kin.zO[0] - mine.zO[0])) <= AGREE * self.size
-                    and np.max(np.abs(kin.E[0] - mine.E[0])) <= AGREE)
+        # the solver's positions only (its rates and conditioning are not compared)
+        _, _, E, O, _, _ = self.lk.positions.solve(np.array([v]))
+        return bool(np.max(np.abs(O[0] - mine.zO[0])) <= AGREE * self.size
+                    and np.max(np.abs(E[0] - mine.E[0])) <= AGREE)
 
     # --- the kinematics -------------------------------------------------------------
     def kinematics(self, q: np.ndarray) -> Kinematics:
@@ -210,9 +211,12 @@ class _ChainKinematics(Kinematics):
         del self.__dict__["jacobian"], self.__dict__["determinant"]
 
     def __getattr__(self, name):
-        if name in ("jacobian", "determinant"):
-            d = self.__dict__
+        d = self.__dict__
+        if name == "determinant":  # the events' sign test: positions and Jacobian only
+            d[name] = d["linkage"].loop_determinant(d["value"])
+            return d[name]
+        if name == "jacobian":
             kin = d["linkage"].kinematics(d["value"], 1.0, 0.0, on_singular="flag")
-            d["jacobian"], d["determinant"] = kin.jacobian, kin.determinant
+            d["jacobian"] = kin.jacobian
             return d[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")

@@ -13,13 +13,14 @@ turning points of the motion (the integrated rate changes sign).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import brentq as _brentq
 
 from ..kinetostatics import solve_forces
-from ..mechanism import Revolute
+from ..mechanism import Load, Revolute
+from ..singular import singular_samples
 from .dynamics import coefficients, element_forces, terms, unwrap_to
 from .integrate import Segment
 
@@ -181,18 +182,51 @@ class FreeTrajectory:
             efforts[mo.joint][idx] = [mo.at(ti) for ti in t]
         if reactions is None:
             return
-        for i, n in enumerate(idx):
-            self._forces_at(lk, co, x, i, n, y[i], t[i], reactions, drive)
+        self._forces(lk, co, x, y[:, 0], qd, qdd, t, idx, reactions, drive)
 
-    def _forces_at(self, lk, co, x, i, n, yi, ti, reactions, drive):
+    def _forces(self, lk, co, x, q, qd, qdd, t, idx, reactions, drive):
+        """The solver's kinetostatics at a segment's samples, all at once, with the
+        force elements applied as loads.  The reactions and the drive effort are linear
+        in the loads at a given motion: each element load's share is the solver's answer
+        with one load of the scale of that element's added, less the answer without it,
+        times its value at each sample (rounding: ~1e-16 of the larger of the two).  A
+        sample at a singular position (its forces are limits along the branch, decided
+        per output) is solved with its own loads (:meth:`_forces_at`)."""
+        kin = lk.kinematics(q, qd, qdd, on_singular="flag")
+        base = solve_forces(lk, kin)
+        rx = {j: f.copy() for j, f in base.joint_force.items()}
+        eff = base.effort.copy()
+        loads = element_forces(lk, co, x, qd, t) if lk.mech.motion else []
+        for ld in loads:
+            for unit, val in ((1.0, ld.force.real), (1j, ld.force.imag), (None, ld.torque)):
+                scale = float(np.max(np.abs(val))) if len(val) else 0.0
+                if not scale > 0:
+                    continue
+                extra = (Load(ld.body, ld.point, (0.0, 0.0), scale) if unit is None else
+                         Load(ld.body, ld.point, ((unit * scale).real, (unit * scale).imag)))
+                one = solve_forces(_Shadow(lk, replace(lk.mech, loads=lk.mech.loads
+                                                       + (extra,))), kin)
+                share = val / scale
+                for j, f in one.joint_force.items():
+                    rx[j] += share[:, None] * (f - base.joint_force[j])
+                eff += share * (one.effort - base.effort)
+        for j, f in rx.items():
+            reactions[j][idx] = f
+        drive[idx] = eff
+        if loads:
+            for i in singular_samples(kin):
+                self._forces_at(lk, x, int(i), idx[i], q[i], qd[i], t[i], reactions, drive)
+
+    def _forces_at(self, lk, x, i, n, qi, qdi, ti, reactions, drive):
         """The solver's kinetostatics at one sample, force elements applied as loads."""
-        from dataclasses import replace
-        co1 = coefficients(lk, float(yi[0]))
-        loads, _ = element_forces(lk, co1, x[i:i + 1], float(yi[1]), float(ti))
-        tm = terms(lk, co1, x[i:i + 1], yi[1], ti)
-        qdd = float((tm.Q[0] - tm.C[0] * yi[1] ** 2) / tm.M[0])
-        kin = lk.kinematics(np.array([yi[0]]), float(yi[1]), qdd, on_singular="flag")
-        shadow = _Shadow(lk, replace(lk.mech, loads=lk.mech.loads + tuple(loads)))
+        co1 = coefficients(lk, float(qi))
+        loads = element_forces(lk, co1, x[i:i + 1], float(qdi), float(ti))
+        tm = terms(lk, co1, x[i:i + 1], qdi, ti)
+        qdd = float((tm.Q[0] - tm.C[0] * qdi ** 2) / tm.M[0])
+        kin = lk.kinematics(np.array([qi]), float(qdi), qdd, on_singular="flag")
+        shadow = _Shadow(lk, replace(lk.mech, loads=lk.mech.loads + tuple(
+            Load(ld.body, ld.point, (float(ld.force[0].real), float(ld.force[0].imag)),
+                 float(ld.torque[0])) for ld in loads)))
         frc = solve_forces(shadow, kin)
         for j, f in frc.joint_force.items():
             reactions[j][n] = f[0]
