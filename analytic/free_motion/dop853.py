@@ -19,9 +19,10 @@ by the kernel again.
 
 As for the equation of motion, no call waits for a compile: the kernel (one for every
 mechanism) is loaded from numba's on-disk cache, or compiled by a background process
-while ``solve_ivp`` answers.  It serves a mechanism whose compiled equation of motion
-runs on the solver's fused kernel with constant motor efforts (not a parallelogram
-chain, not a motor table: those evaluations need Python per state).
+while ``solve_ivp`` answers (``XVAL_FUSED=always``: compiled at once).  It serves a
+mechanism whose compiled equation of motion runs on the solver's fused kernel with
+constant motor efforts (not a parallelogram chain, not a motor table: those evaluations
+need Python per state).
 ``XVAL_FREE_COMPILED=0`` turns it off with the compiled equation of motion,
 ``XVAL_FREE_LOOP=0`` only this loop.
 """
@@ -38,7 +39,7 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .compiled import FastEOM, _Pending
+from .compiled import FastEOM, _mode, _Pending
 
 #: Steps per compiled call: a few milliseconds of work (16 evaluations of 1-10 us per
 #: step), so the wall-clock limit is checked that often.
@@ -104,7 +105,7 @@ def loop_kernel(compile_now: bool = False):
         return None
     if not _LOOP:
         _LOOP.append(_LoopModule())
-    return _ready(_LOOP[0], compile_now)
+    return _ready(_LOOP[0], compile_now or _mode() == "always")
 
 
 def _ready(kern, compile_now: bool):
@@ -236,9 +237,9 @@ class _Run:
         it compiles (or the compiled equation of motion does)."""
         if self.loop is None and time.monotonic() >= self.next_check:
             self.next_check = time.monotonic() + RECHECK_S
+            mod = loop_kernel()  # its background compile starts with the equation's
             fe = _fast_of(self.sysm)
-            mod = loop_kernel() if fe is not None else None
-            if mod is not None:
+            if mod is not None and fe is not None:
                 self.loop = _Loop(mod, fe, self.sysm, self.rtol, self.atol, self.ratio)
         return self.loop
 
