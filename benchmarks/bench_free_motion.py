@@ -324,9 +324,12 @@ c1, w1 = time.process_time(), time.perf_counter()
 tr = simulate(m, duration=2.0)
 c2, w2 = time.process_time(), time.perf_counter()
 from analytic.free_motion.compiled import fast_eom
+from analytic.free_motion import dop853
+from analytic.kernels.cache import _MODULES
+looped = bool(dop853._LOOP) and dop853._LOOP[0].name in _MODULES
 print(f"imports {c1 - c0:.2f} s CPU ({w1 - w0:.2f} wall); simulate 2 s: {c2 - c1:.2f} s "
       f"CPU ({w2 - w1:.2f} wall), {tr.nfev} evaluations, compiled path used: "
-      f"{fast_eom(tr.segments[0].lk) is not None}")
+      f"{fast_eom(tr.segments[0].lk) is not None}, compiled DOP853 loop: {looped}")
 """
 
 

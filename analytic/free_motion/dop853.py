@@ -20,9 +20,8 @@ by the kernel again.
 As for the equation of motion, no call waits for a compile: the kernel (one for every
 mechanism) is loaded from numba's on-disk cache, or compiled by a background process
 while ``solve_ivp`` answers (``XVAL_FUSED=always``: compiled at once).  It serves a
-mechanism whose compiled equation of motion runs on the solver's fused kernel with
-constant motor efforts (not a parallelogram chain, not a motor table: those evaluations
-need Python per state).
+mechanism whose compiled equation of motion runs on the solver's fused kernel (not a
+parallelogram chain: its verified stretches are Python's).
 ``XVAL_FREE_COMPILED=0`` turns it off with the compiled equation of motion,
 ``XVAL_FREE_LOOP=0`` only this loop.
 """
@@ -125,6 +124,20 @@ def _ready(kern, compile_now: bool):
     return None
 
 
+def _tables(motors) -> tuple:
+    """The motors' effort tables as the kernel reads them (``TABLES``)."""
+    tt, te, row0 = [], [], [0]
+    for mo in motors:
+        if mo.times:
+            ts, es = mo._table
+            tt.append(ts)
+            te.append(es)
+        row0.append(row0[-1] + (len(mo.times) if mo.times else 0))
+    cat = (lambda a: np.ascontiguousarray(np.concatenate(a), float)) if tt else (
+        lambda a: np.zeros(0))
+    return cat(tt), cat(te), np.array(row0, np.int64)
+
+
 class _Loop:
     """The kernel's arguments for one :class:`.compiled.FastEOM` (its arrays, shared:
     the kernel leaves them as ``FastEOM.evaluate`` would)."""
@@ -136,6 +149,7 @@ class _Loop:
                    fe._statf, fe._susp]
         self.fo = fe._outs
         self.ea = [fe.eff, None, lay.iv, lay.fv, lay.cv, p.x, p.xq, p.xqq, p.out]
+        self.tab = _tables(fe.motors)
         loops = 1.0 if fe.lk.topo.n_loops else 0.0
         self.st = np.array([0.0, 0.0, 0.0, rtol, math.nan, 0.0, fe._tol, -math.inf,
                             math.inf, loops, ratio])
@@ -175,8 +189,8 @@ class _Loop:
         ts = np.empty(CHUNK)
         ys = np.empty((CHUNK, len(y)))
         F = np.empty((CHUNK, 7, len(y)))
-        m.kernel(fe.fk.fn, tuple(self.fa), self.fo, fe.eom, tuple(self.ea), _scipy().co, st,
-                self.ist, y, f, self.atol, self.scale, ts, ys, F)
+        m.kernel(fe.fk.fn, tuple(self.fa), self.fo, fe.eom, tuple(self.ea), self.tab,
+                 _scipy().co, st, self.ist, y, f, self.atol, self.scale, ts, ys, F)
         fe.key = None if math.isnan(st[S_KEY]) else float(st[S_KEY])
         fe.p = fe.fused_p
         n = int(self.ist[1])
@@ -198,8 +212,7 @@ def _fast_of(sysm) -> FastEOM | None:
     fe = sysm.fast
     if isinstance(fe, _Pending):
         fe = fe.real
-    if (isinstance(fe, FastEOM) and fe.fk is not None and fe.chain is None
-            and not fe._tables):
+    if isinstance(fe, FastEOM) and fe.fk is not None and fe.chain is None:
         return fe
     return None
 

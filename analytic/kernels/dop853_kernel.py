@@ -58,6 +58,9 @@ FARGS = types.Tuple((F1, F1, F1, F2, F1, C1, F1, I1, F1, I1))
 FOUT = types.Tuple((F2, F2, F2, F2, F2, F2, C2, C2, C2, C2, F3, F1, C2, C2, F3, F3, F2))
 #: the equation's other arguments: efforts, ref, iv, fv, cv, x, x_q, x_qq, out
 EARGS = types.Tuple((F1, F1, I1, F1, C1, F1, F1, F1, F1))
+#: the motors' effort tables: times, efforts (all motors' rows, one after the other) and
+#: each motor's first row (n_motors + 1 entries); a motor without a table has no rows
+TABLES = types.Tuple((F1, F1, I1))
 #: DOP853's tableau: A (16, 16), B (12), C (16), E3 (13), E5 (13), D (4, 16)
 COEF = types.Tuple((F2, F1, F1, F1, F1, F2))
 
@@ -74,9 +77,10 @@ EXPONENT = -1.0 / 8.0  # -1 / (error estimator order 7 + 1)
 
 
 @njit(cache=True, nogil=True)
-def _config(fused, fa, fo, eom, ea, st, q, qd):
-    """The equation of motion at ``(q, qd)`` into ``ea[8]`` (``FastEOM.evaluate`` and
-    ``_System._fast``); False where the Python path must answer."""
+def _config(fused, fa, fo, eom, ea, tab, st, t, q, qd):
+    """The equation of motion at ``(q, qd)`` and time ``t`` into ``ea[8]``
+    (``FastEOM.evaluate`` and ``_System._fast``); False where the Python path must
+    answer."""
     new = not q == st[S_KEY]  # a NaN key: nothing held
     if new:
         if not (st[S_LO] <= q < st[S_HI]):  # another row of branch signs
@@ -94,6 +98,10 @@ def _config(fused, fa, fo, eom, ea, st, q, qd):
             st[S_KEY] = np.nan
             return False
     eff, ref, iv, fv, cv, x, xq, xqq, out = ea
+    tt, te, row0 = tab
+    for m in range(row0.shape[0] - 1):  # Motor.at: np.interp in the table, if any
+        if row0[m + 1] > row0[m]:
+            eff[m] = np.interp(t, tt[row0[m]:row0[m + 1]], te[row0[m]:row0[m + 1]])
     eom(0, 1 if new else 0, q, qd, eff, ref, iv, fv, cv, fo[3], fo[4], fo[5], fo[6], fo[7],
         fo[8], fo[9], fo[0], fo[1], fo[2], x, xq, xqq, out)
     if new:
@@ -103,10 +111,10 @@ def _config(fused, fa, fo, eom, ea, st, q, qd):
 
 
 @njit(cache=True, nogil=True)
-def _rhs(fused, fa, fo, eom, ea, st, yv, k, row):
-    """``K[row] = (q', q'', motor power, load power, damper power)`` at state ``yv``;
+def _rhs(fused, fa, fo, eom, ea, tab, st, t, yv, k, row):
+    """``K[row] = (q', q'', motor power, load power, damper power)`` at ``(t, yv)``;
     False where the Python path answers (it would take the numpy path or raise)."""
-    if not _config(fused, fa, fo, eom, ea, st, yv[0], yv[1]):
+    if not _config(fused, fa, fo, eom, ea, tab, st, t, yv[0], yv[1]):
         return False
     out = ea[8]
     if not (math.isfinite(out[8]) and out[0] > 0):
@@ -147,26 +155,28 @@ def _error_norm(k, co, h, y, y_new, atol, rtol):
 
 
 @njit(cache=True, nogil=True)
-def _attempt(fused, fa, fo, eom, ea, co, st, t, h, y, k):
+def _attempt(fused, fa, fo, eom, ea, tab, co, st, t, h, y, k):
     """One try of ``rk_step`` from ``(t, y)`` (``K[0]`` holds ``f``) over ``h``: the
     stages into ``K[1:13]``; the new state, or None where a stage goes to the Python
     path."""
-    A, B = co[0], co[1]
+    A, B, C = co[0], co[1], co[2]
     for s in range(1, N_STAGES):
-        if not _rhs(fused, fa, fo, eom, ea, st, _stage(k, A[s], s, h, y), k, s):
+        if not _rhs(fused, fa, fo, eom, ea, tab, st, t + C[s] * h, _stage(k, A[s], s, h, y),
+                    k, s):
             return None
     y_new = y + h * np.dot(k[:N_STAGES].T, B)
-    if not _rhs(fused, fa, fo, eom, ea, st, y_new, k, N_STAGES):
+    if not _rhs(fused, fa, fo, eom, ea, tab, st, t + h, y_new, k, N_STAGES):
         return None
     return y_new
 
 
 @njit(cache=True, nogil=True)
-def _dense(fused, fa, fo, eom, ea, co, st, h, y_old, y_new, k, F):
+def _dense(fused, fa, fo, eom, ea, tab, co, st, t_old, h, y_old, y_new, k, F):
     """``DOP853._dense_output_impl``: the three extra stages, then ``F`` (7, n)."""
-    A, D = co[0], co[5]
+    A, C, D = co[0], co[2], co[5]
     for s in range(N_STAGES + 1, 16):
-        if not _rhs(fused, fa, fo, eom, ea, st, _stage(k, A[s], s, h, y_old), k, s):
+        if not _rhs(fused, fa, fo, eom, ea, tab, st, t_old + C[s] * h,
+                    _stage(k, A[s], s, h, y_old), k, s):
             return False
     f_old = k[0]
     delta_y = y_new - y_old
@@ -178,10 +188,11 @@ def _dense(fused, fa, fo, eom, ea, co, st, h, y_old, y_new, k, F):
 
 
 @njit(cache=True, nogil=True)
-def _switch(fused, fa, fo, eom, ea, st, scale, q):
+def _switch(fused, fa, fo, eom, ea, tab, st, scale, q):
     """``_System.switch``: the largest joint rate per unit rate of ``q``, less the
-    switching ratio (NaN where the Python path answers)."""
-    if not _config(fused, fa, fo, eom, ea, st, q, 0.0):
+    switching ratio (NaN where the Python path answers); evaluated at rest and t = 0,
+    as ``_System.ratios``."""
+    if not _config(fused, fa, fo, eom, ea, tab, st, 0.0, q, 0.0):
         return np.nan
     xq = ea[6]
     r = -np.inf
@@ -193,7 +204,7 @@ def _switch(fused, fa, fo, eom, ea, st, scale, q):
 
 
 @njit(cache=True, nogil=True)
-def _step(fused, fa, fo, eom, ea, co, st, y, f, atol, k):
+def _step(fused, fa, fo, eom, ea, tab, co, st, y, f, atol, k):
     """``_step_impl`` from ``(st[S_T], y)`` with ``f``: returns ``(evaluations, h,
     y_new)`` of the accepted step (``K[12]`` its derivative, ``st[S_H]`` the next step
     size), or ``(-1, 0, y)`` where the Python path takes it."""
@@ -213,7 +224,7 @@ def _step(fused, fa, fo, eom, ea, co, st, y, f, atol, k):
         h = t_new - t
         h_abs = abs(h)
         k[0] = f
-        y_new = _attempt(fused, fa, fo, eom, ea, co, st, t, h, y, k)
+        y_new = _attempt(fused, fa, fo, eom, ea, tab, co, st, t, h, y, k)
         if y_new is None:
             return -1, 0.0, y
         nfev += N_STAGES
@@ -231,11 +242,13 @@ def _step(fused, fa, fo, eom, ea, co, st, y, f, atol, k):
 
 
 #: ``kernel``'s one signature (compiled at import)
-SIG = types.void(FUSED, FARGS, FOUT, EOM, EARGS, COEF, F1, I1, F1, F1, F1, F1, F1, F2, F3)
+SIG = types.void(FUSED, FARGS, FOUT, EOM, EARGS, TABLES, COEF, F1, I1, F1, F1, F1, F1, F1,
+                 F2, F3)
 
 
 @njit(SIG, cache=True, nogil=True)
-def kernel(fused, fa, fo, eom, ea, co, st, ist, y, f, atol, scale, ts, ys_out, F_out):
+def kernel(fused, fa, fo, eom, ea, tab, co, st, ist, y, f, atol, scale, ts, ys_out,
+           F_out):
     """Up to ``ist[0]`` steps from ``(st[S_T], y)`` with derivative ``f`` (both updated):
     step ``i``'s time, state and dense-output coefficients into ``ts[i]``, ``ys_out[i]``,
     ``F_out[i]``; ``ist[1]`` steps taken, ``ist[2]`` why it returned, ``ist[3]`` the
@@ -249,13 +262,14 @@ def kernel(fused, fa, fo, eom, ea, co, st, ist, y, f, atol, scale, ts, ys_out, F
     while ist[1] < ist[0]:
         ref0[:] = ref
         h0 = st[S_H]
-        nfev, h, y_new = _step(fused, fa, fo, eom, ea, co, st, y, f, atol, k)
+        nfev, h, y_new = _step(fused, fa, fo, eom, ea, tab, co, st, y, f, atol, k)
         i = ist[1]
         t_old = st[S_T]
-        if nfev < 0 or not _dense(fused, fa, fo, eom, ea, co, st, h, y, y_new, k, F_out[i]):
+        if nfev < 0 or not _dense(fused, fa, fo, eom, ea, tab, co, st, t_old, h, y, y_new,
+                                  k, F_out[i]):
             g = np.nan
         else:
-            g = _switch(fused, fa, fo, eom, ea, st, scale, y_new[0])
+            g = _switch(fused, fa, fo, eom, ea, tab, st, scale, y_new[0])
         if not math.isfinite(g):  # undone: the Python path takes this step
             ref[:] = ref0
             st[S_KEY] = np.nan  # the poses held are a later stage's: computed anew
