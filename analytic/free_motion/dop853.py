@@ -96,11 +96,15 @@ class _LoopModule:
 _LOOP: list = []
 
 
+def _off() -> bool:
+    """``XVAL_FREE_LOOP=0``: ``solve_ivp`` steps every segment."""
+    return os.environ.get("XVAL_FREE_LOOP", "1").strip().lower() in ("0", "off", "no",
+                                                                     "false")
+
+
 def loop_kernel(compile_now: bool = False):
     """The compiled loop, or ``None`` (compiling in the background, or turned off)."""
-    if os.environ.get("XVAL_FREE_LOOP", "1").strip().lower() in ("0", "off", "no", "false"):
-        return None
-    if _scipy() is None:
+    if _off() or _scipy() is None:
         return None
     if not _LOOP:
         _LOOP.append(_LoopModule())
@@ -221,7 +225,7 @@ def solve(sysm, span, y0, rtol: float, atol, ratio: float):
     """``solve_ivp(sysm, span, y0, method="DOP853", rtol=rtol, atol=atol,
     dense_output=True, events=[sysm.switch])``, the steps in compiled code where it can
     (``ratio``: the switching ratio the event subtracts, for the kernel's event)."""
-    if _scipy() is None or sysm.fast is None:
+    if _scipy() is None or sysm.fast is None or _off():
         return solve_ivp(sysm, span, y0, method="DOP853", rtol=rtol, atol=atol,
                          dense_output=True, events=[sysm.switch])
     return _Run(sysm, span, y0, rtol, atol, ratio).result()

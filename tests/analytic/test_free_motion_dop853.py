@@ -198,6 +198,21 @@ def test_loop_matches_solve_ivp(name, loop, monkeypatch):
     assert max(worst.values()) <= tol, worst
 
 
+def test_steps_by_scipy_while_the_loop_compiles(loop, monkeypatch):
+    """The kernel not yet compiled: this module's copy of solve_ivp's loop steps with
+    SciPy's solver, and gives solve_ivp's trajectory."""
+    make, T, tol = _cases()["rocker-switching"]
+    mech = make()
+    monkeypatch.setenv("XVAL_FUSED", "always")
+    monkeypatch.setattr(dop853, "loop_kernel", lambda compile_now=False: None)
+    fast = simulate(mech, duration=T)
+    monkeypatch.setenv("XVAL_FREE_LOOP", "0")
+    ref = simulate(mech, duration=T)
+    assert fast.nfev == ref.nfev and len(fast.switches) == len(ref.switches)
+    worst = largest_change(fast, ref, np.linspace(0.0, T, 101))
+    assert max(worst.values()) <= CHANGE_REL, worst
+
+
 def test_wall_limit_stops_a_looped_run(loop):
     """A 1e4 s run of the seed four-bar, all of it in the kernel, stops at a 1 s limit:
     the clock is read between chunks of :data:`dop853.CHUNK` steps (milliseconds)."""
