@@ -221,6 +221,14 @@ def _fast_of(sysm) -> FastEOM | None:
     return None
 
 
+def _compatible(mod, fe: FastEOM) -> bool:
+    """Whether the kernel's function types are the compiled signatures of ``fe``'s two
+    functions (a kernel edited without this loop's types: SciPy steps, not a crash)."""
+    def has(fn, ftype) -> bool:
+        return any(tuple(s.args) == tuple(ftype.signature.args) for s in fn.nopython_signatures)
+    return has(fe.eom, mod.EOM) and has(fe.fk.fn, mod.FUSED)
+
+
 def solve(sysm, span, y0, rtol: float, atol, ratio: float):
     """``solve_ivp(sysm, span, y0, method="DOP853", rtol=rtol, atol=atol,
     dense_output=True, events=[sysm.switch])``, the steps in compiled code where it can
@@ -256,7 +264,7 @@ class _Run:
             self.next_check = time.monotonic() + RECHECK_S
             mod = loop_kernel()  # its background compile starts with the equation's
             fe = _fast_of(self.sysm)
-            if mod is not None and fe is not None:
+            if mod is not None and fe is not None and _compatible(mod, fe):
                 self.loop = _Loop(mod, fe, self.sysm, self.rtol, self.atol, self.ratio)
         return self.loop
 
