@@ -5,14 +5,16 @@
     python benchmarks/bench_free_motion.py --first-call
 
 ``--engines`` (issue 34): the exact reference's CPU time, compiled equation of motion
-(:mod:`analytic.free_motion.compiled`) and the numpy path before it, against each
+(:mod:`analytic.free_motion.compiled`) stepped by the compiled DOP853 loop
+(:mod:`analytic.free_motion.dop853`), by ``solve_ivp`` (the loop off: "exact solve_ivp")
+and the numpy path before both, against each
 engine at its recommended free settings (``free_settings``; A03 at ``A03_STEP``) on
 the same case and duration, one process, interleaved, min and median of the repeats;
 then the equation of motion's evaluations per second (one right-hand side call, as
 the integrator makes it) before and after, and the largest change of any sampled
-quantity between the two paths (fraction of its range).  ``--first-call``: a new
-process with empty kernel caches (the numpy path answers while a background process
-compiles), and a second one once the caches are filled.
+quantity against the numpy path and against ``solve_ivp`` (fraction of its range).
+``--first-call``: a new process with empty kernel caches (the numpy path answers while
+a background process compiles), and a second one once the caches are filled.
 
 Times :func:`analytic.free_motion.simulate` on A03 (Andrews' squeezer, 0.03 s), A01
 (the pendulum, 20 s by default; the published run is 2000 s) and A02 (the N four-bar,
@@ -171,6 +173,28 @@ class _NumpyPath:
         self.mod.fast_eom = self.saved
 
 
+class _NoLoop:
+    """The compiled equation of motion stepped by ``solve_ivp`` (the compiled DOP853 loop
+    of :mod:`analytic.free_motion.dop853` off: the implementation before it)."""
+
+    def __enter__(self):
+        import os
+        self.saved = os.environ.get("XVAL_FREE_LOOP")
+        os.environ["XVAL_FREE_LOOP"] = "0"
+
+    def __exit__(self, *exc):
+        import os
+        if self.saved is None:
+            os.environ.pop("XVAL_FREE_LOOP", None)
+        else:
+            os.environ["XVAL_FREE_LOOP"] = self.saved
+
+
+def _no_loop_sim(mech, T):
+    with _NoLoop():
+        return simulate(mech, duration=T)
+
+
 def _cpu(fn):
     c0 = time.process_time()
     out = fn()
@@ -181,7 +205,9 @@ def _warm(mech, T):
     """Kernels compiled (or loaded) before timing: the steady state of a machine that
     ran the case once (the first call's cost is measured by ``--first-call``)."""
     from analytic.free_motion.compiled import prepare
+    from analytic.free_motion.dop853 import loop_kernel
     assert prepare(mech), "the compiled path does not serve this case"
+    assert loop_kernel(compile_now=True) is not None, "no compiled DOP853 loop"
     simulate(mech, duration=min(T, 0.01))
 
 
@@ -209,9 +235,11 @@ def engines_table(names, repeats: int) -> None:
                 print(f"  {e}: not run ({str(exc).splitlines()[0][:100]})")
                 del runners[e]
                 engines = tuple(x for x in engines if x != e)
+        runners["exact solve_ivp"] = lambda m=mech, T=T: _no_loop_sim(m, T)
         runners["exact numpy path"] = lambda m=mech, T=T: _numpy_sim(m, T)
         times = {k: [] for k in runners}
         ratios = {e: [] for e in engines}
+        ratios["solve_ivp"] = []
         for _ in range(repeats):  # interleaved: each repeat runs every runner once
             for k, fn in runners.items():
                 if k == "exact numpy path" and name == "a02" and times[k]:
@@ -219,15 +247,17 @@ def engines_table(names, repeats: int) -> None:
                 times[k].append(_cpu(fn)[0])
             for e in engines:
                 ratios[e].append(times["exact"][-1] / times[e][-1])
+            ratios["solve_ivp"].append(times["exact"][-1] / times["exact solve_ivp"][-1])
         print(f"\n{name} ({T:g} s): CPU s, min / median of {repeats}")
         for k, v in times.items():
             print(f"  {k:18s} {min(v):8.3f} / {float(np.median(v)):8.3f}")
-        for e in engines:
+        for e in (*engines, "solve_ivp"):
             r = ratios[e]
             print(f"  exact / {e:9s} {min(r):8.2f} / {float(np.median(r)):8.2f} "
                   "(ratio within each repeat)")
         _eom_rate(mech, T, ref)
         _changes(mech, T, ref)
+        _changes(mech, T, ref, _no_loop_sim, "solve_ivp (no compiled loop)")
 
 
 def _numpy_sim(mech, T):
@@ -259,9 +289,10 @@ def _eom_rate(mech, T, ref, n: int = 2000) -> None:
           f"{rates['compiled']:,.0f} compiled ({rates['compiled'] / rates['numpy']:.0f}x)")
 
 
-def _changes(mech, T, ref) -> None:
-    """The largest change of each sampled quantity, compiled against numpy path."""
-    old = _numpy_sim(mech, T)
+def _changes(mech, T, ref, other=None, what: str = "numpy path") -> None:
+    """The largest change of each sampled quantity, compiled against the numpy path (or
+    ``other``'s run, said as ``what``)."""
+    old = (other or _numpy_sim)(mech, T)
     ts = np.linspace(0.0, T, 201)
     a, b = ref.at(ts, forces=False), old.at(ts, forces=False)
     worst = {}
@@ -276,7 +307,7 @@ def _changes(mech, T, ref) -> None:
     k = max(worst, key=worst.get)
     dt = max((abs(e.t - f.t) for e, f in zip(ref.events, old.events, strict=False)),
              default=0.0)
-    print(f"  largest change vs numpy path: {worst[k]:.1e} of range ({k}); events "
+    print(f"  largest change vs {what}: {worst[k]:.1e} of range ({k}); events "
           f"{len(ref.events)} vs {len(old.events)}, times within {dt:.1e} s; "
           f"evaluations {ref.nfev} vs {old.nfev}")
 
@@ -293,9 +324,12 @@ c1, w1 = time.process_time(), time.perf_counter()
 tr = simulate(m, duration=2.0)
 c2, w2 = time.process_time(), time.perf_counter()
 from analytic.free_motion.compiled import fast_eom
+from analytic.free_motion import dop853
+from analytic.kernels.cache import _MODULES
+looped = bool(dop853._LOOP) and dop853._LOOP[0].name in _MODULES
 print(f"imports {c1 - c0:.2f} s CPU ({w1 - w0:.2f} wall); simulate 2 s: {c2 - c1:.2f} s "
       f"CPU ({w2 - w1:.2f} wall), {tr.nfev} evaluations, compiled path used: "
-      f"{fast_eom(tr.segments[0].lk) is not None}")
+      f"{fast_eom(tr.segments[0].lk) is not None}, compiled DOP853 loop: {looped}")
 """
 
 

@@ -26,6 +26,7 @@ from ..errors import AssemblyError, LinkageError
 from ..kinematics import Linkage
 from ..mechanism import Assembly, Driver, Revolute, mechanism_size
 from ..motion_spec import unreachable
+from . import dop853
 from .clock import WallClock
 from .compiled import fast_eom
 from .dynamics import check_masses, coefficients, terms, unwrap_to
@@ -237,8 +238,11 @@ def integrate(mech, duration: float | None = None, rtol: float = RTOL,
         atol = rtol * np.array([qs, rate_scale, e_scale, e_scale, e_scale])
         # a motor table's kinks end a segment: a high-order step across one loses its order
         t_end = next((b for b in stops if b > t), T)
-        sol = solve_ivp(sysm, (t, t_end), y, method=method, rtol=rtol, atol=atol,
-                        dense_output=True, events=[sysm.switch])
+        if method == "DOP853":  # SciPy's steps, taken in compiled code where it can
+            sol = dop853.solve(sysm, (t, t_end), y, rtol, atol, SWITCH_RATIO)
+        else:
+            sol = solve_ivp(sysm, (t, t_end), y, method=method, rtol=rtol, atol=atol,
+                            dense_output=True, events=[sysm.switch])
         if sol.status < 0:
             raise _failed(mech, sysm, sol, float(y[0]))
         xs = _unwrapped_track(lk, sol.t, sol.y[0], x_ref)

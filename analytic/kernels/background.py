@@ -76,7 +76,9 @@ def _main(module: str, args: str) -> int:
     lock = Path(module).with_name(f"{name}.compiling")
     try:
         mod = _load(Path(module).read_text())
-        mod.kernel(*pickle.loads(Path(args).read_bytes()))
+        sample = pickle.loads(Path(args).read_bytes())
+        if sample is not None:  # None: an explicit signature compiled it at import
+            mod.kernel(*sample)
         mark_ready(name, mod.kernel)
         return 0
     finally:
