@@ -85,15 +85,34 @@ class JointDamper:
     coefficient: float
 
 
+class _NoTable(tuple):
+    """The empty ``times``/``efforts`` of a constant motor (their default): told apart
+    from a table given with no rows (``times=()``), which :func:`check_motion` refuses
+    (it would otherwise run as a motor of no effort).  Equal to ``()``, so a motor's
+    identity (``reports.regression.model_identity``) is unchanged."""
+
+    __slots__ = ()
+
+
+#: The default of :attr:`Motor.times` and :attr:`Motor.efforts`: no table.
+NO_TABLE = _NoTable()
+
+
 @dataclass(frozen=True)
 class Motor:
-    """An effort on a joint's coordinate: constant (``times`` empty) or a table
-    ``(times s, efforts)`` interpolated linearly, times strictly increasing."""
+    """An effort on a joint's coordinate: constant (``effort``; ``times`` and
+    ``efforts`` not given) or a table ``(times s, efforts)`` of at least 2 rows
+    interpolated linearly, times strictly increasing."""
 
     joint: str
     effort: float = 0.0
-    times: tuple[float, ...] = ()
-    efforts: tuple[float, ...] = ()
+    times: tuple[float, ...] = NO_TABLE
+    efforts: tuple[float, ...] = NO_TABLE
+
+    @property
+    def tabulated(self) -> bool:
+        """Whether a table was given (``times`` or ``efforts``, even empty)."""
+        return not (isinstance(self.times, _NoTable) and isinstance(self.efforts, _NoTable))
 
     def at(self, t: float) -> float:
         """The effort at time ``t`` (s): N m or N."""
@@ -199,13 +218,21 @@ def check_motion(mech) -> None:
 
 def _check_motor(mech, m: Motor, duration: float, where: str) -> None:
     _joint(mech, m.joint, where)
-    if not m.times:
+    if not m.tabulated:
         if not (math.isfinite(m.effort) and abs(m.effort) <= MAX_EFFORT):
             raise DescriptionError(f"effort = {m.effort:g} is out of range: the accepted range "
                                    f"is |effort| <= {MAX_EFFORT:g} N m or N", where)
         return
-    if len(m.times) != len(m.efforts) or len(m.times) < 2:
-        raise DescriptionError("a motor table needs at least 2 rows [time, effort]", where)
+    if m.effort != 0.0:
+        raise DescriptionError("a motor needs exactly one of effort (constant) or table "
+                               "([[time s, effort], ...]), not both", where)
+    if len(m.times) != len(m.efforts):
+        raise DescriptionError(f"table: {len(m.times)} times and {len(m.efforts)} efforts; "
+                               "each row [time, effort] needs both", where)
+    if len(m.times) < 2:
+        raise DescriptionError(f"table has {len(m.times)} row(s): a motor table needs at "
+                               "least 2 rows [time, effort] (a constant effort: give effort "
+                               "instead)", where)
     if len(m.times) > MAX_TABLE:
         raise DescriptionError(f"a motor table has at most {MAX_TABLE} rows, got "
                                f"{len(m.times)}", where)

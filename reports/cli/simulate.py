@@ -97,18 +97,13 @@ def cmd_simulate(args) -> int:
     if bad:  # judged runs: every door's range (reports.comparison.free_cases.FREE_SAMPLES)
         raise opt.UsageError(("argument --samples: " if args.samples else
                               f"{args.case}: [motion] samples with --engine: ") + bad[2])
-    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
-    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s"):
-        traj = simulate(mech, args.duration,
-                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
+    traj, smp = _exact(args, mech, n)
     if release is not None and not args.json:
         print(release.text)
     if getattr(args, "engine", None):
         if args.csv:
-            smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
             write_csv(_frame(mech, smp), args.csv, args.stdout)
         return cmd_engines(args, mech, traj, n, release)
-    smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
     frame = _frame(mech, smp)
     if args.json:
         out = {"case": mech.name, "duration_s": traj.duration, "rtol": traj.rtol,
@@ -128,6 +123,22 @@ def cmd_simulate(args) -> int:
     if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
+
+
+def _exact(args, mech, n: int):
+    """The exact trajectory and its ``n`` samples (None with ``--engine`` and no
+    ``--csv``: the engines sample it at their own times), both under one wall clock
+    (``--wall-limit``), with their progress on a terminal: ``t`` of the duration while
+    it integrates, the samples done of ``n`` while it samples."""
+    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
+    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s") as line:
+        traj = simulate(mech, args.duration, progress=line.time,
+                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
+        if getattr(args, "engine", None) and not args.csv:
+            return traj, None
+        traj.clock.sample_progress = line.samples
+        return traj, traj.at(np.linspace(0.0, traj.duration, n), forces=False,
+                             clock=traj.clock)
 
 
 def _print_table(mech, smp, traj) -> None:

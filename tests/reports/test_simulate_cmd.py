@@ -207,3 +207,31 @@ def test_simulate_labels_and_exits_as_the_report_does(monkeypatch):
         "simulate seed-four-bar-released: 1 of 2 engines pass, 1 known engine limit "
         "(pybullet; not counted); exit status 0")
     assert code == 0
+
+
+def test_sampling_stops_at_the_wall_limit_with_one_line(capsys):
+    """Issue 30's shortfall: ``--samples 1000000`` (the top of the range) sampled for
+    minutes past ``--wall-limit``.  A 0.05 s run integrates in well under a second, and
+    its 1e6 samples take ~20 s on this machine: the limit of 2 s now ends the sampling
+    with the integration's message form (file, limit, samples done of N), status 2."""
+    code, out = run("simulate", "seed-four-bar", "--duration", "0.05", "--samples",
+                    "1000000", "--wall-limit", "2")
+    err = capsys.readouterr().err
+    assert code == 2 and out == "", (out, err)
+    assert err.count("\n") == 1 and err.startswith("xval: error: "), err
+    assert re.search(r"seed-four-bar\.toml: mechanism 'seed-four-bar-released': sampling the "
+                     r"exact trajectory reached the wall-clock limit of 2 s at [\d,]+ of "
+                     r"1,000,000 samples .*raise --wall-limit or lower --samples", err), err
+
+
+def test_motor_table_without_rows_is_refused_not_run_as_no_motor(tmp_path, capsys):
+    """``table = []`` ran as no motor at all; one line naming the file, the motor and the
+    key now, status 2 (one row, as before, the same)."""
+    for rows, n in (("[]", 0), ("[[0.0, 0.3]]", 1)):
+        f = tmp_path / f"rows{n}.toml"
+        f.write_text(edit("[[0.0, 0.0], [1.0, 0.3]]", rows)(_seed() + MOTION))
+        code, _ = run("simulate", str(f), "--duration", "0.05")
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert f"rows{n}.toml: motor 0: table has {n} row(s): a motor table needs at least " \
+               "2 rows" in err, err
