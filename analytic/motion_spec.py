@@ -31,6 +31,12 @@ MAX_DURATION = 1e4
 #: Most output samples of a free trajectory (a table of 8 bytes x ~100 columns x 1e6
 #: rows is ~1 GB).
 MAX_SAMPLES = 1_000_000
+#: Most values in a free trajectory's sample table (samples x :func:`sample_columns`):
+#: a four-bar's 21 columns at :data:`MAX_SAMPLES`, measured at 2.4 GB peak with ``xval
+#: simulate --json`` (0.75 GB printed or as CSV).  Memory grows with the joints (A02's
+#: 121 joints took 1.1 GB at 1e5 samples), so a larger mechanism gets proportionally
+#: fewer samples (:func:`max_samples`; A02: 56,451).
+MAX_SAMPLE_VALUES = 21 * MAX_SAMPLES
 #: Largest stiffness (N/m, N m/rad) and damping coefficient (N s/m, N m s/rad).
 MAX_STIFFNESS = 1e12
 #: Largest motor effort (N m or N), as a load.
@@ -193,10 +199,8 @@ def check_motion(mech) -> None:
     if not (isinstance(fm.duration, int | float) and 0 < fm.duration <= MAX_DURATION):
         raise DescriptionError(f"duration = {fm.duration!r} s is out of range: the accepted "
                                f"range is 0 < duration <= {MAX_DURATION:g} s", mw)
-    if isinstance(fm.samples, bool) or not isinstance(fm.samples, int) \
-            or not 2 <= fm.samples <= MAX_SAMPLES:
-        raise DescriptionError(f"samples = {fm.samples!r} is out of range: the accepted range "
-                               f"is 2 to {MAX_SAMPLES}", mw)
+    if (bad := samples_problem(mech, fm.samples)) is not None:
+        raise DescriptionError(f"samples = {bad}", mw)
     for i, s in enumerate(fm.springs):
         sw = _w(mech, f"spring {i}")
         if isinstance(s, PointSpring):
@@ -214,6 +218,31 @@ def check_motion(mech) -> None:
         _nonneg(d.coefficient, MAX_STIFFNESS, "coefficient", "N s/m or N m s/rad", dw)
     for i, m in enumerate(fm.motors):
         _check_motor(mech, m, fm.duration, _w(mech, f"motor {i}"))
+
+
+def sample_columns(mech) -> int:
+    """Columns of a free trajectory's sample table (``xval simulate --csv``/``--json``):
+    the time, each joint's coordinate, rate and acceleration, the integrated coordinate,
+    and 7 energy, work and power columns."""
+    return 3 * len(mech.joints) + 9
+
+
+def max_samples(mech) -> int:
+    """The most output samples of ``mech``'s free trajectory: :data:`MAX_SAMPLES`, fewer
+    for a mechanism whose table would exceed :data:`MAX_SAMPLE_VALUES` values."""
+    return max(2, min(MAX_SAMPLES, MAX_SAMPLE_VALUES // sample_columns(mech)))
+
+
+def samples_problem(mech, n) -> str | None:
+    """``None`` when ``n`` output samples are in range for ``mech`` (every door: the
+    file's ``[motion] samples``, ``xval simulate --samples``), else the range in words."""
+    top = max_samples(mech)
+    if not isinstance(n, bool) and isinstance(n, int) and 2 <= n <= top:
+        return None
+    why = "" if top == MAX_SAMPLES else (
+        f" for {len(mech.joints)} joints ({sample_columns(mech)} columns a sample, at "
+        f"most {MAX_SAMPLE_VALUES:,} values: memory)")
+    return f"{n!r} is out of range: the accepted range is 2 to {top}{why}"
 
 
 def _check_motor(mech, m: Motor, duration: float, where: str) -> None:

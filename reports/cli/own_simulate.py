@@ -10,6 +10,7 @@ import json
 import numpy as np
 
 from analytic.free_motion import simulate
+from analytic.motion_spec import samples_problem
 from reports.cli import options as opt
 from reports.cli.own_import import own_closes
 from reports.cli.paths import check_outputs
@@ -41,6 +42,8 @@ def cmd_simulate_own(args, print_table) -> int:
     imp = import_model(args.case, args.driver, args.keyframe,
                        args.duration or DEFAULT_DURATION, own_closes(args))
     mech = imp.mechanism
+    if args.samples and (bad := samples_problem(mech, args.samples)):
+        raise opt.UsageError(f"argument --samples: {bad}")  # a description's range
     n = args.samples or mech.motion.samples
     with engine_progress(f"exact integration: {args.case}, free motion "
                          f"{mech.motion.duration:g} s") as line:

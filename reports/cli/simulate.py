@@ -21,7 +21,7 @@ import pandas as pd
 from analytic.errors import OutputError
 from analytic.free_motion import simulate
 from analytic.mechanism import Revolute
-from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES, samples_problem
 from reports.cli import options as opt
 from reports.cli.own_options import add_own_options
 from reports.cli.paths import write_csv
@@ -50,7 +50,8 @@ def register(sub) -> None:
                    help=f"seconds, {MIN_DURATION:g} to {MAX_DURATION:g} (default: the "
                         "description's)")
     s.add_argument("--samples", type=opt.int_range(2, MAX_SAMPLES),
-                   help=f"output samples, 2 to {MAX_SAMPLES} (default: the description's)")
+                   help=f"output samples, 2 to {MAX_SAMPLES} (fewer for a mechanism of more "
+                        "than 4 joints: memory; default: the description's)")
     s.add_argument("--csv", type=opt.output_file,
                    help="write the samples to this CSV file ('-': standard output)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
@@ -92,6 +93,8 @@ def cmd_simulate(args) -> int:
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
     mech, release = command_case(args.case, args.duration)
+    if args.samples and (bad := samples_problem(mech, args.samples)):
+        raise opt.UsageError(f"argument --samples: {bad}")  # the file's range (memory)
     n = args.samples or (mech.motion.samples if mech.motion is not None else None)
     bad = free_request_problem(None, n) if getattr(args, "engine", None) else None
     if bad:  # judged runs: every door's range (reports.comparison.free_cases.FREE_SAMPLES)
