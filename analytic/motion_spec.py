@@ -31,6 +31,12 @@ MAX_DURATION = 1e4
 #: Most output samples of a free trajectory (a table of 8 bytes x ~100 columns x 1e6
 #: rows is ~1 GB).
 MAX_SAMPLES = 1_000_000
+#: Most values in a free trajectory's sample table (samples x :func:`sample_columns`):
+#: a four-bar's 21 columns at :data:`MAX_SAMPLES`, measured at 2.4 GB peak with ``xval
+#: simulate --json`` (0.75 GB printed or as CSV).  Memory grows with the joints (A02's
+#: 121 joints took 1.1 GB at 1e5 samples), so a larger mechanism gets proportionally
+#: fewer samples (:func:`max_samples`; A02: 56,451).
+MAX_SAMPLE_VALUES = 21 * MAX_SAMPLES
 #: Largest stiffness (N/m, N m/rad) and damping coefficient (N s/m, N m s/rad).
 MAX_STIFFNESS = 1e12
 #: Largest motor effort (N m or N), as a load.
@@ -85,15 +91,34 @@ class JointDamper:
     coefficient: float
 
 
+class _NoTable(tuple):
+    """The empty ``times``/``efforts`` of a constant motor (their default): told apart
+    from a table given with no rows (``times=()``), which :func:`check_motion` refuses
+    (it would otherwise run as a motor of no effort).  Equal to ``()``, so a motor's
+    identity (``reports.regression.model_identity``) is unchanged."""
+
+    __slots__ = ()
+
+
+#: The default of :attr:`Motor.times` and :attr:`Motor.efforts`: no table.
+NO_TABLE = _NoTable()
+
+
 @dataclass(frozen=True)
 class Motor:
-    """An effort on a joint's coordinate: constant (``times`` empty) or a table
-    ``(times s, efforts)`` interpolated linearly, times strictly increasing."""
+    """An effort on a joint's coordinate: constant (``effort``; ``times`` and
+    ``efforts`` not given) or a table ``(times s, efforts)`` of at least 2 rows
+    interpolated linearly, times strictly increasing."""
 
     joint: str
     effort: float = 0.0
-    times: tuple[float, ...] = ()
-    efforts: tuple[float, ...] = ()
+    times: tuple[float, ...] = NO_TABLE
+    efforts: tuple[float, ...] = NO_TABLE
+
+    @property
+    def tabulated(self) -> bool:
+        """Whether a table was given (``times`` or ``efforts``, even empty)."""
+        return not (isinstance(self.times, _NoTable) and isinstance(self.efforts, _NoTable))
 
     def at(self, t: float) -> float:
         """The effort at time ``t`` (s): N m or N."""
@@ -174,10 +199,8 @@ def check_motion(mech) -> None:
     if not (isinstance(fm.duration, int | float) and 0 < fm.duration <= MAX_DURATION):
         raise DescriptionError(f"duration = {fm.duration!r} s is out of range: the accepted "
                                f"range is 0 < duration <= {MAX_DURATION:g} s", mw)
-    if isinstance(fm.samples, bool) or not isinstance(fm.samples, int) \
-            or not 2 <= fm.samples <= MAX_SAMPLES:
-        raise DescriptionError(f"samples = {fm.samples!r} is out of range: the accepted range "
-                               f"is 2 to {MAX_SAMPLES}", mw)
+    if (bad := samples_problem(mech, fm.samples)) is not None:
+        raise DescriptionError(f"samples = {bad}", mw)
     for i, s in enumerate(fm.springs):
         sw = _w(mech, f"spring {i}")
         if isinstance(s, PointSpring):
@@ -197,15 +220,48 @@ def check_motion(mech) -> None:
         _check_motor(mech, m, fm.duration, _w(mech, f"motor {i}"))
 
 
+def sample_columns(mech) -> int:
+    """Columns of a free trajectory's sample table (``xval simulate --csv``/``--json``):
+    the time, each joint's coordinate, rate and acceleration, the integrated coordinate,
+    and 7 energy, work and power columns."""
+    return 3 * len(mech.joints) + 9
+
+
+def max_samples(mech) -> int:
+    """The most output samples of ``mech``'s free trajectory: :data:`MAX_SAMPLES`, fewer
+    for a mechanism whose table would exceed :data:`MAX_SAMPLE_VALUES` values."""
+    return max(2, min(MAX_SAMPLES, MAX_SAMPLE_VALUES // sample_columns(mech)))
+
+
+def samples_problem(mech, n) -> str | None:
+    """``None`` when ``n`` output samples are in range for ``mech`` (every door: the
+    file's ``[motion] samples``, ``xval simulate --samples``), else the range in words."""
+    top = max_samples(mech)
+    if not isinstance(n, bool) and isinstance(n, int) and 2 <= n <= top:
+        return None
+    why = "" if top == MAX_SAMPLES else (
+        f" for {len(mech.joints)} joints ({sample_columns(mech)} columns a sample, at "
+        f"most {MAX_SAMPLE_VALUES:,} values: memory)")
+    return f"{n!r} is out of range: the accepted range is 2 to {top}{why}"
+
+
 def _check_motor(mech, m: Motor, duration: float, where: str) -> None:
     _joint(mech, m.joint, where)
-    if not m.times:
+    if not m.tabulated:
         if not (math.isfinite(m.effort) and abs(m.effort) <= MAX_EFFORT):
             raise DescriptionError(f"effort = {m.effort:g} is out of range: the accepted range "
                                    f"is |effort| <= {MAX_EFFORT:g} N m or N", where)
         return
-    if len(m.times) != len(m.efforts) or len(m.times) < 2:
-        raise DescriptionError("a motor table needs at least 2 rows [time, effort]", where)
+    if m.effort != 0.0:
+        raise DescriptionError("a motor needs exactly one of effort (constant) or table "
+                               "([[time s, effort], ...]), not both", where)
+    if len(m.times) != len(m.efforts):
+        raise DescriptionError(f"table: {len(m.times)} times and {len(m.efforts)} efforts; "
+                               "each row [time, effort] needs both", where)
+    if len(m.times) < 2:
+        raise DescriptionError(f"table has {len(m.times)} row(s): a motor table needs at "
+                               "least 2 rows [time, effort] (a constant effort: give effort "
+                               "instead)", where)
     if len(m.times) > MAX_TABLE:
         raise DescriptionError(f"a motor table has at most {MAX_TABLE} rows, got "
                                f"{len(m.times)}", where)

@@ -28,7 +28,9 @@ def simulate(mech, duration: float | None = None, rtol: float = RTOL,
     (``"Radau"`` for a second opinion).  Returns the :class:`FreeTrajectory`, with
     ``events`` listed.  ``wall_limit`` s (None: none) bounds the integration and the
     event location (:class:`~.clock.WallLimitError` past it, checked at every
-    evaluation); ``progress(t, duration)`` is called every quarter second."""
+    evaluation); ``progress(t, duration)`` is called every quarter second.  The
+    trajectory keeps that clock as ``clock``: ``traj.at(times, clock=traj.clock)``
+    samples it under the same limit (what the command line does)."""
     if mech.motion is None:
         raise DescriptionError("no [motion] table: free motion needs the initial joint, "
                                "value, rate and duration", mech.source)
@@ -40,6 +42,7 @@ def simulate(mech, duration: float | None = None, rtol: float = RTOL,
     segs, switches = integrate(mech, duration, rtol, method, clock)
     traj = FreeTrajectory(mech, segs, switches, rtol, method)
     traj.events = find_events(traj, clock)
+    traj.clock = clock  # the same limit for its sampling: traj.at(..., clock=traj.clock)
     return traj
 
 

@@ -21,6 +21,7 @@ from scipy.optimize import brentq as _brentq
 from ..kinetostatics import solve_forces
 from ..mechanism import Load, Revolute
 from ..singular import singular_samples
+from .clock import SAMPLE_CHUNK
 from .dynamics import coefficients, element_forces, terms, unwrap_to
 from .integrate import Segment
 
@@ -129,23 +130,31 @@ class FreeTrajectory:
             y[m] = self.segments[k].sol(t[m]).T
         return y, si
 
-    def at(self, times, forces: bool = True) -> FreeSamples:
-        """The trajectory at ``times`` (s, within [0, duration])."""
+    def at(self, times, forces: bool = True, clock=None) -> FreeSamples:
+        """The trajectory at ``times`` (s, within [0, duration]), reconstructed in chunks
+        of :data:`~.clock.SAMPLE_CHUNK` samples (the working arrays stay that size);
+        ``clock``: a :class:`~.clock.WallClock` checked before each chunk
+        (:class:`~.clock.WallLimitError` past its limit, with the samples done)."""
         t = np.atleast_1d(np.asarray(times, float))
         if t.size and (t.min() < 0 or t.max() > self.duration * (1 + 1e-12)):
             raise ValueError(f"times must lie in [0, {self.duration:g}] s")
-        y, si = self.state(t)
         N, J = len(t), len(self.joints)
+        y, si = np.empty((N, 5)), np.empty(N, int)
         out = {k: np.empty((N, J)) for k in ("x", "xd", "xdd")}
         body = {k: np.empty((N, len(self.mech.bodies))) for k in ("theta", "omega", "alpha")}
         en = {k: np.empty(N) for k in ("kinetic", "potential", "motor_power")}
-        reactions = {j: np.full((N, 2), np.nan) for j in self.joints}
+        reactions = {j: np.full((N, 2), np.nan) for j in self.joints} if forces else {}
         drive = np.full(N, np.nan)
         efforts = {mo.joint: np.empty(N) for mo in self._motors()}
-        for k in np.unique(si):
-            idx = np.flatnonzero(si == k)
-            self._fill(self.segments[k], idx, t[idx], y[idx], out, body, en, efforts,
-                       reactions if forces else None, drive)
+        for c0 in range(0, N, SAMPLE_CHUNK):
+            if clock is not None:
+                clock.check_samples(c0, N)
+            c = slice(c0, min(N, c0 + SAMPLE_CHUNK))
+            y[c], si[c] = self.state(t[c])
+            for k in np.unique(si[c]):
+                idx = c0 + np.flatnonzero(si[c] == k)
+                self._fill(self.segments[k], idx, t[idx], y[idx], out, body, en, efforts,
+                           reactions if forces else None, drive)
         return FreeSamples(
             t, self.joints, [self.segments[k].joint for k in si], out["x"], out["xd"],
             out["xdd"], body["theta"], body["omega"], body["alpha"], en["kinetic"],

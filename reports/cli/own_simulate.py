@@ -10,6 +10,7 @@ import json
 import numpy as np
 
 from analytic.free_motion import simulate
+from analytic.motion_spec import samples_problem
 from reports.cli import options as opt
 from reports.cli.own_import import own_closes
 from reports.cli.paths import check_outputs
@@ -41,9 +42,16 @@ def cmd_simulate_own(args, print_table) -> int:
     imp = import_model(args.case, args.driver, args.keyframe,
                        args.duration or DEFAULT_DURATION, own_closes(args))
     mech = imp.mechanism
-    traj = simulate(mech)
+    if args.samples and (bad := samples_problem(mech, args.samples)):
+        raise opt.UsageError(f"argument --samples: {bad}")  # a description's range
     n = args.samples or mech.motion.samples
-    smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
+    with engine_progress(f"exact integration: {args.case}, free motion "
+                         f"{mech.motion.duration:g} s") as line:
+        # under --wall-limit, as a description's run (reports.cli.simulate._exact)
+        traj = simulate(mech, progress=line.time,
+                        wall_limit=args.wall_limit or FreeRequest.wall_limit)
+        traj.clock.sample_progress = line.samples
+        smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False, clock=traj.clock)
     if np.ptp(smp.x) <= STILL:  # nothing to judge a run against
         raise opt.UsageError(f"{args.case}: released from {imp.compiled.config} the model "
                              "does not move (at rest, no in-plane gravity, spring or motor); "

@@ -21,7 +21,7 @@ import pandas as pd
 from analytic.errors import OutputError
 from analytic.free_motion import simulate
 from analytic.mechanism import Revolute
-from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES
+from analytic.motion_spec import MAX_DURATION, MAX_SAMPLES, samples_problem
 from reports.cli import options as opt
 from reports.cli.own_options import add_own_options
 from reports.cli.paths import write_csv
@@ -50,7 +50,8 @@ def register(sub) -> None:
                    help=f"seconds, {MIN_DURATION:g} to {MAX_DURATION:g} (default: the "
                         "description's)")
     s.add_argument("--samples", type=opt.int_range(2, MAX_SAMPLES),
-                   help=f"output samples, 2 to {MAX_SAMPLES} (default: the description's)")
+                   help=f"output samples, 2 to {MAX_SAMPLES} (fewer for a mechanism of more "
+                        "than 4 joints: memory; default: the description's)")
     s.add_argument("--csv", type=opt.output_file,
                    help="write the samples to this CSV file ('-': standard output)")
     s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
@@ -92,23 +93,20 @@ def cmd_simulate(args) -> int:
         raise OutputError("--engine prints its verdicts to standard output; give --csv a "
                           "file name")
     mech, release = command_case(args.case, args.duration)
+    if args.samples and (bad := samples_problem(mech, args.samples)):
+        raise opt.UsageError(f"argument --samples: {bad}")  # the file's range (memory)
     n = args.samples or (mech.motion.samples if mech.motion is not None else None)
     bad = free_request_problem(None, n) if getattr(args, "engine", None) else None
     if bad:  # judged runs: every door's range (reports.comparison.free_cases.FREE_SAMPLES)
         raise opt.UsageError(("argument --samples: " if args.samples else
                               f"{args.case}: [motion] samples with --engine: ") + bad[2])
-    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
-    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s"):
-        traj = simulate(mech, args.duration,
-                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
+    traj, smp = _exact(args, mech, n)
     if release is not None and not args.json:
         print(release.text)
     if getattr(args, "engine", None):
         if args.csv:
-            smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
             write_csv(_frame(mech, smp), args.csv, args.stdout)
         return cmd_engines(args, mech, traj, n, release)
-    smp = traj.at(np.linspace(0.0, traj.duration, n), forces=False)
     frame = _frame(mech, smp)
     if args.json:
         out = {"case": mech.name, "duration_s": traj.duration, "rtol": traj.rtol,
@@ -128,6 +126,22 @@ def cmd_simulate(args) -> int:
     if args.csv and args.csv != "-":
         print(f"wrote {args.csv}")
     return 0
+
+
+def _exact(args, mech, n: int):
+    """The exact trajectory and its ``n`` samples (None with ``--engine`` and no
+    ``--csv``: the engines sample it at their own times), both under one wall clock
+    (``--wall-limit``), with their progress on a terminal: ``t`` of the duration while
+    it integrates, the samples done of ``n`` while it samples."""
+    T = args.duration or (mech.motion.duration if mech.motion else 0.0)
+    with engine_progress(f"exact integration: {mech.name}, free motion {T:g} s") as line:
+        traj = simulate(mech, args.duration, progress=line.time,
+                        wall_limit=getattr(args, "wall_limit", None) or FreeRequest.wall_limit)
+        if getattr(args, "engine", None) and not args.csv:
+            return traj, None
+        traj.clock.sample_progress = line.samples
+        return traj, traj.at(np.linspace(0.0, traj.duration, n), forces=False,
+                             clock=traj.clock)
 
 
 def _print_table(mech, smp, traj) -> None:

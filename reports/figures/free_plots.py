@@ -73,11 +73,11 @@ def parse_free_what(text: str | None) -> list[str]:
 
 def trajectory(mech, duration: float | None = None):
     """:func:`analytic.free_motion.simulate` of ``mech`` (``duration`` s, default the
-    description's), with a spinner and the elapsed time on a terminal's standard error
-    after a few seconds (a long run is not a hang)."""
+    description's), with a spinner, the time reached of the duration and the elapsed time
+    on a terminal's standard error after a few seconds (a long run is not a hang)."""
     T = mech.motion.duration if duration is None else duration
-    with engine_progress(f"free motion: {mech.name}, {T:g} s"):
-        return simulate(mech, duration)
+    with engine_progress(f"free motion: {mech.name}, {T:g} s") as line:
+        return simulate(mech, duration, progress=line.time)
 
 
 def sample_times(traj, n: int) -> np.ndarray:

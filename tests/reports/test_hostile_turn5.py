@@ -261,10 +261,7 @@ def scratch(tmp_path_factory):
     return d
 
 
-_XFAIL = {
-    "sim-motor-empty": "a [[motors]] table = [] runs as no motor instead of one line "
-                       "naming the motor; owner: analytic description / force elements",
-}
+_XFAIL: dict[str, str] = {}  # "sim-motor-empty" is one line now (s6gaps)
 _ENERGY = re.compile(r"work-energy balance: max \|residual\| (\S+) J \((\S+) of the energy scale")
 
 

@@ -114,7 +114,7 @@ BAD = [
     ("table-starts-late", edit(_TABLE, "[[0.1, 0.0], [1.0, 0.3]]"),
      SHORT, r"motor 0: the table covers t = 0.1 to 1 s; it must cover the run, 0 to 1 s"),
     ("table-one-row", edit(_TABLE, "[[0.0, 0.3]]"),
-     SHORT, r"motor 0: a motor table needs at least 2 rows"),
+     SHORT, r"motor 0: table has 1 row\(s\): a motor table needs at least 2 rows"),
     ("table-effort-nan", edit(_TABLE, "[[0.0, nan], [1.0, 0.3]]"),
      SHORT, r"motor 0: table row 0 effort must be a finite number, got nan"),
     ("table-shorter-than-duration-option", four_bar, ("--duration", "2"),

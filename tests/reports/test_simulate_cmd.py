@@ -207,3 +207,55 @@ def test_simulate_labels_and_exits_as_the_report_does(monkeypatch):
         "simulate seed-four-bar-released: 1 of 2 engines pass, 1 known engine limit "
         "(pybullet; not counted); exit status 0")
     assert code == 0
+
+
+def test_sampling_stops_at_the_wall_limit_with_one_line(capsys):
+    """Issue 30's shortfall: ``--samples 1000000`` (the top of the range) sampled for
+    minutes past ``--wall-limit``.  A 0.05 s run integrates in ~0.1 s, and its 1e6
+    samples take 8 s on the shared 2-core machine: the limit of 1 s now ends the sampling
+    with the integration's message form (file, limit, samples done of N), status 2."""
+    code, out = run("simulate", "seed-four-bar", "--duration", "0.05", "--samples",
+                    "1000000", "--wall-limit", "1")
+    err = capsys.readouterr().err
+    assert code == 2 and out == "", (out, err)
+    assert err.count("\n") == 1 and err.startswith("xval: error: "), err
+    assert re.search(r"seed-four-bar\.toml: mechanism 'seed-four-bar-released': sampling the "
+                     r"exact trajectory reached the wall-clock limit of 1 s at [\d,]+ of "
+                     r"1,000,000 samples .*raise --wall-limit or lower --samples", err), err
+
+
+def test_motor_table_without_rows_is_refused_not_run_as_no_motor(tmp_path, capsys):
+    """``table = []`` ran as no motor at all; one line naming the file, the motor and the
+    key now, status 2 (one row, as before, the same)."""
+    for rows, n in (("[]", 0), ("[[0.0, 0.3]]", 1)):
+        f = tmp_path / f"rows{n}.toml"
+        f.write_text(edit("[[0.0, 0.0], [1.0, 0.3]]", rows)(_seed() + MOTION))
+        code, _ = run("simulate", str(f), "--duration", "0.05")
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1, err
+        assert f"rows{n}.toml: motor 0: table has {n} row(s): a motor table needs at least " \
+               "2 rows" in err, err
+
+
+def test_samples_range_shrinks_with_the_joints_at_every_door(tmp_path, capsys):
+    """A 121-joint chain (A02) at 1e5 samples held 1.1 GB (at 1e6: ~11 GB, ~35 GB as
+    JSON); its table's values are capped (MAX_SAMPLE_VALUES), the same range from the
+    option and from the file, one line each, status 2; the four-bar keeps 1e6."""
+    from analytic import load_case
+    from analytic.cases import case_path
+    from analytic.motion_spec import MAX_SAMPLE_VALUES, MAX_SAMPLES, max_samples
+    top = MAX_SAMPLE_VALUES // (3 * 121 + 9)
+    rng = rf"the accepted range is 2 to {top} for 121 joints \(372 columns a sample"
+    code, _ = run("simulate", "iftomm-a02-n-four-bar", "--samples", str(top + 1))
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert re.search(rf"argument --samples: {top + 1} is out of range: {rng}", err), err
+    f = tmp_path / "a02.toml"
+    f.write_text(case_path("iftomm-a02-n-four-bar").read_text().replace(
+        "samples = 401", f"samples = {top + 1}"))
+    code, _ = run("simulate", str(f))
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert re.search(rf"a02.toml: \[motion\]: samples = {top + 1} is out of range: {rng}",
+                     err), err
+    assert max_samples(load_case("seed-four-bar")) == MAX_SAMPLES
