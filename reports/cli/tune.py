@@ -1,7 +1,8 @@
-"""``xval tune CASE|FILE --engine NAME``: the cheapest settings of one engine whose
-verdict passes at ``--tolerance`` (:mod:`reports.tune`), verified by a fresh run;
-``--out`` writes them as a settings file (``--settings FILE`` of ``compare``,
-``simulate``, ``baseline record``), ``--write-model`` a tuned MJCF (MuJoCo).
+"""``xval tune CASE|FILE --engine NAME`` or ``xval tune MODEL.xml``: the cheapest settings
+of one engine whose verdict passes at ``--tolerance`` (:mod:`reports.tune`), verified by
+a fresh run; ``--out`` writes them as a settings file (``--settings FILE`` of
+``compare``, ``simulate``, ``baseline record``), ``--write-model`` a tuned MJCF
+(MuJoCo: the case's model, or the user's file with only the tuned attributes changed).
 
 Exit status: 0 the verified answer passes; 1 no setting passes within the budget or the
 engine's limits (the best reached and what limits it are printed), or the verification
@@ -21,14 +22,17 @@ from sim_models.engines.registry import engine_names
 def cmd_tune(args) -> int:
     from reports.tune.measure import TuneCase
     from reports.tune.tune import TuneInputError, check_inputs
+    own = _check_own(args)
     check_outputs([("--out", args.out), ("--write-model", args.write_model),
-                   ("--plot", args.plot)], [("the case file", args.case)])
+                   ("--plot", args.plot)],
+                  [("the model file" if own else "the case file", args.case)])
     if args.write_model and args.engine != "mujoco":
         raise opt.UsageError(f"argument --write-model: writes MJCF, MuJoCo's model: it needs "
                              f"--engine mujoco, not {args.engine!r}")
     if args.duration is not None and not args.free:
         raise opt.UsageError("argument --duration: the free run's duration; it needs --free")
-    tc = TuneCase(args.case, bool(args.free), args.duration if args.free else None)
+    tc = TuneCase(args.case, bool(args.free), args.duration if args.free else None,
+                  driver=args.driver, keyframe=args.keyframe)
     try:
         check_inputs(tc, args.tolerance, args.budget, args.quantity)
     except TuneInputError as e:
@@ -36,6 +40,33 @@ def cmd_tune(args) -> int:
     _check_engine(args.engine, args.free)
     _check_case(tc)
     return _run(args, tc)
+
+
+def _check_own(args) -> bool:
+    """Whether the case is a user's MJCF model; its engine is MuJoCo (the default there),
+    a built-in case or TOML file needs ``--engine``; the model options need a model."""
+    low = str(args.case).lower()
+    if low.endswith((".urdf", ".sdf")):
+        raise opt.UsageError(f"{args.case}: xval tune reads a user's MJCF model (.xml); a "
+                             "URDF or SDF model is not tuned (xval compare runs a URDF)")
+    own = low.endswith(".xml")
+    if not own:
+        if args.engine is None:
+            raise opt.UsageError("argument --engine is required for a built-in case or "
+                                 f"TOML file (one of {', '.join(engine_names())})")
+        for flag, value in (("--driver", args.driver), ("--keyframe", args.keyframe)):
+            if value is not None:
+                raise opt.UsageError(f"argument {flag}: an option of a user's MJCF model "
+                                     f"(.xml), not of {args.case!r}")
+        return False
+    if args.engine not in (None, "mujoco"):
+        raise opt.UsageError(f"argument --engine: {args.engine!r}: a user's MJCF model "
+                             f"{args.case} runs in MuJoCo only (--engine mujoco)")
+    args.engine = "mujoco"
+    if args.out:
+        raise opt.UsageError("argument --out: a user's model carries its settings in its "
+                             "file: write them with --write-model TUNED.xml")
+    return True
 
 
 def _check_engine(engine: str, free: bool) -> None:
@@ -53,6 +84,12 @@ def _check_case(tc) -> None:
     """Load the case as the search will (a bad file or a case that cannot be released
     is one line here, not a failed run in every worker)."""
     from reports.tune.measure import free_reference, prescribed_tree
+    if tc.own:
+        from reports.tune.own import check_moves, model_of
+        model_of(tc)  # the model as xval compare reads it (a refusal: one line)
+        if tc.free:
+            check_moves(tc)
+        return
     if tc.free:
         free_reference(tc.case, tc.duration)
     else:
@@ -93,14 +130,40 @@ def _run(args, tc) -> int:
         Path(args.write_model).write_text(text)
         print(f"wrote {args.write_model}: {len(changes)} attributes changed, each named in "
               "a comment")
+        if tc.own:
+            return _read_back(args, tc, res)
+    return 0 if res.passed else 1
+
+
+def _read_back(args, tc, res) -> int:
+    """The written file read by MuJoCo carries the verified settings (status 1 and one
+    line naming what differs where it does not, e.g. set in an included file)."""
+    from reports.tune.own import read_back
+    diff = read_back(args.write_model, tc, res.answer.m.overrides)
+    if diff:
+        print(f"{args.write_model}: MuJoCo reads other settings than the verified run's "
+              f"(file / run): {'; '.join(diff)}")
+        return 1
+    mode = f"simulate {args.write_model} --engine mujoco" if tc.free else \
+        f"compare {args.write_model} --engine mujoco"
+    print(f"read back by MuJoCo: the file carries the verified settings (use it: xval "
+          f"{mode})")
     return 0 if res.passed else 1
 
 
 def register(sub) -> None:
     """Add ``tune`` to ``xval``'s subparsers."""
     s = sub.add_parser("tune", help="the cheapest engine settings that pass a tolerance")
-    s.add_argument("case", type=opt.case_or_file, help="built-in case name or TOML file")
-    s.add_argument("--engine", required=True, choices=engine_names())
+    s.add_argument("case", type=opt.case_or_file,
+                   help="built-in case name, TOML file, or your own MJCF model (.xml, read "
+                        "as xval compare reads it)")
+    s.add_argument("--engine", choices=engine_names(), default=None,
+                   help="the engine tuned (required for a case or TOML file; a model "
+                        "file: mujoco)")
+    s.add_argument("--driver", help="with a model file: its input joint (default: the one "
+                   "actuated joint)")
+    s.add_argument("--keyframe", help="with a model file: the reference configuration "
+                   "(default: qpos0)")
     s.add_argument("--tolerance", type=opt.finite_number, default=1e-3,
                    help="largest normalised error (of peak) on every judged quantity "
                         "(default 1e-3)")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from reports.tune.search import Point
+from reports.tune.search import COST_MATTERS, ERROR_MATTERS, Point
 from reports.tune.tune import TuneResult
 
 
@@ -52,7 +52,10 @@ def summary_lines(res: TuneResult) -> list[str]:
                f"{' (spent: stopped)' if s.budget_hit else ''}, {res.search_wall:.3g} s "
                f"wall; knobs: {knobs}")
     if s.not_mattering:
-        out.append(f"stopped mattering (kept recommended): {', '.join(s.not_mattering)}")
+        out.append(f"stopped mattering (screened: at equal steps each level moves the error "
+                   f"less than {ERROR_MATTERS:g}x and the step's CPU less than "
+                   f"{COST_MATTERS - 1:.0%}; not refined): "
+                   f"{', '.join(s.not_mattering)}")
     if s.not_tried:
         out.append(f"not tried (the budget was spent first): {', '.join(s.not_tried)}")
     if res.answer is None:
@@ -155,6 +158,13 @@ def write_settings(res: TuneResult, path: str) -> None:
 
 def model_text(res: TuneResult) -> tuple[str, list]:
     """The tuned MJCF of the case's own model (MuJoCo; :mod:`reports.tune.model`)."""
+    of = "of its scale" if res.case.free else "of peak"
+    header = (f"case {s_case(res)} ({mode_text(res)}), tolerance {res.tolerance:g} {of}, "
+              f"verified {'PASS' if res.passed else 'FAIL'} at {res.verify_error:.3g}.")
+    if res.case.own:  # the user's file, only the tuned attributes changed
+        from reports.tune.own import tuned_text
+        new = {k: v for k, (_old, v) in res.changed.items()}
+        return tuned_text(res.case, new, {k: _why(res, k) for k in new}, header)
     from reports.tune.measure import free_reference, prescribed_tree
     from reports.tune.model import tuned_model_text
     from sim_models.builders.mjcf import MujocoSettings
@@ -167,8 +177,6 @@ def model_text(res: TuneResult) -> tuple[str, list]:
     why = {k: _why(res, k) for k in new}
     not_mjcf = {"invweight_scale": getattr(res.settings, "invweight_scale",
                                            base.invweight_scale)}
-    header = (f"case {s_case(res)} ({mode_text(res)}), tolerance {res.tolerance:g} of peak, "
-              f"verified {'PASS' if res.passed else 'FAIL'} at {res.verify_error:.3g}.")
     return tuned_model_text(viewer_xml(mech, base), new, why, not_mjcf, header)
 
 

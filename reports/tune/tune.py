@@ -26,6 +26,8 @@ from reports.tune.measure import (
     measure_task,
     settings_of,
 )
+from reports.tune.own import changed as own_changed
+from reports.tune.own import own_knobs
 from reports.tune.search import STEP_MATTERS, Point, Search, Tuner
 from reports.tune.space import engine_knobs
 
@@ -126,7 +128,8 @@ def tune(tc: TuneCase, engine: str, tolerance: float = 1e-3, family: str | None 
     ``knob_limit``: search only the first knobs (to measure how the cost grows)."""
     check_inputs(tc, tolerance, budget, family)
     fields = settings_of(tc, engine, {}).as_dict()
-    knobs = engine_knobs(engine, tc.free, knob_limit)
+    knobs = engine_knobs(engine, tc.free, knob_limit) if not tc.own else \
+        own_knobs(tc, knob_limit)
     t0 = time.perf_counter()
     with executor(pool, workers) as ex:
         tuner = Tuner(tc, engine, tolerance, family, budget, knobs, ex,
@@ -148,10 +151,7 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
     reached = min(finite, key=lambda p: (p.error, tuner.rank_key(p)), default=None)
     settings = settings_of(tc, engine, tuner.overrides(best.family, best.steps)) \
         if best is not None else None
-    base = settings_of(tc, engine, {})
-    changed = {} if settings is None else {
-        k: (getattr(base, k), getattr(settings, k)) for k in base.as_dict()
-        if getattr(base, k) != getattr(settings, k)}
+    changed = {} if settings is None else _changed(tc, engine, settings, best)
     alts = []
     seen = {best.family} if best is not None else set()
     for p in tuner.passing():
@@ -164,6 +164,15 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
         knob_text(tuner, best, sens), sens,
         "" if best is not None else limit_text(tuner, reached), reached,
         front(tuner), alts[:4], s, wall, tuner)
+
+
+def _changed(tc: TuneCase, engine: str, settings, best: Point) -> dict:
+    """field -> (recommended, tuned) that differ (a user's model: (the file's, tuned))."""
+    if tc.own:
+        return own_changed(tc, best.m.overrides)
+    base = settings_of(tc, engine, {})
+    return {k: (getattr(base, k), getattr(settings, k)) for k in base.as_dict()
+            if getattr(base, k) != getattr(settings, k)}
 
 
 def retarget(res: TuneResult, tolerance: float) -> TuneResult:
@@ -222,7 +231,10 @@ def knob_text(tuner: Tuner, best: Point | None, sens: list[Sensitivity]) -> str:
     low = min(others, key=lambda x: x.ratio, default=None)
     step_sets = step is not None and step.ratio <= STEP_MATTERS
     eng = tuner.engine
-    if low is not None and (not step_sets or low.ratio < step.ratio):
+    # a knob sets the error when moving it lowers the error as much as a step that
+    # matters would (a change within the runs' noise sets nothing)
+    if low is not None and low.ratio <= STEP_MATTERS and \
+            (not step_sets or low.ratio < step.ratio):
         i = [k.name for k in tuner.knobs].index(low.knob)
         k = tuner.knobs[i]
         tail = (f"; halving the step: {step.before:.2g} -> {step.after:.2g}" +
