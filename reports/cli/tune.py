@@ -10,6 +10,8 @@ run fails; 2 a bad input (one line)."""
 
 from __future__ import annotations
 
+import argparse
+import json
 from pathlib import Path
 
 from analytic.motion_spec import MAX_DURATION
@@ -17,6 +19,30 @@ from reports.cli import options as opt
 from reports.cli.paths import check_outputs
 from reports.comparison.free_cases import MIN_DURATION
 from sim_models.engines.registry import engine_names
+
+#: ``xval tune --json``: the keys of its object (:func:`reports.tune.output.json_document`),
+#: the command's help epilog.
+JSON_KEYS = """\
+--json writes one object (non-finite numbers as null; errors are normalised by
+each quantity's peak, prescribed, or scale, free; CPU in process CPU seconds):
+  case, engine, mode ("prescribed" | "free"), duration_s, tolerance, budget_s,
+    seed, unit ("revolution" | "simulated s"), quantity (family, or "all")
+  passed        the verification run passes at the tolerance (exit status 0)
+  answer        null when no setting passes; else the chosen candidate:
+                levels {knob: level}, steps_per_unit, error (worst, the
+                search's run), worst_quantity, model_cost_s (per unit),
+                changed {setting: [from, to]}, settings (one line)
+  verification  fresh run of the answer: passed, error, quantity, run_ok,
+                reason, cpu_s (per unit, median of 3), recommended_cpu_s,
+                cpu_ratio, cpu_spread, stepping_only_ratio (model costs)
+  knob          the knob that sets the error at the answer (one line)
+  limit         why nothing passes (null when something does)
+  search        runs, cpu_s, wall_s, budget_hit, knobs, stopped_mattering,
+                not_tried
+  candidates    every run of the search, cheapest model cost first: levels,
+                steps_per_unit, error, worst_quantity, passed, run_ok, reason,
+                model_cost_s, run_cpu_s, on_front (Pareto front), answer
+  files         what was written: settings, model, model_read_back"""
 
 
 def cmd_tune(args) -> int:
@@ -104,7 +130,6 @@ def _pool(args):
 
 
 def _run(args, tc) -> int:
-    from reports.tune import output
     from reports.tune.tune import tune
     pool = _pool(args)
     try:
@@ -114,46 +139,67 @@ def _run(args, tc) -> int:
         client = getattr(pool, "client_to_close", None)
         if client is not None:
             client.close()
-    print(output.full_text(res))
+    lines, files, code = _write(args, tc, res)
+    from reports.tune import output
+    if args.json:
+        print(json.dumps(output.json_document(res, files), indent=2, allow_nan=False))
+    else:
+        print("\n".join([output.full_text(res), *lines]))
+    return code
+
+
+def _write(args, tc, res) -> tuple[list[str], dict, int]:
+    """Write what was asked (--plot, --out, --write-model): the lines saying so, the
+    files written (the JSON's ``files``) and the exit status."""
+    from reports.tune import output
+    lines: list[str] = []
+    files: dict = {}
     if args.plot:
         Path(args.plot).write_bytes(output.figure(res))
-        print(f"wrote {args.plot}")
+        lines.append(f"wrote {args.plot}")
+        files["plot"] = args.plot
     if res.answer is None:
-        return 1
+        return lines, files, 1
+    code = 0 if res.passed else 1
     if args.out:
         output.write_settings(res, args.out)
         dur = f" --duration {tc.duration:g}" if tc.free and tc.duration else ""
-        print(f"wrote {args.out} (use it: xval {'simulate' if tc.free else 'compare'} "
-              f"{tc.case}{dur} --engine {args.engine} --settings {args.out})")
+        lines.append(f"wrote {args.out} (use it: xval {'simulate' if tc.free else 'compare'} "
+                     f"{tc.case}{dur} --engine {args.engine} --settings {args.out})")
+        files["settings"] = args.out
     if args.write_model:
         text, changes = output.model_text(res)
         Path(args.write_model).write_text(text)
-        print(f"wrote {args.write_model}: {len(changes)} attributes changed, each named in "
-              "a comment")
+        lines.append(f"wrote {args.write_model}: {len(changes)} attributes changed, each "
+                     "named in a comment")
+        files["model"] = args.write_model
         if tc.own:
-            return _read_back(args, tc, res)
-    return 0 if res.passed else 1
+            line, ok = _read_back(args, tc, res)
+            lines.append(line)
+            files["model_read_back"] = ok
+            code = code if ok else 1
+    return lines, files, code
 
 
-def _read_back(args, tc, res) -> int:
-    """The written file read by MuJoCo carries the verified settings (status 1 and one
-    line naming what differs where it does not, e.g. set in an included file)."""
+def _read_back(args, tc, res) -> tuple[str, bool]:
+    """Whether the written file read by MuJoCo carries the verified settings, and a line
+    saying so (naming what differs where it does not, e.g. set in an included file)."""
     from reports.tune.own import read_back
     diff = read_back(args.write_model, tc, res.answer.m.overrides)
     if diff:
-        print(f"{args.write_model}: MuJoCo reads other settings than the verified run's "
-              f"(file / run): {'; '.join(diff)}")
-        return 1
+        return (f"{args.write_model}: MuJoCo reads other settings than the verified run's "
+                f"(file / run): {'; '.join(diff)}"), False
     mode = f"simulate {args.write_model} --engine mujoco" if tc.free else \
         f"compare {args.write_model} --engine mujoco"
-    print(f"read back by MuJoCo: the file carries the verified settings (use it: xval "
-          f"{mode})")
-    return 0 if res.passed else 1
+    return (f"read back by MuJoCo: the file carries the verified settings (use it: xval "
+            f"{mode})"), True
 
 
 def register(sub) -> None:
     """Add ``tune`` to ``xval``'s subparsers."""
-    s = sub.add_parser("tune", help="the cheapest engine settings that pass a tolerance")
+    s = sub.add_parser("tune", help="the cheapest engine settings that pass a tolerance",
+                       epilog=JSON_KEYS,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     s.add_argument("case", type=opt.case_or_file,
                    help="built-in case name, TOML file, or your own MJCF model (.xml, read "
                         "as xval compare reads it)")
@@ -188,6 +234,8 @@ def register(sub) -> None:
                    help="write a tuned copy of the MJCF model (MuJoCo)")
     s.add_argument("--plot", type=opt.output_file, metavar="PNG",
                    help="write the cost/error figure of the search")
+    s.add_argument("--json", action="store_true",
+                   help="print the result as JSON (its keys: below)")
     s.add_argument("--workers", type=opt.workers, default=None,
                    help="local worker processes (default: one per core)")
     s.add_argument("--dask", metavar="SCHEDULER_ADDRESS", type=opt.scheduler_address,
