@@ -49,6 +49,12 @@ def cmd_tune(args) -> int:
     from reports.tune.measure import TuneCase
     from reports.tune.tune import TuneInputError, check_inputs
     own = _check_own(args)
+    for flag, value in (("--out", args.out), ("--write-model", args.write_model),
+                        ("--plot", args.plot)):
+        if value == "-":
+            raise opt.UsageError(f"argument {flag}: '-' (standard output) is not written "
+                                 "by xval tune; give a file name (--json prints the "
+                                 "result)")
     check_outputs([("--out", args.out), ("--write-model", args.write_model),
                    ("--plot", args.plot)],
                   [("the model file" if own else "the case file", args.case)])

@@ -160,3 +160,28 @@ def test_urdf_and_model_options_elsewhere_are_one_line(tmp_path, capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and says in err
+
+
+def test_missing_model_and_standard_output_are_one_line(tmp_path, capsys, monkeypatch):
+    """A model file that is not there is named as a missing file (not as an unknown
+    built-in case); '-' as a written file is refused before any run."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.xml").write_text(um.four_bar_xml())
+    for argv, says in ((["tune", "nothere.xml"], "no such file 'nothere.xml'"),
+                       (["tune", "m.xml", "--write-model", "-"], "--write-model")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and says in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.xml"]
+
+
+def test_read_back_names_a_setting_the_file_does_not_carry(soft):
+    """The read-back check of --write-model: the user's file as written does not carry a
+    stiffer solref or a shorter step, and the check names both (file / run)."""
+    from reports.tune.measure import TuneCase
+    from reports.tune.own import read_back
+    diff = read_back(str(soft), TuneCase(str(soft)), {"solref": (0.005, 1.0),
+                                                      "timestep": 2.5e-4})
+    assert any(d.startswith("close.solref: (0.02,1) / (0.005,1)") for d in diff), diff
+    assert "timestep: 0.0005 / 0.00025" in diff
+    assert read_back(str(soft), TuneCase(str(soft)), {}) == []
