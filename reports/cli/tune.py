@@ -117,8 +117,9 @@ def _check_case(tc) -> None:
     is one line here, not a failed run in every worker)."""
     from reports.tune.measure import free_reference, prescribed_tree
     if tc.own:
-        from reports.tune.own import check_moves, model_of
+        from reports.tune.own import check_moves, check_runs, model_of
         model_of(tc)  # the model as xval compare reads it (a refusal: one line)
+        check_runs(tc)
         if tc.free:
             check_moves(tc)
         return

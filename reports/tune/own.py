@@ -89,6 +89,16 @@ def check_moves(tc) -> None:
                                "a keyframe with a velocity (--keyframe NAME)", tc.case)
 
 
+def check_runs(tc) -> None:
+    """MuJoCo's session can read the model in the description's tree (its joint map):
+    an :class:`sim_models.engines.settings.EngineRefusal` here is one line, not a failed
+    run in every worker."""
+    from sim_models.engines.protocol import compile_linkage
+    from sim_models.own.mujoco_own import Mapping
+    imp = model_of(tc)
+    Mapping(compile_linkage(imp.mechanism, chords="analytic"), imp)
+
+
 def unit_time(tc) -> float:
     """One revolution of the imported driver (prescribed), 1 s (free)."""
     if tc.free:
@@ -282,5 +292,5 @@ def read_back(path: str, tc, overrides: dict) -> list[str]:
     return [f"{k}: {got.get(k)} / {v}" for k, v in exp.items() if got.get(k) != v]
 
 
-__all__ = ["FILE", "changed", "check_moves", "file_values", "is_own", "measure",
+__all__ = ["FILE", "changed", "check_moves", "check_runs", "file_values", "is_own", "measure",
            "model_of", "own_knobs", "read_back", "settings_of", "tuned_text", "unit_time"]

@@ -372,7 +372,7 @@ def _cross(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
-__all__ = ["INTEGRATORS", "TUNED_KEYS", "OwnMujocoSession", "OwnMujocoSettings",
+__all__ = ["INTEGRATORS", "TUNED_KEYS", "Mapping", "OwnMujocoSession", "OwnMujocoSettings",
            "apply_tuned", "own_settings"]
 
 
