@@ -192,7 +192,7 @@ def _read_back(args, tc, res) -> tuple[str, bool]:
     """Whether the written file read by MuJoCo carries the verified settings, and a line
     saying so (naming what differs where it does not, e.g. set in an included file)."""
     from reports.tune.own import read_back
-    diff = read_back(args.write_model, tc, res.answer.m.overrides)
+    diff = read_back(args.write_model, tc, {k: v for k, (_old, v) in res.changed.items()})
     if diff:
         return (f"{args.write_model}: MuJoCo reads other settings than the verified run's "
                 f"(file / run): {'; '.join(diff)}"), False

@@ -151,7 +151,7 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
     reached = min(finite, key=lambda p: (p.error, tuner.rank_key(p)), default=None)
     settings = settings_of(tc, engine, tuner.overrides(best.family, best.steps)) \
         if best is not None else None
-    changed = {} if settings is None else _changed(tc, engine, settings, best)
+    changed = {} if settings is None else _changed(tc, engine, settings, tuner, best)
     alts = []
     seen = {best.family} if best is not None else set()
     for p in tuner.passing():
@@ -166,10 +166,11 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
         front(tuner), alts[:4], s, wall, tuner)
 
 
-def _changed(tc: TuneCase, engine: str, settings, best: Point) -> dict:
-    """field -> (recommended, tuned) that differ (a user's model: (the file's, tuned))."""
+def _changed(tc: TuneCase, engine: str, settings, tuner: Tuner, best: Point) -> dict:
+    """field -> (recommended, tuned) that differ (a user's model: (the file's, tuned));
+    the step is the one the answer's run took (its steps per unit), as in ``settings``."""
     if tc.own:
-        return own_changed(tc, best.m.overrides)
+        return own_changed(tc, tuner.overrides(best.family, best.steps))
     base = settings_of(tc, engine, {})
     return {k: (getattr(base, k), getattr(settings, k)) for k in base.as_dict()
             if getattr(base, k) != getattr(settings, k)}
@@ -277,7 +278,20 @@ def limit_text(tuner: Tuner, reached: Point | None) -> str:
              f"famil{'y' if n == 1 else 'ies'} of levels)") if tried else ""
     return (f"best reached {reached.error:.3g} {of} ({reached.worst_quantity}) at "
             f"{reached.m.settings_text}; limit: {why} (the most common stop over the "
-            f"families){floor}{budget}{knobs}")
+            f"families){floor}{budget}{knobs}{_drive_note(tuner.tc)}")
+
+
+def _drive_note(tc: TuneCase) -> str:
+    """A user's model driven: the drive xval compare adds is part of its error.  Measured
+    on docs/examples/user-four-bar.xml (worst alpha, of peak, at steps 5e-4 / 2.5e-4 s):
+    armature ratio 1e6 3.7e-4 / 3.1e-4 (the step stops mattering), 1e7 1.4e-4 / 3.4e-5,
+    1e8 1.4e-4 / 8.7e-6."""
+    if not tc.own or tc.free:
+        return ""
+    from sim_models.own.mujoco_own import DRIVE_RATIO
+    return (f"; the driven run adds xval compare's drive, an armature of {DRIVE_RATIO:g} "
+            "times the driver's inertia, whose finite stiffness no setting of the file "
+            "removes: --free judges the model with nothing added")
 
 
 def front(tuner: Tuner) -> list[Point]:

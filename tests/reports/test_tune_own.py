@@ -185,3 +185,37 @@ def test_read_back_names_a_setting_the_file_does_not_carry(soft):
     assert any(d.startswith("close.solref: (0.02,1) / (0.005,1)") for d in diff), diff
     assert "timestep: 0.0005 / 0.00025" in diff
     assert read_back(str(soft), TuneCase(str(soft)), {}) == []
+
+
+def test_driven_floor_is_the_drives_armature(monkeypatch):
+    """What the no-pass line of a driven user model blames: at xval compare's drive
+    (armature DRIVE_RATIO = 1e6 times the driver's inertia) halving the step leaves the
+    worst error of docs/examples/user-four-bar.xml above STEP_MATTERS of itself (it sits
+    at ~3e-4 of peak), while with a 10x stiffer drive the same halving cuts it by more
+    than 2: the drive, not the file's settings, sets the floor; the line says so."""
+    from pathlib import Path
+
+    import sim_models.own.mujoco_own as mo
+    from reports.comparison.compare import compare_run
+    from reports.comparison.quantities import judged
+    from reports.tune.measure import TuneCase
+    from reports.tune.search import STEP_MATTERS
+    from reports.tune.tune import tune
+    from sim_models.own import import_model
+    model = str(Path(__file__).resolve().parents[2] / "docs" / "examples" /
+                "user-four-bar.xml")
+    imp = import_model(model)
+
+    def worst(step):
+        _tree, r = mo.run_prescribed(imp, None, step)
+        return max(c.normalised for c in judged(compare_run(r)))
+
+    assert mo.DRIVE_RATIO == 1e6
+    assert worst(2.5e-4) / worst(5e-4) > STEP_MATTERS
+    monkeypatch.setattr(mo, "DRIVE_RATIO", 1e7)
+    assert worst(2.5e-4) / worst(5e-4) < 0.5
+    monkeypatch.undo()
+    res = tune(TuneCase(model), "mujoco", 1e-4, budget=1, pool=False, knob_limit=0,
+               verify=False)
+    assert res.answer is None
+    assert "an armature of 1e+06 times the driver's inertia" in res.limit_text
