@@ -5,8 +5,12 @@ The change is made on the model's text, attribute by attribute
 (:data:`FIELD_ATTRIBUTES`: which MJCF attribute carries which MuJoCo setting), so the
 same code tunes the harness's own model of a case (:func:`sim_models.builders.viewer_model.
 viewer_xml`, what ``xval models`` writes) and a user's own MJCF file: nothing but the
-named attributes changes.  A setting MJCF cannot carry (``invweight_scale``, which the
-harness applies to the compiled model) is named in the file's header comment.
+named attributes changes.  The text is edited in place at the byte offsets of the
+start tags (``xml.parsers.expat``): quotes, spacing, comments, the XML declaration
+and the order of attributes stay as the user wrote them; the file gains only the
+comments and, where it has none, an ``<option>``.  A setting MJCF cannot carry
+(``invweight_scale``, which the harness applies to the compiled model) is named in the
+file's header comment.
 """
 
 from __future__ import annotations
