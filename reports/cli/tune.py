@@ -71,6 +71,8 @@ def cmd_tune(args) -> int:
         raise opt.UsageError(str(e)) from None
     _check_engine(args.engine, args.free)
     _check_case(tc)
+    if own and args.write_model:
+        _check_writable(tc)
     return _run(args, tc)
 
 
@@ -127,6 +129,17 @@ def _check_case(tc) -> None:
         free_reference(tc.case, tc.duration)
     else:
         prescribed_tree(tc.case)
+
+
+def _check_writable(tc) -> None:
+    """The user's file is one --write-model can edit (UTF-8 MJCF text with a <mujoco>
+    root; MuJoCo also reads a URDF named .xml): one line before the search, not after."""
+    from reports.tune.model import ModelWriteError
+    from reports.tune.own import tuned_text
+    try:
+        tuned_text(tc, {}, {}, "")
+    except ModelWriteError as e:
+        raise opt.UsageError(f"argument --write-model: {e}") from None
 
 
 def _pool(args):

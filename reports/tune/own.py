@@ -273,8 +273,16 @@ def tuned_text(tc, changes: dict, why: dict, header: str):
     attributes (:func:`reports.tune.model.tuned_model_text`: nothing else changes)."""
     from pathlib import Path
 
-    from reports.tune.model import tuned_model_text
-    return tuned_model_text(Path(tc.case).read_text(), changes, why, None, header)
+    from reports.tune.model import ModelWriteError, tuned_model_text
+    try:
+        text = Path(tc.case).read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ModelWriteError(f"{tc.case}: not UTF-8 text ({e.reason} at byte {e.start}); "
+                              "--write-model edits a UTF-8 MJCF file") from None
+    try:
+        return tuned_model_text(text, changes, why, None, header)
+    except ModelWriteError as e:
+        raise ModelWriteError(f"{tc.case}: {e}") from None
 
 
 def read_back(path: str, tc, overrides: dict) -> list[str]:

@@ -219,3 +219,32 @@ def test_driven_floor_is_the_drives_armature(monkeypatch):
                verify=False)
     assert res.answer is None
     assert "an armature of 1e+06 times the driver's inertia" in res.limit_text
+
+
+def test_a_file_not_in_utf8_is_one_line_at_every_door(tmp_path, capsys):
+    """An MJCF saved as ISO-8859-1 with an accented joint name: MuJoCo keeps the name's
+    byte 0xe9, which is not UTF-8; compare and tune refused it with a UnicodeDecodeError
+    traceback before (the importer decoded the names); now one line naming the file and
+    the byte, status 2."""
+    text = um.four_bar_xml().replace('"O4"', '"O\u00e9"')
+    p = tmp_path / "latin.xml"
+    p.write_bytes(text.replace("<mujoco", '<?xml version="1.0" encoding="ISO-8859-1"?>\n'
+                               "<mujoco", 1).encode("latin-1"))
+    for argv in (["compare", str(p), "--engine", "mujoco"], ["tune", str(p)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "not UTF-8" in err and str(p) in err
+        assert "0xe9" in err
+
+
+def test_write_model_refuses_a_root_other_than_mujoco(tmp_path):
+    """MuJoCo also reads a URDF named .xml: --write-model cannot edit it as MJCF, and says
+    so naming the file (the command asks this before the search)."""
+    from reports.tune.measure import TuneCase
+    from reports.tune.model import ModelWriteError
+    from reports.tune.own import tuned_text
+    p = tmp_path / "robot.xml"
+    p.write_text(um.four_bar_urdf())
+    with pytest.raises(ModelWriteError, match=r"robot\.xml: not an MJCF model: the root "
+                                              r"element is <robot>"):
+        tuned_text(TuneCase(str(p)), {}, {}, "")
