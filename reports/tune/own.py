@@ -288,9 +288,13 @@ def tuned_text(tc, changes: dict, why: dict, header: str):
 def read_back(path: str, tc, overrides: dict) -> list[str]:
     """What MuJoCo reads from the written file that differs from the tuned run's
     settings (``key: file / run``; empty: the file carries them all)."""
+    from analytic.errors import DescriptionError
     from sim_models.own import import_model
     from sim_models.own.mujoco_own import option_items, own_settings
-    imp = import_model(path, tc.driver, tc.keyframe)
+    try:
+        imp = import_model(path, tc.driver, tc.keyframe)
+    except DescriptionError as e:  # e.g. an <include> not found beside the written file
+        return [f"the written file is not read as the model was: {e}"]
     step, tuned = split(overrides)
     want = own_settings(model_of(tc), prescribed=False, timestep=step, tuned=tuned)
     got = option_items(imp.compiled.model)
