@@ -306,7 +306,7 @@ def case_or_file(text: str) -> str:
     p = Path(text)
     if p.is_file():
         return str(p.resolve())
-    if text.endswith(".toml") or os.sep in text:
+    if text.lower().endswith((".toml", ".xml", ".urdf", ".sdf")) or os.sep in text:
         raise argparse.ArgumentTypeError(f"no such file {text!r}")
     raise argparse.ArgumentTypeError(f"no built-in case {text!r}; cases are {case_names()}, "
                                      f"hard cases {hard_case_names()}")

@@ -21,17 +21,15 @@ import dataclasses
 import functools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from reports.comparison.quantities import judged
-
-#: Prescribed quantity families, by a quantity name's last part (``rocker.alpha``).
-PRESCRIBED_FAMILY = {"alpha": "acceleration", "a": "acceleration", "effort": "force",
-                     "force": "force", "normal": "force", "moment": "force"}
-PRESCRIBED_FAMILIES = ("acceleration", "force")
-#: Free-motion families (:class:`reports.comparison.free_compare.FreeComparison.family`).
-FREE_FAMILIES = ("joint angle", "joint rate", "slider", "slider rate", "angle",
-                 "angular rate", "angular acceleration", "reaction", "energy", "loop")
+from reports.tune.measured import (
+    FREE_FAMILIES,
+    PRESCRIBED_FAMILIES,
+    PRESCRIBED_FAMILY,
+    Measured,
+)
 
 
 @dataclass(frozen=True)
@@ -45,44 +43,16 @@ class TuneCase:
     duration: float | None = None
     #: free runs: samples judged (None: the description's, as ``xval simulate``)
     samples: int | None = None
+    #: a user's MJCF model (``case`` ends in .xml, :mod:`reports.tune.own`): its input
+    #: joint and reference keyframe, as ``xval compare MODEL --driver --keyframe``
+    driver: str | None = None
+    keyframe: str | None = None
 
-
-@dataclass(frozen=True)
-class Measured:
-    """One candidate's run: ``errors`` quantity -> (family, normalised error, floor);
-    ``unit_steps``: steps per revolution (prescribed) or per simulated second (free);
-    ``steps``: steps the run took; ``cpu``: process CPU seconds of the run; ``units``:
-    revolutions or simulated seconds run."""
-
-    overrides: dict
-    ok: bool
-    reason: str
-    errors: dict = field(default_factory=dict)
-    unit_steps: float = math.nan
-    steps: int = 0
-    cpu: float = math.nan
-    units: float = 1.0
-    settings_text: str = ""
-    #: s per step of the bare stepping loop (best of a few; NaN: not timed)
-    step_cost: float = math.nan
-    #: process CPU s of the whole task (run, judging, timing): what the budget counts
-    task_cpu: float = 0.0
-
-    def worst(self, family: str | None = None) -> tuple[str, float]:
-        """The judged quantity of ``family`` (None: all) with the largest error, and it
-        (``("", inf)`` for a run that failed)."""
-        if not self.ok:
-            return "", math.inf
-        sel = [(q, e) for q, (f, e, _fl) in self.errors.items() if family in (None, f)]
-        if not sel:
-            return "", math.nan
-        q, e = max(sel, key=lambda x: x[1] if math.isfinite(x[1]) else math.inf)
-        return q, (e if math.isfinite(e) else math.inf)
-
-    def floor(self, family: str | None = None) -> float:
-        """The largest arithmetic error floor of the family's quantities (0: float64)."""
-        return max((fl for f, _e, fl in self.errors.values() if family in (None, f)),
-                   default=0.0)
+    @property
+    def own(self) -> bool:
+        """Whether the case is a user's own MJCF model."""
+        from reports.tune.own import is_own
+        return is_own(self.case)
 
 
 # ============================================================================ cases
@@ -113,6 +83,9 @@ def free_reference(case: str, duration: float | None, samples: int | None = None
 def unit_time(tc: TuneCase) -> float:
     """One revolution's duration (prescribed) or 1 s (free): what ``unit_steps`` counts
     steps per."""
+    if tc.own:
+        from reports.tune.own import unit_time as own_unit_time
+        return own_unit_time(tc)
     if tc.free:
         return 1.0
     from sim_models.engines.protocol import travel_time
@@ -120,7 +93,11 @@ def unit_time(tc: TuneCase) -> float:
 
 
 def settings_of(tc: TuneCase, engine: str, overrides: dict):
-    """The engine's settings for the case's mode with ``overrides``."""
+    """The engine's settings for the case's mode with ``overrides`` (a user's model: its
+    file's settings with ``overrides`` set over them)."""
+    if tc.own:
+        from reports.tune.own import settings_of as own_settings_of
+        return own_settings_of(tc, overrides)
     from reports.comparison.settings_file import settings_class
     return settings_class(engine, "free" if tc.free else "run").from_overrides(overrides,
                                                                                engine)
@@ -141,8 +118,12 @@ def measure_task(tc: TuneCase, engine: str, overrides: dict, timed: bool = False
     t0 = time.process_time()
     try:
         s = settings_of(tc, engine, overrides)
-        m = _free(tc, engine, s, overrides, timed) if tc.free else \
-            _prescribed(tc, engine, s, overrides, timed)
+        if tc.own:
+            from reports.tune.own import measure
+            m = measure(tc, s, overrides, timed, TIMING_STEPS, TIMING_REPEATS)
+        else:
+            m = _free(tc, engine, s, overrides, timed) if tc.free else \
+                _prescribed(tc, engine, s, overrides, timed)
     except Exception as e:  # noqa: BLE001 - a refused setting is a measured result
         m = Measured(dict(overrides), False, f"{type(e).__name__}: {e}")
     return dataclasses.replace(m, task_cpu=time.process_time() - t0)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from reports.tune.search import Point
+from reports.tune.search import COST_MATTERS, ERROR_MATTERS, Point
 from reports.tune.tune import TuneResult
 
 
@@ -52,7 +52,10 @@ def summary_lines(res: TuneResult) -> list[str]:
                f"{' (spent: stopped)' if s.budget_hit else ''}, {res.search_wall:.3g} s "
                f"wall; knobs: {knobs}")
     if s.not_mattering:
-        out.append(f"stopped mattering (kept recommended): {', '.join(s.not_mattering)}")
+        out.append(f"stopped mattering (screened: at equal steps each level moves the error "
+                   f"less than {ERROR_MATTERS:g}x and the step's CPU less than "
+                   f"{COST_MATTERS - 1:.0%}; not refined): "
+                   f"{', '.join(s.not_mattering)}")
     if s.not_tried:
         out.append(f"not tried (the budget was spent first): {', '.join(s.not_tried)}")
     if res.answer is None:
@@ -135,6 +138,59 @@ def figure(res: TuneResult) -> bytes:
     return buf.getvalue()
 
 
+# ============================================================================ --json
+def _levels(res: TuneResult, p: Point) -> dict:
+    return {k.name: lv for k, lv in zip(res.tuner.knobs, p.family, strict=True)}
+
+
+def _candidate(res: TuneResult, p: Point, front: set) -> dict:
+    return {"levels": _levels(res, p), "steps_per_unit": p.steps, "error": p.error,
+            "worst_quantity": p.worst_quantity, "passed": p.passed, "run_ok": p.m.ok,
+            "reason": p.m.reason, "model_cost_s": res.cost(p),
+            "run_cpu_s": p.m.cpu / p.m.units if p.m.units else None,
+            "on_front": id(p) in front, "answer": p is res.answer}
+
+
+def _jsonable(v):
+    return list(v) if isinstance(v, tuple) else v
+
+
+def json_document(res: TuneResult, files: dict | None = None) -> dict:
+    """The ``--json`` object of a result (its keys: :data:`reports.cli.tune.JSON_KEYS`,
+    the command's help)."""
+    from reports.comparison.compare import json_safe
+    s, a, c = res.search, res.answer, res.case
+    front = {id(p) for p in res.front}
+    pts = sorted(s.points.values(), key=lambda p: (res.cost(p), p.error))
+    answer = None if a is None else {
+        "levels": _levels(res, a), "steps_per_unit": a.steps, "error": a.error,
+        "worst_quantity": a.worst_quantity, "model_cost_s": res.cost(a),
+        "changed": {k: [_jsonable(x), _jsonable(y)] for k, (x, y) in res.changed.items()},
+        "settings": res.settings.describe()}
+    ver = None
+    if res.verification is not None:
+        v = res.verification
+        step = res.cost(a) / res.cost(res.recommended) if res.recommended else None
+        ver = {"passed": res.passed, "error": res.verify_error,
+               "quantity": res.verify_quantity, "run_ok": v.ok, "reason": v.reason,
+               "cpu_s": res.cpu_tuned, "recommended_cpu_s": res.cpu_recommended,
+               "cpu_ratio": res.cpu_ratio, "cpu_spread": res.cpu_spread,
+               "stepping_only_ratio": step}
+    return json_safe({
+        "case": c.case, "engine": res.engine, "mode": "free" if c.free else "prescribed",
+        "duration_s": c.duration, "unit": res.unit, "tolerance": res.tolerance,
+        "quantity": res.family or "all", "budget_s": res.budget, "seed": res.seed,
+        "passed": res.passed, "answer": answer, "verification": ver,
+        "knob": res.knob_text or None, "limit": res.limit_text or None,
+        "search": {"runs": s.runs, "cpu_s": s.spent, "wall_s": res.search_wall,
+                   "budget_hit": s.budget_hit,
+                   "knobs": ["step"] + [k.name for k in res.tuner.knobs],
+                   "stopped_mattering": list(s.not_mattering),
+                   "not_tried": list(s.not_tried)},
+        "candidates": [_candidate(res, p, front) for p in pts],
+        "files": files or {}})
+
+
 def tuned_document(res: TuneResult) -> dict:
     """What the settings file records about the search (its ``tuned`` object)."""
     return {"case": res.case.case, "free": res.case.free, "duration_s": res.case.duration,
@@ -155,6 +211,13 @@ def write_settings(res: TuneResult, path: str) -> None:
 
 def model_text(res: TuneResult) -> tuple[str, list]:
     """The tuned MJCF of the case's own model (MuJoCo; :mod:`reports.tune.model`)."""
+    of = "of its scale" if res.case.free else "of peak"
+    header = (f"case {s_case(res)} ({mode_text(res)}), tolerance {res.tolerance:g} {of}, "
+              f"verified {'PASS' if res.passed else 'FAIL'} at {res.verify_error:.3g}.")
+    if res.case.own:  # the user's file, only the tuned attributes changed
+        from reports.tune.own import tuned_text
+        new = {k: v for k, (_old, v) in res.changed.items()}
+        return tuned_text(res.case, new, {k: _why(res, k) for k in new}, header)
     from reports.tune.measure import free_reference, prescribed_tree
     from reports.tune.model import tuned_model_text
     from sim_models.builders.mjcf import MujocoSettings
@@ -167,8 +230,6 @@ def model_text(res: TuneResult) -> tuple[str, list]:
     why = {k: _why(res, k) for k in new}
     not_mjcf = {"invweight_scale": getattr(res.settings, "invweight_scale",
                                            base.invweight_scale)}
-    header = (f"case {s_case(res)} ({mode_text(res)}), tolerance {res.tolerance:g} of peak, "
-              f"verified {'PASS' if res.passed else 'FAIL'} at {res.verify_error:.3g}.")
     return tuned_model_text(viewer_xml(mech, base), new, why, not_mjcf, header)
 
 
@@ -188,5 +249,5 @@ def _why(res: TuneResult, fld: str) -> str:
             f"(verified {res.verify_error:.3g})") if moved else "tuned"
 
 
-__all__ = ["figure", "full_text", "model_text", "summary_lines", "table", "tuned_document",
-           "write_settings"]
+__all__ = ["figure", "full_text", "json_document", "model_text",
+           "summary_lines", "table", "tuned_document", "write_settings"]

@@ -26,6 +26,8 @@ from reports.tune.measure import (
     measure_task,
     settings_of,
 )
+from reports.tune.own import changed as own_changed
+from reports.tune.own import own_knobs
 from reports.tune.search import STEP_MATTERS, Point, Search, Tuner
 from reports.tune.space import engine_knobs
 
@@ -126,7 +128,8 @@ def tune(tc: TuneCase, engine: str, tolerance: float = 1e-3, family: str | None 
     ``knob_limit``: search only the first knobs (to measure how the cost grows)."""
     check_inputs(tc, tolerance, budget, family)
     fields = settings_of(tc, engine, {}).as_dict()
-    knobs = engine_knobs(engine, tc.free, knob_limit)
+    knobs = engine_knobs(engine, tc.free, knob_limit) if not tc.own else \
+        own_knobs(tc, knob_limit)
     t0 = time.perf_counter()
     with executor(pool, workers) as ex:
         tuner = Tuner(tc, engine, tolerance, family, budget, knobs, ex,
@@ -148,10 +151,7 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
     reached = min(finite, key=lambda p: (p.error, tuner.rank_key(p)), default=None)
     settings = settings_of(tc, engine, tuner.overrides(best.family, best.steps)) \
         if best is not None else None
-    base = settings_of(tc, engine, {})
-    changed = {} if settings is None else {
-        k: (getattr(base, k), getattr(settings, k)) for k in base.as_dict()
-        if getattr(base, k) != getattr(settings, k)}
+    changed = {} if settings is None else _changed(tc, engine, settings, tuner, best)
     alts = []
     seen = {best.family} if best is not None else set()
     for p in tuner.passing():
@@ -164,6 +164,16 @@ def _result(tc, engine, tolerance, family, budget, seed, tuner, best, rec, sens,
         knob_text(tuner, best, sens), sens,
         "" if best is not None else limit_text(tuner, reached), reached,
         front(tuner), alts[:4], s, wall, tuner)
+
+
+def _changed(tc: TuneCase, engine: str, settings, tuner: Tuner, best: Point) -> dict:
+    """field -> (recommended, tuned) that differ (a user's model: (the file's, tuned));
+    the step is the one the answer's run took (its steps per unit), as in ``settings``."""
+    if tc.own:
+        return own_changed(tc, tuner.overrides(best.family, best.steps))
+    base = settings_of(tc, engine, {})
+    return {k: (getattr(base, k), getattr(settings, k)) for k in base.as_dict()
+            if getattr(base, k) != getattr(settings, k)}
 
 
 def retarget(res: TuneResult, tolerance: float) -> TuneResult:
@@ -222,7 +232,10 @@ def knob_text(tuner: Tuner, best: Point | None, sens: list[Sensitivity]) -> str:
     low = min(others, key=lambda x: x.ratio, default=None)
     step_sets = step is not None and step.ratio <= STEP_MATTERS
     eng = tuner.engine
-    if low is not None and (not step_sets or low.ratio < step.ratio):
+    # a knob sets the error when moving it lowers the error as much as a step that
+    # matters would (a change within the runs' noise sets nothing)
+    if low is not None and low.ratio <= STEP_MATTERS and \
+            (not step_sets or low.ratio < step.ratio):
         i = [k.name for k in tuner.knobs].index(low.knob)
         k = tuner.knobs[i]
         tail = (f"; halving the step: {step.before:.2g} -> {step.after:.2g}" +
@@ -265,7 +278,20 @@ def limit_text(tuner: Tuner, reached: Point | None) -> str:
              f"famil{'y' if n == 1 else 'ies'} of levels)") if tried else ""
     return (f"best reached {reached.error:.3g} {of} ({reached.worst_quantity}) at "
             f"{reached.m.settings_text}; limit: {why} (the most common stop over the "
-            f"families){floor}{budget}{knobs}")
+            f"families){floor}{budget}{knobs}{_drive_note(tuner.tc)}")
+
+
+def _drive_note(tc: TuneCase) -> str:
+    """A user's model driven: the drive xval compare adds is part of its error.  Measured
+    on docs/examples/user-four-bar.xml (worst alpha, of peak, at steps 5e-4 / 2.5e-4 s):
+    armature ratio 1e6 3.7e-4 / 3.1e-4 (the step stops mattering), 1e7 1.4e-4 / 3.4e-5,
+    1e8 1.4e-4 / 8.7e-6."""
+    if not tc.own or tc.free:
+        return ""
+    from sim_models.own.mujoco_own import DRIVE_RATIO
+    return (f"; the driven run adds xval compare's drive, an armature of {DRIVE_RATIO:g} "
+            "times the driver's inertia, whose finite stiffness no setting of the file "
+            "removes: --free judges the model with nothing added")
 
 
 def front(tuner: Tuner) -> list[Point]:

@@ -99,12 +99,27 @@ class Close:
         return f"close_{self.a}_{self.b}"
 
 
+def _check_utf8(path: str) -> None:
+    """MuJoCo's reader keeps a name's bytes as written and its names are UTF-8: a file in
+    another encoding (e.g. ISO-8859-1 with an accented name) is one line here, not an
+    undecodable name later."""
+    with open(path, "rb") as fh:
+        data = fh.read()
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise DescriptionError(f"not UTF-8 text (byte 0x{data[e.start]:02x} at offset "
+                               f"{e.start}): MuJoCo reads names as UTF-8; save the file as "
+                               "UTF-8", path) from None
+
+
 def load_spec(path: str, closes: tuple[Close, ...] = ()):
     """The model's ``mujoco.MjSpec`` (MJCF, or URDF through MuJoCo's URDF reader) with
     the ``closes`` added; a file MuJoCo cannot read is one line naming it."""
     import mujoco
     if not os.path.isfile(path):
         raise DescriptionError("no such file", path)
+    _check_utf8(path)
     try:
         spec = mujoco.MjSpec.from_file(path)
     except ValueError as e:  # MuJoCo's parser error, several lines: keep them on one

@@ -51,6 +51,9 @@ class OwnMujocoSettings(EngineSettings):
     timestep: float = 1e-3
     armature: float = 0.0
     options: str = ""
+    #: settings set over the file's for this run (``xval tune``): ``(key, value)`` pairs
+    #: of :data:`TUNED_KEYS`, applied to the model before compiling (:func:`apply_tuned`)
+    tuned: tuple = ()
     engine_name: ClassVar[str] = "mujoco"
 
     def validate(self) -> None:  # read from a compiled model: nothing to range-check
@@ -58,6 +61,32 @@ class OwnMujocoSettings(EngineSettings):
 
     def describe(self) -> str:
         return f"the user's model {self.file} with its own options: {self.options}"
+
+
+#: What ``xval tune`` may set over a user's file, as the MJCF attributes spell them:
+#: ``<option integrator iterations tolerance>`` and every equality constraint's
+#: ``solref``, ``solimp``.
+TUNED_KEYS = ("integrator", "iterations", "tolerance", "solref", "solimp")
+#: MJCF's integrator spellings -> MuJoCo's enum names.
+INTEGRATORS = {"Euler": "mjINT_EULER", "RK4": "mjINT_RK4", "implicit": "mjINT_IMPLICIT",
+               "implicitfast": "mjINT_IMPLICITFAST"}
+
+
+def apply_tuned(spec, tuned) -> None:
+    """Set ``tuned`` (``(key, value)`` pairs of :data:`TUNED_KEYS`) on ``spec`` (an
+    ``MjSpec``): the solver's options, and ``solref``/``solimp`` on every equality
+    constraint (what ``xval tune --write-model`` writes into the file)."""
+    import mujoco
+    for key, value in tuned:
+        if key == "integrator":
+            spec.option.integrator = getattr(mujoco.mjtIntegrator, INTEGRATORS[value])
+        elif key in ("iterations", "tolerance"):
+            setattr(spec.option, key, value)
+        elif key in ("solref", "solimp"):
+            for eq in spec.equalities:
+                setattr(eq, key, list(value))
+        else:
+            raise ValueError(f"{key!r} is not a setting of a user's model ({TUNED_KEYS})")
 
 
 def option_items(m) -> dict[str, str]:
@@ -86,10 +115,11 @@ def model_options(m) -> str:
 
 
 def own_settings(imp: Imported, prescribed: bool = True,
-                 timestep: float | None = None) -> OwnMujocoSettings:
+                 timestep: float | None = None, tuned: tuple = ()) -> OwnMujocoSettings:
     """The settings record of a run on the user's model: its file, its own options and
     (prescribed) the drive's armature, :data:`DRIVE_RATIO` times the driver's diagonal
-    of the mass matrix at the reference."""
+    of the mass matrix at the reference; ``tuned``: settings over the file's
+    (:func:`apply_tuned`; the options line then reads the model with them)."""
     import mujoco
     m, d = imp.compiled.model, imp.compiled.data
     full = np.zeros((m.nv, m.nv))
@@ -97,11 +127,16 @@ def own_settings(imp: Imported, prescribed: bool = True,
     mujoco.mj_fullM(m, d, full)
     arm = DRIVE_RATIO * float(full[imp.driver.dof, imp.driver.dof]) if prescribed else 0.0
     step = f"; timestep {timestep:g} s given for this run" if timestep else ""
+    if tuned:
+        spec = load_spec(str(imp.compiled.path), imp.compiled.closes)
+        apply_tuned(spec, tuned)
+        m = spec.compile()
+        step += "; tuned over the file: " + ", ".join(k for k, _v in tuned)
     return OwnMujocoSettings(file=str(imp.compiled.path),
                              timestep=float(timestep or m.opt.timestep),
                              armature=arm, options=model_options(m) + step + (
                                  f"; drive: armature {arm:.3g} on {imp.driver.name!r}"
-                                 if prescribed else ""))
+                                 if prescribed else ""), tuned=tuple(tuned))
 
 
 class Mapping:
@@ -193,6 +228,7 @@ class OwnMujocoSession(MujocoSession):
         # the drive's armature added before compiling, as the harness's own models have
         # it: the compiled constraint weights (dof/body_invweight0) then see it
         spec = load_spec(str(imp.compiled.path), imp.compiled.closes)
+        apply_tuned(spec, self.settings.tuned)
         self.A = float(self.settings.armature)
         if self.A:
             spec.joint(imp.driver.name).armature += self.A
@@ -336,17 +372,21 @@ def _cross(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
-__all__ = ["OwnMujocoSession", "OwnMujocoSettings", "own_settings"]
+__all__ = ["INTEGRATORS", "TUNED_KEYS", "Mapping", "OwnMujocoSession", "OwnMujocoSettings",
+           "apply_tuned", "own_settings"]
 
 
 
-def run_prescribed(imp: Imported, request=None, timestep: float | None = None):
+def run_prescribed(imp: Imported, request=None, timestep: float | None = None,
+                   tuned: tuple = ()):
     """The user's model driven along the description's prescribed motion: an
-    :class:`sim_models.runs.engine_run.EngineRun` against ``compile_linkage(imp.mechanism)``."""
+    :class:`sim_models.runs.engine_run.EngineRun` against ``compile_linkage(imp.mechanism)``
+    (``tuned``: settings over the file's, :func:`apply_tuned`)."""
     from ..engines.protocol import RunRequest, compile_linkage, drive, plan_samples
     request = dataclasses.replace(request or RunRequest(), chords="analytic")
     # the model's own tree: its joints first (description order), its connects the chords
     tree = compile_linkage(imp.mechanism, chords="analytic")
     plan = plan_samples(tree, request.revolutions, request.samples)
-    with OwnMujocoSession(tree, imp, own_settings(imp, timestep=timestep)) as session:
+    with OwnMujocoSession(tree, imp, own_settings(imp, timestep=timestep,
+                                                  tuned=tuned)) as session:
         return tree, drive(session, plan, request)

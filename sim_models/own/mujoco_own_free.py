@@ -63,9 +63,11 @@ class OwnFreeSession(OwnMujocoSession, FreeSession):
         return FreeRead(th[0], om[0], al[0], org[0], vo[0], rec.force[0].copy(), math.nan)
 
 
-def run_free_own(imp: Imported, request=None, reference=None, timestep: float | None = None):
+def run_free_own(imp: Imported, request=None, reference=None, timestep: float | None = None,
+                 tuned: tuple = ()):
     """The user's model released: a :class:`sim_models.runs.free_run.FreeEngineRun` against
-    the exact free motion of ``imp.mechanism`` (``reference``, computed if not given)."""
+    the exact free motion of ``imp.mechanism`` (``reference``, computed if not given;
+    ``tuned``: settings over the file's, :func:`sim_models.own.mujoco_own.apply_tuned`)."""
     from ..engines.free_protocol import drive_free
     from ..engines.protocol import compile_linkage
     from ..runs.free_run import FreeRequest
@@ -73,7 +75,7 @@ def run_free_own(imp: Imported, request=None, reference=None, timestep: float | 
     fm = imp.mechanism.motion
     request = request or FreeRequest(duration=fm.duration, samples=max(1, fm.samples - 1))
     session = OwnFreeSession(tree, imp, own_settings(imp, prescribed=False,
-                                                            timestep=timestep))
+                                                     timestep=timestep, tuned=tuned))
     try:
         return drive_free(session, request, reference)
     finally:
