@@ -100,7 +100,8 @@ def register(sub) -> None:
     """Add ``tune`` to ``xval``'s subparsers."""
     s = sub.add_parser("tune", help="the cheapest engine settings that pass a tolerance")
     s.add_argument("case", type=opt.case_or_file, help="built-in case name or TOML file")
-    s.add_argument("--engine", required=True, choices=engine_names())
+    s.add_argument("--engine", required=True, choices=engine_names(), metavar="ENGINE",
+                   help=f"the engine to tune: {opt.choices_text(engine_names())}")
     s.add_argument("--tolerance", type=opt.finite_number, default=1e-3,
                    help="largest normalised error (of peak) on every judged quantity "
                         "(default 1e-3)")
