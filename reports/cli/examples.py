@@ -43,7 +43,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     "compare": (
         "xval compare seed-four-bar --engine mujoco",
         "xval compare seed-slider-crank --engine pybullet --samples 36 --json",
-        "xval compare six-bar --engine mujoco --integrator Euler --junit six-bar.xml",
+        "xval compare six-bar --engine mujoco --junit six-bar.xml --summary six-bar.md",
     ),
     "baseline record": (
         "xval baseline record seed-four-bar six-bar --engine mujoco --out base.json",

@@ -48,7 +48,7 @@ def version() -> str:
         return "unknown version"
 
 
-def checkout_commit(root: Path = ROOT) -> Commit | None:
+def checkout_commit(root: Path) -> Commit | None:
     """HEAD of the git checkout at ``root`` (its own ``.git``, a folder or a worktree's
     file; never a repository around it, such as a project that holds a venv), or
     ``None`` when ``root`` is not a checkout or git cannot answer."""
@@ -96,7 +96,9 @@ def built_commit(module: str = "reports._build_info") -> Commit | None:
     return Commit(info.COMMIT, getattr(info, "DATE", "")) if info.COMMIT else None
 
 
-def version_line() -> str:
-    """``xval 0.1.0 (commit 49e6b7c, 2026-11-28)``, or ``(commit unknown)``."""
-    commit = checkout_commit() or built_commit()
+def version_line(root: Path | None = None, module: str = "reports._build_info") -> str:
+    """``xval 0.1.0 (commit 49e6b7c, 2026-11-28)``, or ``(commit unknown)``: the commit of
+    the checkout at ``root`` (default: the one this file is in, if any), else the one
+    recorded in ``module`` at build time."""
+    commit = checkout_commit(ROOT if root is None else root) or built_commit(module)
     return f"xval {version()} ({commit.text() if commit else 'commit unknown'})"
