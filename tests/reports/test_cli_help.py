@@ -96,3 +96,33 @@ def test_a_rejected_example_fails_the_check():
     with pytest.raises(Exception) as e:
         build_parser("solve").parse_args(["solve", "seed-four-bar", "--angel", "30"])
     assert isinstance(e.value, (argparse.ArgumentError, SystemExit)) or "--angel" in str(e.value)
+
+
+@pytest.mark.parametrize("width", [60, 80, 120])
+def test_cases_prints_each_description_to_the_end_of_a_sentence(width, monkeypatch):
+    """``xval cases``: every case (built-in, hard, free) on its lines, its text read back
+    from the output ends a sentence, no line is wider than the terminal, no word cut
+    (every word of the output is a word of the case file's description)."""
+    import os
+    import shutil
+
+    from analytic.cases import case_description, case_names, free_case_names, hard_case_names
+    monkeypatch.setattr(shutil, "get_terminal_size", lambda *a, **k: os.terminal_size((width, 24)))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["cases"]) == 0
+    lines = out.getvalue().splitlines()
+    assert all(len(ln) <= width for ln in lines)
+    entries: dict[str, list[str]] = {}
+    for ln in lines:
+        if ln.startswith("  ") and not ln.startswith("   "):  # "  name  text"
+            name, _, text = ln.strip().partition(" ")
+            entries[name] = [text.strip()]
+        elif ln.startswith("   "):
+            entries[name].append(ln.strip())
+    names = case_names() + hard_case_names() + free_case_names()
+    assert sorted(entries) == sorted(names)
+    for name, parts in entries.items():
+        text = " ".join(parts)
+        assert text.endswith((".", "!", "?")), f"{name}: {text!r}"
+        assert set(text.split()) <= set(case_description(name).split()), name
