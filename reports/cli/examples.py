@@ -55,11 +55,11 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     ),
     "report": (
         "xval report --quick",
-        "xval report --cases seed-four-bar six-bar --out my-report",
+        "xval report --cases seed-four-bar --out my-report",
     ),
     "tune": (
         "xval tune seed-four-bar --engine mujoco --budget 20 --out mujoco.json",
-        "xval tune seed-four-bar --engine pybullet --free --budget 20",
+        "xval tune seed-four-bar --engine mujoco --free --budget 20 --out free.json",
     ),
     "import": (
         "xval models seed-four-bar --out models     # an MJCF model to read",
