@@ -57,6 +57,7 @@ def _released_at(rate: float, duration: float):
     return replace(mech, motion=replace(mech.motion, rate=rate, duration=duration))
 
 
+@pytest.mark.slow
 def test_fast_release_through_the_limit_matches_absolute_coordinates():
     """F7b: released at 50 rad/s toward O4's limit position (refused before: "loops cannot
     close at driver 'O4' = 109.297 deg", a trial step past the limit): it switches and
