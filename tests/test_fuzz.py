@@ -355,6 +355,7 @@ def fast_folder(tmp_path):
     shutil.rmtree(d, ignore_errors=True)
 
 
+@pytest.mark.slow
 def test_random_linkages_leave_no_silent_non_finite(fast_folder):
     """EXAMPLES linkages, split over one worker process per core (at most WORKERS),
     each with its own fixed hypothesis seed: the same linkages on every run."""

@@ -112,8 +112,10 @@ def register(sub) -> None:
                       help="animate the prescribed cycle of [driver] even when the "
                            "description has a [motion] table")
     s.add_argument("--out", type=opt.output_file, help="F.gif, F.mp4 (needs ffmpeg) or F.html")
-    s.add_argument("--engine", choices=[*engine_names(), "all"],
-                   help="draw this engine's poses (dashed) over the analytic ones")
+    engines = [*engine_names(), "all"]
+    s.add_argument("--engine", choices=engines, metavar="ENGINE",
+                   help="draw this engine's poses (dashed) over the analytic ones: "
+                        f"{opt.choices_text(engines)}")
     s.add_argument("--forces", action="store_true",
                    help="joint forces as arrows on one scale, with a key")
     s.add_argument("--frames", type=opt.int_range(36, 720, "frames per cycle"),

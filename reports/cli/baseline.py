@@ -18,6 +18,7 @@ from analytic.cases import case_names, free_case_names
 from analytic.input_display import format_input
 from analytic.motion_spec import MAX_DURATION
 from reports.cli import options as opt
+from reports.cli.examples import help_kw
 from reports.comparison.free_cases import (
     FREE_SAMPLES,
     MIN_DURATION,
@@ -228,12 +229,14 @@ def register(sub) -> None:
     """``xval baseline record|check``."""
     p = sub.add_parser("baseline", help="record engine errors, later check them for drift")
     bsub = p.add_subparsers(dest="baseline_command", required=True, metavar="record|check")
-    r = bsub.add_parser("record", help="run cases in engines and write a baseline file")
+    line = "run cases in engines and write a baseline file"
+    r = bsub.add_parser("record", help=line, **help_kw("baseline record", line))
     r.add_argument("models", nargs="+", type=_model, metavar="CASE_OR_FILE",
                    help="built-in case names, TOML files, your own MJCF models (.xml, "
                         "with --engine mujoco), or 'all' (every built-in case)")
-    r.add_argument("--engine", action="append", choices=[*engine_names(), "all"],
-                   help="an engine (repeatable; default all)")
+    engines = [*engine_names(), "all"]
+    r.add_argument("--engine", action="append", choices=engines, metavar="ENGINE",
+                   help=f"an engine (repeatable; default all): {opt.choices_text(engines)}")
     r.add_argument("--out", required=True, type=opt.output_file, metavar="FILE",
                    help="the baseline file to write (JSON)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
@@ -265,8 +268,10 @@ def register(sub) -> None:
                    help="replace an existing file (default: record these runs into it, "
                         "keeping the others)")
     r.set_defaults(func=cmd_record)
-    c = bsub.add_parser("check", help="re-run a baseline's runs and fail on drift")
-    c.add_argument("baseline", metavar="BASELINE_JSON")
+    line = "re-run a baseline's runs and fail on drift"
+    c = bsub.add_parser("check", help=line, **help_kw("baseline check", line))
+    c.add_argument("baseline", metavar="BASELINE_JSON",
+                   help="the baseline file that xval baseline record wrote")
     c.add_argument("--factor", type=opt.drift_factor, default=bl.DEFAULT_FACTOR,
                    help=f"largest allowed growth over the baseline (default "
                         f"{bl.DEFAULT_FACTOR:g}; errors below {bl.DRIFT_FLOOR:g} of peak "

@@ -157,7 +157,9 @@ def register(sub) -> None:
     s = sub.add_parser("compare", help="run engines and compare with the analytic solution")
     s.add_argument("case", help="built-in case name, TOML file, or your own MJCF or URDF "
                    "model (.xml, .urdf, read as xval import reads it)")
-    s.add_argument("--engine", choices=[*engine_names(), "all"], default="all")
+    engines = [*engine_names(), "all"]
+    s.add_argument("--engine", choices=engines, default="all", metavar="ENGINE",
+                   help=f"the engine to run: {opt.choices_text(engines)} (default all)")
     add_own_options(s)
     s.add_argument("--mode", choices=["run", "instantaneous"], default="run",
                    help="run: step through the driver's motion; instantaneous: the "
@@ -178,7 +180,7 @@ def register(sub) -> None:
     s.add_argument("--timestep", type=opt.timestep,
                    help=f"override the recommended step, {opt.MIN_TIMESTEP:g} to "
                         f"{opt.MAX_TIMESTEP:g} s")
-    s.add_argument("--json", action="store_true")
+    s.add_argument("--json", action="store_true", help="print one JSON object (SI)")
     opt.add_ci_outputs(s)
     s.set_defaults(func=cmd_compare)
 

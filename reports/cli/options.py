@@ -34,6 +34,13 @@ class OneLineParser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
+def choices_text(choices) -> str:
+    """The choices of an option whose metavar names them (``--engine ENGINE``), for its
+    help: the usage line stays short and every choice is listed once."""
+    *head, last = list(choices)
+    return f"{', '.join(head)} or {last}" if head else str(last)
+
+
 # --- sizes ---------------------------------------------------------------------
 
 #: Most points a sweep may have.  A sweep holds about 190-200 bytes per point for

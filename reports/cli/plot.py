@@ -375,8 +375,10 @@ def register(sub) -> None:
     s.add_argument("--what",
                    help=f"comma-separated: {', '.join(WHAT)} (default {DEFAULT_WHAT}); free "
                         f"motion: {', '.join(FREE_WHAT)} (default {FREE_DEFAULT_WHAT})")
-    s.add_argument("--engine", choices=[*engine_names(), "all"],
-                   help="overlay this engine's run (markers) and plot its error below")
+    engines = [*engine_names(), "all"]
+    s.add_argument("--engine", choices=engines, metavar="ENGINE",
+                   help="overlay this engine's run (markers) and plot its error below: "
+                        f"{opt.choices_text(engines)}")
     s.add_argument("--units", type=opt.units_option, help=opt.UNITS_HELP)
     s.add_argument("--out", type=opt.output_file,
                    help="output file; .png, .svg or .pdf (default <case>-plot.png; free "

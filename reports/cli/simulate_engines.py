@@ -41,9 +41,11 @@ INTEGRATORS = opt.MUJOCO_INTEGRATORS
 
 def add_options(s) -> None:
     """The engine options of ``xval simulate``."""
-    s.add_argument("--engine", choices=[*free_engine_names(), "all"],
+    engines = [*free_engine_names(), "all"]
+    s.add_argument("--engine", choices=engines, metavar="ENGINE",
                    help="release the linkage in this engine (or all) and judge its run "
-                        "against the exact trajectory; exit status 1 on a failed verdict")
+                        "against the exact trajectory; exit status 1 on a failed verdict: "
+                        f"{opt.choices_text(engines)}")
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="an engine setting (repeatable; ENGINE.KEY=VALUE for one engine "
                         "only), e.g. --set mujoco.solref=-1e4,-200 (needs --engine)")

@@ -223,9 +223,9 @@ def register(sub) -> None:
     s.add_argument("case", type=opt.case_or_file,
                    help="built-in case name, TOML file, or your own MJCF model (.xml, read "
                         "as xval compare reads it)")
-    s.add_argument("--engine", choices=engine_names(), default=None,
+    s.add_argument("--engine", choices=engine_names(), default=None, metavar="ENGINE",
                    help="the engine tuned (required for a case or TOML file; a model "
-                        "file: mujoco)")
+                        f"file: mujoco): {opt.choices_text(engine_names())}")
     s.add_argument("--driver", help="with a model file: its input joint (default: the one "
                    "actuated joint)")
     s.add_argument("--keyframe", help="with a model file: the reference configuration "

@@ -25,6 +25,7 @@ import unicodedata
 from analytic.errors import LinkageError
 from analytic.perf import tune_allocator
 from reports.cli import options as opt
+from reports.cli.examples import TOUR, examples_text, help_kw
 from reports.cli.paths import check_command
 
 COMMANDS = {
@@ -95,18 +96,37 @@ class _OnlyOne:
         self.sub, self.name = sub, name
 
     def add_parser(self, name, **kw):
-        if name == self.name:
-            return self.sub.add_parser(name, **kw)
+        if name == self.name:  # its one line above its options, its examples below
+            ours = help_kw(name, COMMANDS[name][1])
+            if kw.get("epilog"):  # the command's own epilog (tune's JSON keys) before them
+                ours["epilog"] = f"{kw['epilog']}\n\n{ours['epilog']}"
+            return self.sub.add_parser(name, **{**kw, **ours})
         return argparse.ArgumentParser(prog=f"xval {name}", add_help=False)
+
+
+class _Version(argparse.Action):
+    """``--version``: reads the version and the commit only when asked (a subprocess of
+    git in a checkout), so that no other command pays for it."""
+
+    def __init__(self, option_strings, dest, **kw):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from reports.cli.version import version_line
+        print(version_line())
+        parser.exit()
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """``xval``'s parser: every command listed with its help line (:data:`COMMANDS`, in the
     groups of :data:`GROUPS`);
     ``command``'s own options added by its module, the only one imported."""
-    p = opt.OneLineParser(prog="xval", usage="xval [-h] COMMAND ...",
-                          description=f"{ABOUT}\n\n{commands_text()}", epilog=EXIT_STATUS,
+    p = opt.OneLineParser(prog="xval", usage="xval [-h] [--version] COMMAND ...",
+                          description=f"{ABOUT}\n\n{commands_text()}",
+                          epilog=f"{EXIT_STATUS}\n\n{examples_text(TOUR)}",
                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action=_Version, help="print the version and the commit "
+                   "of this copy of xval, and exit")
     # the commands are listed in the description, grouped (commands_text); argparse's own
     # list of them (a brace of every name, then each again) is left out
     sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND", prog="xval",
@@ -121,7 +141,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def _command(argv: list[str]) -> str | None:
     """The command ``argv`` runs (the first word; ``xval`` has no options of its own
-    besides ``--help``), or ``None``."""
+    besides ``--help`` and ``--version``), or ``None``."""
     word = next((a for a in argv if not a.startswith("-")), None)
     return word if word in COMMANDS else None
 

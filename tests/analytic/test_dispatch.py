@@ -73,6 +73,7 @@ def test_unloaded_kernel_waits_until_loading_pays(monkeypatch, tmp_path):
     assert fused.dispatch(lk, 10 ** 6) is fk  # a large call loads at once
 
 
+@pytest.mark.slow
 def test_background_compile_marks_the_kernel_ready(monkeypatch, tmp_path):
     """The first call of an uncached structure answers on numpy and leaves a background
     process compiling the kernel into the cache, which marks it ready."""

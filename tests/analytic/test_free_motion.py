@@ -194,6 +194,7 @@ def _absolute_reference(mech, traj, times):
     return out
 
 
+@pytest.mark.slow
 def test_non_grashof_rocker_switches_and_matches_absolute_coordinates():
     mech = _rocker_mech()
     traj = simulate(mech)

@@ -87,6 +87,7 @@ def test_a02_case_file_is_the_generator_text():
     assert case_path("iftomm-a02-n-four-bar").read_text() == n_four_bar_toml(40)
 
 
+@pytest.mark.slow
 def test_a02_n40_through_the_first_horizontal():
     """N = 40 as published, 1 s: released upright, the first horizontal pass (all 40
     windows flat at once, N + 1 degrees of freedom for an instant) is crossed on the
@@ -95,6 +96,7 @@ def test_a02_n40_through_the_first_horizontal():
     assert sum(e.kind == "singular" for e in traj.events) == 1
 
 
+@pytest.mark.slow
 def test_a02_published_run_n40_20s():
     """The published problem: N = 40 over 20 s.  B0 at 5, 10, 15 and 20 s against the
     phi equation to 1e-9 m (measured 1e-10 to 6e-10 m: the reference's own error is

@@ -105,7 +105,8 @@ def _run_both(mech, T, monkeypatch):
     return fast, ref, used
 
 
-@pytest.mark.parametrize("name", list(_cases()))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow)
+                                  if n == "rocker-switching" else n for n in _cases()])
 def test_compiled_matches_numpy_path(name, eom_ready, monkeypatch):
     make, T, tol = _cases()[name]
     mech = make()

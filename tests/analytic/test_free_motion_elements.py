@@ -35,6 +35,7 @@ def _without(mech, springs=True, dampers=True):
     ("F2_zero_length_spring_coincident.toml", True, False),
     ("F2b_point_damper_coincident.toml", False, True),
     ("damper_coincident_points.toml", False, True)])
+@pytest.mark.slow
 def test_element_between_coincident_points_exerts_no_force(name, springs, dampers):
     """A zero-length spring or a damper between two points of the same pin: no force
     (before: "loops cannot close at driver 'O2' = nan deg"), so the motion is the one

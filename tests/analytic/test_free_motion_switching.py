@@ -30,6 +30,7 @@ SWITCH_REL = 1e-9
 SWITCH_DEFECT = 1e-10
 
 
+@pytest.mark.slow
 def test_free01_every_joint_within_1e_9_of_range_after_switches():
     mech = load_mechanism(BUGS / "free01_s3_switch_error.toml")
     traj = simulate(mech, duration=3.0)
@@ -56,6 +57,7 @@ def _released_at(rate: float, duration: float):
     return replace(mech, motion=replace(mech.motion, rate=rate, duration=duration))
 
 
+@pytest.mark.slow
 def test_fast_release_through_the_limit_matches_absolute_coordinates():
     """F7b: released at 50 rad/s toward O4's limit position (refused before: "loops cannot
     close at driver 'O4' = 109.297 deg", a trial step past the limit): it switches and
@@ -80,6 +82,7 @@ def test_fast_release_through_the_limit_matches_absolute_coordinates():
 ENERGY_REL = 1e-11
 
 
+@pytest.mark.slow
 def test_release_at_1e6_rad_per_s_passes_the_limits():
     """At 1e6 rad/s gravity, the spring and the damper are negligible: the motion is the
     50 rad/s one's inertial limit, so the events fall at the same crank angles (times

@@ -174,6 +174,7 @@ def test_streamed_newton_path_and_range_are_the_whole_sweeps():
     assert got.summary.lines() == whole.summary.lines()
 
 
+@pytest.mark.slow
 def test_streamed_sweep_memory_does_not_grow_with_points():
     """Peak traced memory of a streamed sweep at 8x the points stays within FLAT: the
     values, events and summary hold nothing per point (before issue 23's fix the

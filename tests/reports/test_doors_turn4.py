@@ -188,6 +188,7 @@ def _user_pytest(root: Path) -> subprocess.CompletedProcess:
                           text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_plugin_deep_baseline_fails_only_the_xval_test(tmp_path):
     (tmp_path / "tests").mkdir()
     (tmp_path / "tests" / "test_user.py").write_text(USER_TESTS)

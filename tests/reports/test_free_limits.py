@@ -106,6 +106,7 @@ def test_pybullet_seed_limit_is_its_first_order_integrator():
     assert 1.8 < rec.err_end / half.err_end < 2.2, (rec.err_end, half.err_end)
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_full_report_limits_cover_what_was_measured_and_a03_falls_with_the_step():
     """The full report's 14 free failures (issue 30) carried no label although the quick

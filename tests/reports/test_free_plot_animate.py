@@ -211,6 +211,7 @@ def test_animate_free_frames_are_the_trajectory(tmp_path, traj):
                                             "frame 36/36")
 
 
+@pytest.mark.slow
 def test_animate_free_html_with_forces(tmp_path):
     out = tmp_path / "a.html"
     code, text = run("animate", "iftomm-a01-pendulum", "--duration", "0.5", "--forces",

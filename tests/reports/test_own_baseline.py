@@ -59,6 +59,7 @@ def test_baseline_of_a_user_model(tmp_path, capsys, monkeypatch):
     assert "close.force: error" in out and "exceeds its tolerance" in out
 
 
+@pytest.mark.slow
 def test_free_baselines_of_user_models(tmp_path, capsys, monkeypatch):
     """``baseline record MODEL.xml --free``: the six-bar released from qpos0 and the
     simulator four-bar from its keyframe 'moving' (--driver, --keyframe kept in the

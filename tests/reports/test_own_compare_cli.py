@@ -93,6 +93,7 @@ def test_urdf_with_close_runs_in_mujoco(tmp_path, capsys):
     assert code == 2 and "does not move" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_urdf_with_close_runs_in_pybullet(tmp_path):
     """PyBullet loads the user's URDF itself (the XZ-plane four-bar: gravity in its
     plane), the loop closed at the --close points by a point-to-point constraint, driven

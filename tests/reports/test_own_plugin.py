@@ -80,6 +80,7 @@ def _pytest(root: Path, *args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_user_project_on_its_own_models(own_project):
     """The driven and free assertions and the two baseline runs pass, the too-tight one
     fails naming the file, a quantity and the model's own settings; the baseline's runs
@@ -143,6 +144,7 @@ def test_the_command_lines_ranges(own_project, xval, call, kind, words):
     assert xval.runs.stats["runs"] == before
 
 
+@pytest.mark.slow
 def test_a_urdf_with_its_closure_in_pybullet(tmp_path, xval):
     """``xval.assert_agrees("four_bar.urdf", engine="pybullet", driver=, close=)``: PyBullet
     loads the file, the loop closed at the given link points, within 1e-3 of peak (measured

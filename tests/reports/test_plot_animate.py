@@ -256,6 +256,7 @@ def test_engine_pose_displaced_is_drawn_displaced():
     plt.close(an.fig)
 
 
+@pytest.mark.slow
 def test_animate_html_is_self_contained(tmp_path):
     out = tmp_path / "x.html"
     assert run("animate", "seed-four-bar", "--out", str(out), "--frames", "36",

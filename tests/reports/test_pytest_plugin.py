@@ -123,6 +123,7 @@ def _pytest(root: Path, *args: str, **env: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_user_project_one_pass_one_failure(user_project):
     """Through the installed ``pytest11`` entry point (autoloaded): the passing and the
     baseline assertions pass, the too-tight one fails with a message naming the
@@ -145,6 +146,7 @@ def test_user_project_one_pass_one_failure(user_project):
     assert "xval: 1 engine runs" in out and "2 served from the session cache" in out
 
 
+@pytest.mark.slow
 def test_user_project_with_autoload_off_and_dash_p(user_project):
     """``-p xval`` (the entry point's name) loads the plugin when autoloading is off."""
     p = _pytest(user_project, "-q", "-p", "xval", "-k", "agrees",
@@ -308,6 +310,7 @@ def drift_project(tmp_path_factory):
     return root
 
 
+@pytest.mark.slow
 def test_a_drift_in_one_quantity_is_one_red_test(drift_project, tmp_path):
     """Must show (issue 22): the 10.6x drift is one red test ``my-four-bar/exudyn`` whose
     first failure line (and JUnit message) names the quantity, the growth, the factor
@@ -332,6 +335,7 @@ def test_a_drift_in_one_quantity_is_one_red_test(drift_project, tmp_path):
     assert cases["test_no_drift[my-four-bar/mujoco]"].find("failure") is None
 
 
+@pytest.mark.slow
 def test_skip_and_select_engine_tests(drift_project, tmp_path):
     """``--xval-skip-engines`` skips, ``-m "not xval_engine"`` deselects every test that
     uses an xval fixture; ``baseline_params`` takes a rootdir-relative path, so its
@@ -350,6 +354,7 @@ def test_skip_and_select_engine_tests(drift_project, tmp_path):
     assert p.returncode == 0 and "1 passed, 6 deselected" in p.stdout, p.stdout
 
 
+@pytest.mark.slow
 def test_unusable_and_missing_baselines_are_one_line(drift_project, tmp_path):
     import shutil
     root = tmp_path / "p"
@@ -367,6 +372,7 @@ def test_unusable_and_missing_baselines_are_one_line(drift_project, tmp_path):
     assert "create it with: xval baseline record" in p.stdout
 
 
+@pytest.mark.slow
 def test_xval_update_rewrites_what_changed_and_creates_a_missing_file(drift_project,
                                                                       tmp_path):
     import json

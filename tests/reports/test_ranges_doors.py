@@ -241,6 +241,7 @@ def _pytest(root: Path, *args: str) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
+@pytest.mark.slow
 def test_xval_factor_is_checked_where_pytest_parses_it(tmp_path):
     """``--xval-factor 0`` was silently taken as 10, ``0.5`` failed at test time naming
     ``--factor``: both are now pytest usage errors naming ``--xval-factor``; a valid

@@ -209,11 +209,14 @@ def test_missing_engine_still_reports(tmp_path, monkeypatch):
     assert s.iloc[0].verdict == "FAIL" and "not installed" in s.iloc[0].note
 
 
+@pytest.mark.slow
 def test_dask_local_cluster(tmp_path):
     """--dask SCHEDULER_ADDRESS: the same tasks on a Dask distributed cluster."""
     distributed = pytest.importorskip("distributed")
+    # the dashboard on a port the system picks (None meant Dask's fixed 8787, taken by a
+    # second test process under pytest -n, or another project's cluster)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         cfg = ReportConfig(out=tmp_path, quick=True, cases=("seed-four-bar",), samples=8,
                            studies=False, engines=("mujoco",), dask=cluster.scheduler_address)
         build_report(cfg)

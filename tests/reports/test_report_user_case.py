@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,6 +24,7 @@ def _snapshot(*dirs: Path) -> dict:
     return out
 
 
+@pytest.mark.slow
 def test_user_case_report_writes_only_under_out(tmp_path, monkeypatch):
     from reports.cli.xval import main
     user = tmp_path / "my"

@@ -178,6 +178,7 @@ def test_long_run_loop_short():
     assert res["summary"]["ok"] and len(res["per_rev"]["revolution"]) == 2
 
 
+@pytest.mark.slow
 def test_hard_cases_quick():
     h = hard_cases(quick=True)
     assert h["long_run_revolutions"] == S.LONG_RUN_REVOLUTIONS[True]
