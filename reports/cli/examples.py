@@ -59,8 +59,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     ),
     "tune": (
         "xval tune seed-four-bar --engine mujoco --budget 20 --out mujoco.json",
-        "xval models seed-four-bar --out models     # an MJCF model to tune",
-        "xval tune models/seed-four-bar.xml --free --budget 20 --write-model tuned.xml",
+        "xval tune six-bar --engine exudyn --budget 20 --json",
     ),
     "import": (
         "xval models seed-four-bar --out models     # an MJCF model to read",
