@@ -125,18 +125,8 @@ def settings_of(tc, overrides: dict):
 def file_values(tc) -> dict:
     """The file's own value of every setting a candidate may change, as MJCF writes it
     (``solref``/``solimp``: the first equality constraint's; None without one)."""
-    import mujoco
-
-    from sim_models.own.mujoco_own import INTEGRATORS
-    m = model_of(tc).compiled.model
-    names = {int(getattr(mujoco.mjtIntegrator, e)): k for k, e in INTEGRATORS.items()}
-    out = {"timestep": float(m.opt.timestep), "integrator": names[int(m.opt.integrator)],
-           "iterations": int(m.opt.iterations), "tolerance": float(m.opt.tolerance),
-           "solref": None, "solimp": None}
-    if m.neq:
-        out["solref"] = tuple(float(x) for x in m.eq_solref[0])
-        out["solimp"] = tuple(float(x) for x in m.eq_solimp[0])
-    return out
+    from sim_models.own.mujoco_own import file_settings
+    return file_settings(model_of(tc).compiled.model)
 
 
 def changed(tc, overrides: dict) -> dict:

@@ -390,3 +390,20 @@ def run_prescribed(imp: Imported, request=None, timestep: float | None = None,
     with OwnMujocoSession(tree, imp, own_settings(imp, timestep=timestep,
                                                   tuned=tuned)) as session:
         return tree, drive(session, plan, request)
+
+
+def file_settings(m) -> dict:
+    """The settings ``xval tune`` may change, as the compiled MuJoCo model ``m`` holds
+    them (the file's own values): timestep (s), integrator (MJCF name), iterations,
+    tolerance, and the first equality constraint's ``solref``/``solimp`` (None without
+    one)."""
+    import mujoco
+
+    names = {int(getattr(mujoco.mjtIntegrator, e)): k for k, e in INTEGRATORS.items()}
+    out = {"timestep": float(m.opt.timestep), "integrator": names[int(m.opt.integrator)],
+           "iterations": int(m.opt.iterations), "tolerance": float(m.opt.tolerance),
+           "solref": None, "solimp": None}
+    if m.neq:
+        out["solref"] = tuple(float(x) for x in m.eq_solref[0])
+        out["solimp"] = tuple(float(x) for x in m.eq_solimp[0])
+    return out

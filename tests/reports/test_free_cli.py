@@ -85,7 +85,7 @@ def test_the_wall_limit_reaches_the_run(monkeypatch):
     below; here the exact side runs unbounded so that the engine's path is tested.)"""
     import reports.cli.simulate as sim
     real = sim.simulate
-    monkeypatch.setattr(sim, "simulate", lambda mech, duration, wall_limit=None:
+    monkeypatch.setattr(sim, "simulate", lambda mech, duration, wall_limit=None, **kw:
                         real(mech, duration))
     code, out = run("simulate", "iftomm-a01-pendulum", "--engine", "mujoco", "--duration",
                     "0.5", "--wall-limit", "1e-9", "--json")
