@@ -60,10 +60,10 @@ def add_options(s) -> None:
                    help="engine settings from a free-motion settings file (xval tune --free "
                         "--out; needs --engine)")
     s.add_argument("--wall-limit", type=opt.sim_range("WALL_LIMIT"), metavar="SECONDS",
-                   help="end the exact integration and each engine's run after this "
-                        f"much wall-clock time, {WALL_LIMIT.text()} (default "
+                   help="end the exact integration, its sampling and each engine's run "
+                        f"after this much wall-clock time, {WALL_LIMIT.text()} (default "
                         f"{FreeRequest.wall_limit:g} s; an engine run that reaches it ends "
-                        "as a result that says so, the exact integration with one line, "
+                        "as a result that says so, the exact side with one line, "
                         "status 2)")
     opt.add_ci_outputs(s)
 
