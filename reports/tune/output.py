@@ -95,10 +95,29 @@ def full_text(res: TuneResult) -> str:
     if res.front:
         lines += ["Pareto front (no cheaper run has a lower error; model cost = steps x "
                   "per-step CPU of the bare loop):", table(res, res.front[:12])]
+        lines += _answer_off_front(res)
     if res.alternatives:
         lines += ["next-cheapest passing alternatives (other knob levels):",
                   table(res, res.alternatives)]
     return "\n".join(lines)
+
+
+def _answer_off_front(res: TuneResult) -> list[str]:
+    """Why the answer is not a row of the front, when it is not: a cheaper passing run
+    on the front lies within the cost tie (timing noise cannot order the two), and the
+    answer was preferred for fewer steps or fewer knobs moved (:meth:`Tuner.best`)."""
+    from reports.tune.search import COST_TIE
+    if res.answer is None or any(p is res.answer for p in res.front):
+        return []
+    passing = [p for p in res.front if p.passed]
+    if not passing:
+        return []
+    cheap = min(passing, key=res.cost)
+    return [f"the answer is not on the front: its model cost "
+            f"{res.cost(res.answer) * 1e3:.3g} ms is within {COST_TIE - 1:.0%} of the "
+            f"front's cheapest passing run ({res.cost(cheap) * 1e3:.3g} ms), which timing "
+            "noise cannot order; among such runs the answer takes the fewest steps, then "
+            "the fewest knobs moved"]
 
 
 def figure(res: TuneResult) -> bytes:

@@ -90,3 +90,18 @@ def test_cli_json_is_one_object_and_no_pass_is_null(capsys):
     assert doc["answer"] is None and doc["passed"] is False
     assert doc["limit"].startswith("best reached ")
     assert all(c["error"] is None or c["error"] > 1e-12 for c in doc["candidates"])
+
+
+def test_an_answer_off_the_front_says_why():
+    """The answer may sit off the Pareto front (a cheaper passing run within the cost
+    tie, more knobs moved): the text says so instead of showing a front that seems to
+    contradict the answer line; an answer on the front adds nothing."""
+    from types import SimpleNamespace as NS
+
+    from reports.tune.output import _answer_off_front
+    cheap, answer = NS(passed=True, c=1.91e-3), NS(passed=True, c=1.94e-3)
+    res = NS(answer=answer, front=[NS(passed=False, c=1.0e-3), cheap],
+             cost=lambda p: p.c)
+    (line,) = _answer_off_front(res)
+    assert "1.94 ms" in line and "1.91 ms" in line and "15%" in line
+    assert _answer_off_front(NS(answer=cheap, front=[cheap], cost=lambda p: p.c)) == []
