@@ -60,7 +60,8 @@ def test_json_numbers_are_the_texts(res):
     (ans,) = [c for c in doc["candidates"] if c["answer"]]
     assert ans["steps_per_unit"] == doc["answer"]["steps_per_unit"] and ans["passed"]
     front = [c for c in doc["candidates"] if c["on_front"]]
-    table = text.split("Pareto front")[1].split("next-cheapest")[0].splitlines()[2:]
+    table = [ln for ln in text.split("Pareto front")[1].split("next-cheapest")[0]
+             .splitlines()[2:] if not ln.startswith("the answer is not on the front")]
     assert len(table) == min(12, len(front))
     for row, c in zip(table, front, strict=False):
         cells = row.split()
