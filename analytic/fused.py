@@ -110,8 +110,9 @@ class FusedKernel:
 
     def __init__(self, linkage):
         from .kernels.codegen import KernelSource
-        if linkage.topo.plan is None:
-            raise ValueError(f"mechanism {linkage.mech.name!r} has no dyad plan: no kernel")
+        if not has_kernel(linkage.topo):
+            raise ValueError(f"mechanism {linkage.mech.name!r} has no dyad plan of a driven "
+                             "variable: no kernel")
         self.lk = linkage
         self.with_forces = linkage.mech.has_mass
         ks = KernelSource(linkage, self.with_forces)
@@ -599,11 +600,20 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
     return None
 
 
+def has_kernel(topo) -> bool:
+    """Whether the generated kernel serves ``topo``: a dyad plan whose driver is one
+    unknown (:attr:`Topology.driven_var`).  A ``driven_RRR`` plan (a coupler joint
+    driven: the driver row is a difference of two group angles) has its closed form
+    on the numpy path only; :mod:`.kernels.codegen` eliminates a single driven
+    variable."""
+    return topo.plan is not None and topo.driven_var is not None
+
+
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:
     """The linkage's fused kernel (built once and kept in the linkage's declared
     ``fused_kernel``), or ``None`` on the Newton path, when disabled (``XVAL_FUSED=0``)
     or without numba."""
-    if not (enabled() if enabled_ is None else enabled_) or linkage.topo.plan is None:
+    if not (enabled() if enabled_ is None else enabled_) or not has_kernel(linkage.topo):
         return None
     fk = linkage.fused_kernel
     if fk is None:
