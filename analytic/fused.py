@@ -110,9 +110,8 @@ class FusedKernel:
 
     def __init__(self, linkage):
         from .kernels.codegen import KernelSource
-        if not has_kernel(linkage.topo):
-            raise ValueError(f"mechanism {linkage.mech.name!r} has no dyad plan of a driven "
-                             "variable: no kernel")
+        if linkage.topo.plan is None:
+            raise ValueError(f"mechanism {linkage.mech.name!r} has no dyad plan: no kernel")
         self.lk = linkage
         self.with_forces = linkage.mech.has_mass
         ks = KernelSource(linkage, self.with_forces)
@@ -123,7 +122,7 @@ class FusedKernel:
         self.compile_seconds = None  # import + compile or load, at the first call
         topo = linkage.topo
         self.B, self.nq, self.J = len(topo.body_names), topo.nq, len(linkage.mech.joints)
-        self.n = self.nq - 1
+        self.n = ks.n
         self.P = len(topo.prismatic)
         self.T = ks.n_dyad_trans
         self.trans_names = [t[0] for t in ks.trans]
@@ -600,20 +599,11 @@ def dispatch(linkage, n: int) -> FusedKernel | None:
     return None
 
 
-def has_kernel(topo) -> bool:
-    """Whether the generated kernel serves ``topo``: a dyad plan whose driver is one
-    unknown (:attr:`Topology.driven_var`).  A ``driven_RRR`` plan (a coupler joint
-    driven: the driver row is a difference of two group angles) has its closed form
-    on the numpy path only; :mod:`.kernels.codegen` eliminates a single driven
-    variable."""
-    return topo.plan is not None and topo.driven_var is not None
-
-
 def kernel_for(linkage, enabled_: bool | None = None) -> FusedKernel | None:
     """The linkage's fused kernel (built once and kept in the linkage's declared
     ``fused_kernel``), or ``None`` on the Newton path, when disabled (``XVAL_FUSED=0``)
     or without numba."""
-    if not (enabled() if enabled_ is None else enabled_) or not has_kernel(linkage.topo):
+    if not (enabled() if enabled_ is None else enabled_) or linkage.topo.plan is None:
         return None
     fk = linkage.fused_kernel
     if fk is None:

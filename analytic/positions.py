@@ -87,8 +87,8 @@ class ClosedForm:
     Planar vectors are complex numbers here (x + iy): a body frame's rotation is
     ``E = exp(i theta)``, a body point is ``O + E c``.  One solver per step kind
     (:meth:`_driven_revolute`, :meth:`_driven_prismatic`, :meth:`_rrr`, :meth:`_rrp`,
-    :meth:`_rpr`, :meth:`_prp`), as :mod:`analytic.kernels.codegen` generates them;
-    :meth:`_driven_rrr` (a coupler joint driven) on this path only.
+    :meth:`_rpr`, :meth:`_prp`, :meth:`_driven_rrr`), as :mod:`analytic.kernels.codegen`
+    generates them.
     """
 
     def __init__(self, topo: Topology):

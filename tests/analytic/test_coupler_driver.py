@@ -169,3 +169,24 @@ def test_free_rocker_has_no_newton_segment():
     traj = simulate(_rocker_mech(), duration=0.5)
     assert {seg.joint for seg in traj.segments} & {"A", "B"}
     assert all(seg.lk.topo.plan is not None for seg in traj.segments)
+
+
+@pytest.mark.parametrize("joint", ["A", "B"])
+def test_fused_kernel_serves_a_coupler_driver(joint):
+    """The generated kernel of a driven_RRR plan (the driver's row in the square system)
+    gives the numpy path's numbers (test_fused's bar: AGREEMENT of peak, kappa eps next
+    to a limit), kinematics and forces, over the joint's feasible range."""
+    pytest.importorskip("numba")
+    from analytic.fused import FusedKernel
+    from analytic.sweep import input_values
+
+    from .test_free_motion import _rocker_mech
+    from .test_fused import POINTS, _compare, _numpy_kinematics
+    lk, _, _, _ = _driven_at(_rocker_mech(), joint)
+    assert lk.topo.driven_var is None
+    x = input_values(lk, POINTS)[0]
+    kin0, frc0 = _numpy_kinematics(lk, x)
+    kin, frc = FusedKernel(lk).solve(x, on_singular="flag", forces=True)
+    errs = _compare(lk, kin, frc, kin0, frc0, conditioned=True)
+    worst = max(errs, key=errs.get)
+    assert errs[worst] <= 1.0, (worst, errs[worst])
