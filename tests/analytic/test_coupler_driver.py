@@ -190,3 +190,24 @@ def test_fused_kernel_serves_a_coupler_driver(joint):
     errs = _compare(lk, kin, frc, kin0, frc0, conditioned=True)
     worst = max(errs, key=errs.get)
     assert errs[worst] <= 1.0, (worst, errs[worst])
+
+
+def test_free_rocker_body_angles_continue_across_segments():
+    """Body angles of the samples are continuous over the run, across switches into the
+    coupler joints' coordinates (fails before: the closed form's angles lie within one
+    turn, so a sample after a switch jumped by 2 pi: 6.13 rad between samples), and each
+    is the solver's angle up to whole turns."""
+    from analytic.free_motion import simulate
+
+    from .test_free_motion import _rocker_mech
+    traj = simulate(_rocker_mech(), duration=1.0)
+    t = np.linspace(0.0, 1.0, 201)
+    s = traj.at(t, forces=False)
+    # the fastest body turns < 0.5 rad between samples (its peak rate 60 rad/s, 5 ms)
+    assert np.max(np.abs(np.diff(s.theta, axis=0))) < 0.5
+    _, si = traj.state(t)
+    for k in np.unique(si):
+        seg, sel = traj.segments[k], np.flatnonzero(si == k)
+        kin = seg.lk.kinematics(traj.state(t[sel])[0][:, 0], 1.0, 0.0, branch="continued")
+        d = np.angle(np.exp(1j * (s.theta[sel] - kin.theta)))
+        assert np.max(np.abs(d)) <= 1e-12
