@@ -523,6 +523,9 @@ class KernelSource:
         s, topo, eqs = self.s, self.topo, self.eqs
         n, k, L2 = self.n, self.k, 2 * self.L
         t = topo.terms
+        # (the parameter's index first, as before the driver-row case: the same source,
+        # so the kernels already in numba's cache stay valid)
+        dk = s.f(topo.driver_row[k]) if k is not None else None
         for r in range(L2):
             for ci, c in enumerate(self.cols):
                 s.emit(f"A[{r}, {ci}] = J{r}_{c}")
@@ -559,7 +562,6 @@ class KernelSource:
         if k is None:
             self._emit_solve("A", ["0.0"] * L2 + ["wd"], n, "xu", True)
         else:
-            dk = s.f(topo.driver_row[k])
             s.emit(f"xd = wd / {dk}")
             self._emit_solve("A", [f"0.0 - J{r}_{k} * xd" for r in range(L2)], n, "xu", True)
         self._insert("qd", "xd")
