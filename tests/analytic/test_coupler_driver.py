@@ -13,16 +13,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from analytic import Assembly, AssemblyError, Linkage, load_case
-from analytic.free_motion.dynamics import coefficients
+from analytic.free_motion.dynamics import coefficients, terms
 from analytic.free_motion.integrate import rebased
 from analytic.mechanism import Revolute
 from analytic.position_solver import PositionSolver
 from analytic.positions import q_from_poses
+from analytic.toml_io import load_mechanism
 
 from .conftest_helpers import four_bar
 
@@ -38,6 +40,13 @@ NEWTON_REL = 1e-10
 #: peak leaves a margin of 1e3 and still fails for a wrong sign or a missing term.
 FD_REL = 1e-6
 H = 1e-5
+#: A coupler joint's equation of motion next to its limit position against the ground
+#: joint's (regular there, a different plan): B'' = dB/dO4 O4'' + d2B/dO4^2 O4'^2.  Both
+#: sides are rounding (measured <= 2.6e-15 of |B''|) times the conditioning of the
+#: change of coordinate (1/|dB/dO4| <= 8 here); 1e-13 fails the Newton path that served
+#: the coupler joints before the closed form (1.2e-12 at dB/dO4 = 0.285, the switch).
+LIMIT_RHS_REL = 1e-13
+BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs" / "turn4"
 
 
 def _swapped(mech, joint: str):
@@ -211,3 +220,34 @@ def test_free_rocker_body_angles_continue_across_segments():
         kin = seg.lk.kinematics(traj.state(t[sel])[0][:, 0], 1.0, 0.0, branch="continued")
         d = np.angle(np.exp(1j * (s.theta[sel] - kin.theta)))
         assert np.max(np.abs(d)) <= 1e-12
+
+
+def _accel(lk, co, qd: float) -> float:
+    """The coordinate's acceleration (rad/s^2) from the equation of motion at ``co``'s
+    state with rate ``qd`` (rad/s), at t = 0."""
+    tm = terms(lk, co, co.x, qd, 0.0)
+    return float(((tm.Q - tm.C * qd * qd) / tm.M)[0])
+
+
+def test_coupler_coordinate_equation_of_motion_next_to_its_limit():
+    """free01 (issue 30's reproducer) driven at its coupler joint B, 0.2 .. 0.01 rad from
+    each end of B's range (dB/dO4 from 0.6 down to 0.13: past the switches' 1/4): B''
+    from B's equation of motion equals B'' from O4's at the same state (fails before,
+    on the Newton path: 1.2e-12 of |B''| at dB/dO4 = 0.285)."""
+    mech = load_mechanism(BUGS / "free01_s3_switch_error.toml")
+    names = [j.name for j in mech.joints]
+    kb, ko = names.index("B"), names.index("O4")
+    co = coefficients(Linkage(mech), mech.driver.value)
+    lkb = Linkage(rebased(mech, "B", float(co.x[0, kb]), co.kin))
+    lo, hi = next((a, b) for a, b in lkb.positions.feasible()
+                  if a <= lkb.mech.driver.value <= b)
+    qd = 3.0  # rad/s of B: its rate near the limit in the run
+    for q in [lo + g for g in (0.2, 0.1, 0.05, 0.03, 0.02, 0.01)] + \
+             [hi - g for g in (0.2, 0.1, 0.05, 0.03, 0.02, 0.01)]:
+        c = coefficients(lkb, q)
+        b_own = _accel(lkb, c, qd)
+        lko = Linkage(rebased(lkb.mech, "O4", float(c.x[0, ko]), c.kin))
+        c2 = coefficients(lko, float(c.x[0, ko]))
+        od = float(c.x_q[0, ko]) * qd
+        b_o4 = float(c2.x_q[0, kb]) * _accel(lko, c2, od) + float(c2.x_qq[0, kb]) * od * od
+        assert abs(b_own - b_o4) <= LIMIT_RHS_REL * abs(b_o4), (q, b_own, b_o4)
