@@ -31,13 +31,8 @@ import numpy as np
 from .mechanism import Revolute
 from .positions import ClosedForm, Placement, input_span, size_of
 from .tolerances import CHANGE_POINT_DISC, CONTINUITY_RATIO, TOGGLE_SNAP
-from .topology import Topology
+from .topology import BRANCHING, WITH_DISCRIMINANT, Topology
 
-#: Dyad kinds with two assemblies (a branch sign each).
-BRANCHING = ("RRR", "RRP", "RPR")
-#: Dyad kinds whose closed form reports a discriminant (:meth:`ClosedForm.run`'s columns,
-#: in the plan's order): the branching ones and PRP (its two guides must cross).
-WITH_DISCRIMINANT = (*BRANCHING, "PRP")
 #: Samples per turn (or span) searched for the discriminants' minima.
 _SAMPLES = 3600
 #: Most dyads touching at one change point whose sign combinations :meth:`decide`
@@ -315,7 +310,7 @@ class BranchSchedule:
         in the plan's order, takes the sign whose two bodies' poses continue with the
         velocity they had (a dyad places its bodies from bodies placed before it)."""
         B = len(self.topo.body_names)
-        steps = [st for st in self.topo.plan if st.kind in ("RRR", "RRP", "RPR")]
+        steps = [st for st in self.topo.plan if st.kind in BRANCHING]
         unit = 1.0 if self.revolute else self.size
         for h in unit * np.array([1e-4, 1e-3, 1e-2]):
             left, dl = self._pose(t - d * np.array([2 * h, h]), signs)

@@ -122,7 +122,7 @@ class FusedKernel:
         self.compile_seconds = None  # import + compile or load, at the first call
         topo = linkage.topo
         self.B, self.nq, self.J = len(topo.body_names), topo.nq, len(linkage.mech.joints)
-        self.n = self.nq - 1
+        self.n = ks.n
         self.P = len(topo.prismatic)
         self.T = ks.n_dyad_trans
         self.trans_names = [t[0] for t in ks.trans]

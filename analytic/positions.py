@@ -36,7 +36,7 @@ from .tolerances import (
     NEWTON_MAX_STEP,
     TOGGLE_SNAP,
 )
-from .topology import Topology
+from .topology import BRANCHING, WITH_DISCRIMINANT, Topology
 
 
 def size_of(topo: Topology) -> float:
@@ -87,14 +87,15 @@ class ClosedForm:
     Planar vectors are complex numbers here (x + iy): a body frame's rotation is
     ``E = exp(i theta)``, a body point is ``O + E c``.  One solver per step kind
     (:meth:`_driven_revolute`, :meth:`_driven_prismatic`, :meth:`_rrr`, :meth:`_rrp`,
-    :meth:`_rpr`, :meth:`_prp`), as :mod:`analytic.kernels.codegen` generates them.
+    :meth:`_rpr`, :meth:`_prp`, :meth:`_driven_rrr`), as :mod:`analytic.kernels.codegen`
+    generates them.
     """
 
     def __init__(self, topo: Topology):
         self.topo = topo
         self.mech = topo.mech
         self.plan = topo.plan
-        self.n_branch = sum(1 for st in self.plan if st.kind in ("RRR", "RRP", "RPR"))
+        self.n_branch = sum(1 for st in self.plan if st.kind in BRANCHING)
         self.at = {}  # (joint, body) -> complex attachment point, body frame
         for j, jt in enumerate(self.mech.joints):
             for bn in jt.bodies:
@@ -128,6 +129,8 @@ class ClosedForm:
                 self._driven_prismatic(p, st, values)
             elif st.kind == "RRR":
                 self._rrr(p, st, si)
+            elif st.kind == "driven_RRR":
+                self._driven_rrr(p, st, values, si)
             elif st.kind == "RRP":
                 self._rrp(p, st, si)
             elif st.kind == "RPR":
@@ -200,6 +203,51 @@ class ClosedForm:
         p.O[:, x1] = P1 - u1 * at[j1, x1]
         p.O[:, x2] = P2 - u2 * at[j2, x2]
         p.trans.append((self.mech.joints[j2].name, -e1, e2))
+
+    def _driven_rrr(self, p: Placement, st, values, si):
+        """A revolute driver between two moving bodies ``u`` and ``v`` (a ``driven_RRR``
+        step, see :class:`analytic.topology.DyadStep`): at the driver's angle ``u`` and
+        ``v`` are one rigid body, whose joints ``j1`` (on a known body) and ``j2`` (to
+        ``w``) are a virtual link of length ``|c1|``; ``j2`` is at an intersection of
+        the circle of that radius about ``j1`` with the circle of ``w``'s link about
+        ``j3`` (:meth:`_rrr`'s operations with ``c1`` per value), then ``v`` turns on
+        ``u`` by the driver's angle."""
+        topo, at = self.topo, self.at
+        u, w, v = st.bodies
+        j1, j2, j3, jd = st.joints
+        k1, k3 = topo.other(j1, u), topo.other(j3, w)
+        P1, P3 = p.pt(k1, at[j1, k1]), p.pt(k3, at[j3, k3])
+        sgn = 1.0 if topo.body_names[v] == self.mech.joints[jd].body_b else -1.0
+        R = np.exp(1j * (sgn * values))  # v's frame in u's
+        # the virtual link in u's frame: j1 -> driver -> j2
+        c1 = at[jd, u] - at[j1, u] + R * (at[j2, v] - at[jd, v])
+        c2 = at[j3, w] - at[j2, w]
+        L1 = np.abs(c1)
+        L1s, L2s, L2 = L1 * L1, abs(c2) ** 2, abs(c2)
+        d = P3 - P1
+        D2 = d.real * d.real + d.imag * d.imag
+        D = np.sqrt(D2)
+        ok = (D > 0) & (L1 > 0)
+        Dsafe = np.where(D > 0, D, 1.0)
+        L1safe = np.where(L1 > 0, L1, 1.0)
+        a = (L1s - L2s + D2) / (2 * Dsafe)
+        h2 = L1s - a * a
+        disc = np.where(ok, h2 * (L1safe + L2) / (L1safe * L2 * np.maximum(L1safe, L2)), -1.0)
+        p.discs.append(disc)
+        h = np.where(disc > TOGGLE_SNAP, np.sqrt(np.maximum(h2, 0.0)), 0.0)
+        sg = next(si)
+        P2 = P1 + d * (a + 1j * sg * h) / Dsafe
+        e1, e2 = P2 - P1, P3 - P2
+        eu = e1 / np.abs(e1) * (c1 / L1safe).conjugate()
+        ew = e2 / np.abs(e2) * (c2 / L2).conjugate()
+        p.place(u, np.angle(eu), eu)
+        p.place(w, np.angle(ew), ew)
+        p.place(v, p.theta[:, u] + sgn * values, eu * R)
+        p.O[:, u] = P1 - eu * at[j1, u]
+        p.O[:, w] = P2 - ew * at[j2, w]
+        p.O[:, v] = P2 - p.E[:, v] * at[j2, v]
+        PD = p.pt(u, at[jd, u])  # the driver joint
+        p.trans.append((self.mech.joints[j2].name, PD - P2, e2))
 
     def _rrp(self, p: Placement, st, si):
         """An RRP dyad: the inner joint where a circle meets the slider's line."""
@@ -412,15 +460,15 @@ _JOINT_CHOICE = 12
 
 
 def branching_steps(topo: Topology) -> list:
-    """The plan's steps that carry a branch sign (RRR, RRP, RPR), in sign order."""
-    return [st for st in topo.plan if st.kind in ("RRR", "RRP", "RPR")]
+    """The plan's steps that carry a branch sign (:data:`BRANCHING`), in sign order."""
+    return [st for st in topo.plan if st.kind in BRANCHING]
 
 
 def _choose_one_by_one(topo: Topology, cf: ClosedForm, value: float) -> tuple[int, ...]:
     """Dyad signs chosen in plan order, each by the hints on its own two bodies."""
     signs = [1] * cf.n_branch
     v = np.array([value, value])
-    disc_steps = [st for st in topo.plan if st.kind in ("RRR", "RRP", "RPR", "PRP")]
+    disc_steps = [st for st in topo.plan if st.kind in WITH_DISCRIMINANT]
     for k, st in enumerate(branching_steps(topo)):
         col = disc_steps.index(st)
         names = {topo.body_names[b] for b in st.bodies}

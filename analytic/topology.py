@@ -52,14 +52,28 @@ class LoopTerms:
     sign: np.ndarray    # (T,) +1/-1 for slider vectors, 0 otherwise
 
 
+#: Plan steps with two assemblies (a branch sign each, in the plan's order).
+BRANCHING = ("RRR", "RRP", "RPR", "driven_RRR")
+#: Plan steps whose closed form reports a discriminant (:meth:`ClosedForm.run`'s
+#: columns, in the plan's order): the branching ones and PRP (its two guides must cross).
+WITH_DISCRIMINANT = (*BRANCHING, "PRP")
+
+
 @dataclass(frozen=True)
 class DyadStep:
     """One closed-form step: bodies whose poses follow from already known ones.
 
     ``kind`` is one of ``driven_revolute``, ``driven_prismatic``, ``RRR``,
     ``RRP``, ``RPR``, ``PRP`` (the dyad types, named by their joints from the
-    first known body to the second).  ``bodies`` are the one or two bodies
-    placed; ``joints`` the joints used, in order along the chain.
+    first known body to the second), or ``driven_RRR``.  ``bodies`` are the one or
+    two bodies placed; ``joints`` the joints used, in order along the chain.
+
+    ``driven_RRR`` is a revolute driver between two moving bodies (a coupler joint of
+    a four-bar loop): bodies ``(u, w, v)`` and joints ``(j1, j2, j3, jd)``, where
+    ``u`` turns on a known body at ``j1``, ``w`` on a known body at ``j3``, ``v``
+    joins ``u`` at the driver ``jd`` and ``w`` at ``j2``.  With the driver's angle
+    known, ``u`` and ``v`` are one rigid body, a virtual link from ``j1`` to ``j2``:
+    an RRR dyad with ``w`` (one branch sign; ``j2`` its inner joint).
     """
 
     kind: str
@@ -387,21 +401,18 @@ def _dyad_plan(topo: Topology) -> list[DyadStep] | None:
     B = len(names)
     known = {topo.ground}
     steps: list[DyadStep] = []
-    dj = topo.driver_joint
-    a, b = names.index(joints[dj].body_a), names.index(joints[dj].body_b)
-    if topo.driven_var is None or (a not in known and b not in known):
+    body_joints = {x: [k for k, j in enumerate(joints) if names[x] in j.bodies]
+                   for x in range(B)}
+    first = _driven_first(topo, known, body_joints)
+    if first is None:
         return None
-    kind = "driven_revolute" if isinstance(joints[dj], Revolute) else "driven_prismatic"
-    steps.append(DyadStep(kind, (b if a in known else a,), (dj,)))
-    known.add(a)
-    known.add(b)
-    used = {dj}
+    steps.append(first)
+    known.update(first.bodies)
+    used = set(first.joints)
 
     def jtype(k):
         return "R" if isinstance(joints[k], Revolute) else "P"
 
-    body_joints = {x: [k for k, j in enumerate(joints) if names[x] in j.bodies]
-                   for x in range(B)}
     while len(known) < B:
         found = None
         for j2, jt in enumerate(joints):
@@ -438,3 +449,32 @@ def _dyad_plan(topo: Topology) -> list[DyadStep] | None:
         known.update(found.bodies)
         used.update(found.joints)
     return steps
+
+
+def _driven_first(topo: Topology, known: set, body_joints) -> DyadStep | None:
+    """The plan's first step: the driven link (a driver on a known body), else a
+    ``driven_RRR`` (a revolute driver between two moving bodies that close a four-bar
+    loop with the ground: see :class:`DyadStep`), else None (no closed form)."""
+    joints, names = topo.mech.joints, topo.body_names
+    dj = topo.driver_joint
+    a, b = names.index(joints[dj].body_a), names.index(joints[dj].body_b)
+    if a in known or b in known:
+        if topo.driven_var is None:
+            return None
+        kind = "driven_revolute" if isinstance(joints[dj], Revolute) else "driven_prismatic"
+        return DyadStep(kind, (b if a in known else a,), (dj,))
+    if not isinstance(joints[dj], Revolute):
+        return None
+
+    def pins(x, to):  # revolute joints of body x (not the driver) whose other body is ``to``
+        return [k for k in body_joints[x] if k != dj and isinstance(joints[k], Revolute)
+                and to(topo.other(k, x))]
+
+    for u, v in ((a, b), (b, a)):
+        for j1 in pins(u, known.__contains__):
+            for j2 in pins(v, lambda o, u=u: o not in known and o != u):
+                w = topo.other(j2, v)
+                for j3 in pins(w, known.__contains__):
+                    if j3 != j2:
+                        return DyadStep("driven_RRR", (u, w, v), (j1, j2, j3, dj))
+    return None

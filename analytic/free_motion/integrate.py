@@ -339,14 +339,17 @@ def _start_elsewhere(lk, co, y, scale, closed, size, switches):
 
 
 def _closed_form_joints(mech) -> np.ndarray:
-    """Per joint: whether the solver has a closed form with that joint driven (else it
-    solves the positions by Newton's method, to its loop tolerance only)."""
+    """Per joint: whether the solver has a closed form with that joint driven as one
+    unknown (a ground joint; else a coupler joint's driven_RRR or Newton's method)."""
     from ..topology import build_topology
     out = []
     for j in mech.joints:
         try:
             topo = build_topology(replace(mech, driver=Driver(j.name, 0.0, 0.0)))
-            out.append(topo.plan is not None)
+            # a coupler joint's closed form (a driven_RRR plan, no single driven
+            # variable) is not preferred: the choice, and so every run's switch
+            # sequence, stays as before it existed (issue 34)
+            out.append(topo.plan is not None and topo.driven_var is not None)
         except LinkageError:
             out.append(False)
     return np.array(out)

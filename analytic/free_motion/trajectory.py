@@ -182,7 +182,7 @@ class FreeTrajectory:
         # same numbers as the solver at (q', q''), and for a parallelogram chain its exact
         # identities instead of the solver's near-singular rates at a change point)
         u = co.kin
-        body["theta"][idx] = u.theta
+        body["theta"][idx] = continued_angles(lk, u.theta, x)
         body["omega"][idx] = u.omega * qd[:, None]
         body["alpha"][idx] = u.omega * qdd[:, None] + u.alpha * (qd ** 2)[:, None]
         en["kinetic"][idx], en["potential"][idx] = tm.kinetic, tm.potential
@@ -363,3 +363,26 @@ def find_events(traj: FreeTrajectory, clock=None) -> list[Event]:
             events.append(Event(tc, "turn", seg.joint, "the motion reverses (rate of "
                                 f"{seg.joint!r} is zero)"))
     return sorted(events, key=lambda e: e.t)
+
+
+def continued_angles(lk, theta: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Body angles ``theta (N, B)`` (rad; a closed form gives them within one turn)
+    moved by whole turns onto the angles the unwrapped joint coordinates ``x (N, J)``
+    give along the spanning tree from the ground: continuous over the run and across
+    coordinate switches (a coupler joint's segment places its bodies by a closed form
+    since issue 34; its Newton trace had continued them)."""
+    topo = lk.topo
+    out = np.array(theta, float)
+    tree = np.zeros_like(out)
+    two_pi = 2.0 * np.pi
+    for b in topo.order[1:]:
+        p, j = topo.parent[b]
+        jt = lk.mech.joints[j]
+        if isinstance(jt, Revolute):
+            rel = x[:, j] if topo.body_names[b] == jt.body_b else -x[:, j]
+        else:  # a slider keeps its angle to the guide
+            rel = theta[:, b] - theta[:, p]
+        tree[:, b] = tree[:, p] + rel
+        out[:, b] += np.round((tree[:, b] - out[:, b]) / two_pi) * two_pi
+    return out
+

@@ -89,8 +89,11 @@ class KernelSource:
         self.ng = topo.n_groups
         self.J = len(self.mech.joints)
         self.L = topo.n_loops
-        self.n = self.nq - 1  # unknowns besides the driven variable
         self.k = topo.driven_var
+        # the square system's size: the unknowns besides the driven variable, or (a
+        # driver row over two group angles: a coupler joint driven) every unknown, the
+        # driver's row added to the loops' (LoopEquations.split)
+        self.n = self.nq - 1 if self.k is not None else self.nq
         self.n_branch = 0
         self.trans = []  # (joint name, e1 var, e2 var)
         # level 0: poses; 1: + angles and q; 2: + rates and tree walk; 3: + forces
@@ -274,6 +277,55 @@ class KernelSource:
         s.emit(f"O{x1} = P1 - cm(E{x1}, {at(j1, x1)})")
         s.emit(f"O{x2} = P2 - cm(E{x2}, {at(j2, x2)})")
         self.trans.append((joints[j2].name, f"-{t}a", f"{t}b"))
+
+    def _step_driven_RRR(self, st):
+        """:meth:`analytic.positions.ClosedForm._driven_rrr`: the virtual link ``c1``
+        (the driver's two bodies) per input, then :meth:`_step_RRR`'s intersection."""
+        topo, joints, s, at = self.topo, self.mech.joints, self.s, self._at
+        u, w, v = st.bodies
+        j1, j2, j3, jd = st.joints
+        k1, k3 = topo.other(j1, u), topo.other(j3, w)
+        sgn = 1.0 if topo.body_names[v] == joints[jd].body_b else -1.0
+        cu = cplx(topo.attach(jd, u)) - cplx(topo.attach(j1, u))
+        cv = cplx(topo.attach(j2, v)) - cplx(topo.attach(jd, v))
+        c2 = cplx(topo.attach(j3, w)) - cplx(topo.attach(j2, w))
+        L2 = abs(c2)
+        t = s.tmp("tr")
+        s.emit(f"P1 = {self._pt(k1, j1)}")
+        s.emit(f"P3 = {self._pt(k3, j3)}")
+        s.emit(f"rv = {sgn!r} * v")
+        s.emit("R = complex(math.cos(rv), math.sin(rv))")
+        s.emit(f"c1 = {s.c(cu)} + cm(R, {s.c(cv)})")
+        s.emit("L1 = cabs(c1.real, c1.imag)")
+        s.emit("L1s = L1 * L1")
+        s.emit("d = P3 - P1")
+        s.emit("D2 = d.real * d.real + d.imag * d.imag")
+        s.emit("D = math.sqrt(D2)")
+        s.emit("Dsafe = D if D > 0 else 1.0")
+        s.emit("L1safe = L1 if L1 > 0 else 1.0")
+        s.emit(f"a = (L1s - {s.f(L2 * L2)} + D2) / (2 * Dsafe)")
+        s.emit("iD = 1.0 / Dsafe")
+        s.emit("h2 = L1s - a * a")
+        L2f = s.f(L2)
+        s.emit(f"dsc = (h2 * (L1safe + {L2f}) / (L1safe * {L2f} * max(L1safe, {L2f})) "
+               "if D > 0 and L1 > 0 else -1.0)")
+        self._disc("dsc")
+        s.emit(f"h = math.sqrt(max(h2, 0.0)) if dsc > {TOGGLE_SNAP!r} else 0.0")
+        s.emit(f"w = cm(d, complex(a, {self._sign()} * h))")
+        s.emit("P2 = P1 + complex(w.real * iD, w.imag * iD)")
+        s.emit(f"{t}a = P2 - P1")
+        s.emit(f"{t}b = P3 - P2")
+        s.emit(f"E{u} = {self._unit(f'{t}a', 'complex(c1.real / L1safe, -c1.imag / L1safe)')}")
+        s.emit(f"E{w} = {self._unit(f'{t}b', s.c((c2 / L2).conjugate()))}")
+        s.emit(f"E{v} = cm(E{u}, R)")
+        s.emit(f"th{u} = math.atan2(E{u}.imag, E{u}.real) if level >= 1 else 0.0")
+        s.emit(f"th{w} = math.atan2(E{w}.imag, E{w}.real) if level >= 1 else 0.0")
+        s.emit(f"th{v} = th{u} + rv")
+        s.emit(f"O{u} = P1 - cm(E{u}, {at(j1, u)})")
+        s.emit(f"O{w} = P2 - cm(E{w}, {at(j2, w)})")
+        s.emit(f"O{v} = P2 - cm(E{v}, {at(j2, v)})")
+        s.emit(f"{t}p = O{u} + cm(E{u}, {at(jd, u)}) - P2")
+        self.trans.append((joints[j2].name, f"{t}p", f"{t}b"))
 
     def _step_RRP(self, st):
         topo, joints, s, at = self.topo, self.mech.joints, self.s, self._at
@@ -471,10 +523,15 @@ class KernelSource:
         s, topo, eqs = self.s, self.topo, self.eqs
         n, k, L2 = self.n, self.k, 2 * self.L
         t = topo.terms
-        dk = s.f(topo.driver_row[k])
+        # (the parameter's index first, as before the driver-row case: the same source,
+        # so the kernels already in numba's cache stay valid)
+        dk = s.f(topo.driver_row[k]) if k is not None else None
         for r in range(L2):
             for ci, c in enumerate(self.cols):
                 s.emit(f"A[{r}, {ci}] = J{r}_{c}")
+        if k is None:  # the driver's row
+            for ci, c in enumerate(self.cols):
+                s.emit(f"A[{L2}, {ci}] = {float(topo.driver_row[c])!r}")
         # determinant normalised by the column norms, and the singular screen
         if n:
             s.emit("colnorm = 1.0")
@@ -500,9 +557,13 @@ class KernelSource:
             s.emit("nsus += 1", 3)
         else:
             s.emit("det = 1.0")
-        # q' : rhs = 0 - col * xd ; q'' : rhs = -gamma - col * xdd
-        s.emit(f"xd = wd / {dk}")
-        self._emit_solve("A", [f"0.0 - J{r}_{k} * xd" for r in range(L2)], n, "xu", True)
+        # q' : rhs = 0 - col * xd ; q'' : rhs = -gamma - col * xdd (a driver row: the
+        # input's rate and acceleration are its right-hand side)
+        if k is None:
+            self._emit_solve("A", ["0.0"] * L2 + ["wd"], n, "xu", True)
+        else:
+            s.emit(f"xd = wd / {dk}")
+            self._emit_solve("A", [f"0.0 - J{r}_{k} * xd" for r in range(L2)], n, "xu", True)
         self._insert("qd", "xd")
         # gamma with the rates
         ns = eqs.ns
@@ -521,14 +582,18 @@ class KernelSource:
             s.emit(f"gz = {' + '.join(parts) if parts else '0j'}")
             s.emit(f"G{2 * li} = gz.real")
             s.emit(f"G{2 * li + 1} = gz.imag")
-        s.emit(f"xdd = ad / {dk}")
-        self._emit_solve("A", [f"-G{r} - J{r}_{k} * xdd" for r in range(L2)], n, "xu", True)
+        if k is None:
+            self._emit_solve("A", [f"-G{r}" for r in range(L2)] + ["ad"], n, "xu", True)
+        else:
+            s.emit(f"xdd = ad / {dk}")
+            self._emit_solve("A", [f"-G{r} - J{r}_{k} * xdd" for r in range(L2)], n, "xu",
+                             True)
         self._insert("qdd", "xdd")
 
     def _insert(self, name, driven):
         ci = 0
         for c in range(self.nq):
-            if c == self.k:
+            if self.k is not None and c == self.k:
                 self.s.emit(f"{name}{c} = {driven}")
             else:
                 self.s.emit(f"{name}{c} = xu[{ci}]")

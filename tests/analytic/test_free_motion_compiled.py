@@ -40,6 +40,14 @@ CHANGE_REL = 1e-12
 #: the last place larger moves by 1.7e-11 of range (switch times by 2e-13 s), so no
 #: rounding-level change of the right-hand side stays within 1e-12 on this run.
 SWITCHING_REL = 2e-11
+#: The switching rocker since its coupler coordinates have a closed form (the compiled
+#: path now serves all of its segments, not a third): the numpy path against itself
+#: with the initial rate one ulp larger / smaller moves 2.6e-11 / 4.1e-11 of range
+#: (1.7e-11 before), so the compiled path's rounding differences are judged at 2.5x the
+#: larger spread, not at a bar the run's own rounding passes (compiled vs numpy measured
+#: 3.4e-11; against the absolute-coordinate reference the run is 1.6e-10 of range in
+#: rates, 9.3e-10 before).
+ROCKER_REL = 1e-10
 #: Energies (residual) are compared against the run's energy scale, not their range
 #: (the residual's own range is rounding).
 QUANTITIES = ("x", "xd", "xdd", "theta", "omega", "alpha", "kinetic", "potential",
@@ -68,7 +76,7 @@ def _cases():
         "a03": (lambda: load_case("iftomm-a03-andrews"), 0.03, CHANGE_REL),
         "a02-n8": (lambda: a02, 1.0, CHANGE_REL),
         "seed-spring-damper-motor": (lambda: _seed(True), 2.0, CHANGE_REL),
-        "rocker-switching": (_rocker_mech, 3.0, SWITCHING_REL),
+        "rocker-switching": (_rocker_mech, 3.0, ROCKER_REL),
     }
 
 

@@ -12,6 +12,7 @@ import pytest
 
 from analytic import Linkage
 from analytic.free_motion import simulate
+from analytic.free_motion.integrate import RTOL
 from analytic.mechanism import Driver
 from analytic.toml_io import load_mechanism
 
@@ -25,6 +26,20 @@ BUGS = Path(__file__).resolve().parents[1] / "data" / "bugs" / "turn4"
 #: rates, from the state carried into O4's coordinate at 0.6446 s read from DOP853's
 #: dense output, 1.5e-10 rad/s off, amplified by the motion).
 SWITCH_REL = 1e-9
+#: Reactions next to a limit position: the motion amplifies any change of its state
+#: there.  On free01 the initial rate one unit in the last place (ulp) larger moves the
+#: reactions by 2.5e-12 of their range at t = 1.95 s (between O2's limit at 1.9423 s,
+#: the switch O4 -> B at 1.944 s and O4's limit at 1.9516 s) and by 1e-16..4e-15 at
+#: every other sample.  DOP853's local errors are about rtol/eps (~450) ulp, committed
+#: at every step: the error against the reference measured 700-3500 times the ulp
+#: spread at every sample of this run, hence ACCUMULATED x rtol/eps.  Where that
+#: estimate passes SWITCH_REL no integration at rtol 1e-13 can promise SWITCH_REL
+#: (measured at 1.95 s: the Newton-path code, which met 1e-9 there by an error direction
+#: the motion damped, gives 1.3e-8 at rtol 3e-14; the closed-form code 3.2e-9 at rtol
+#: 1e-13 and 1.6e-9 at 3e-14).  The bound per sample is the larger of SWITCH_REL and
+#: that estimate: every sample but the one next to the limits keeps 1e-9.
+RTOL_OVER_ULP = RTOL / np.finfo(float).eps
+ACCUMULATED = 10.0
 #: The switches' self-check (:mod:`analytic.free_motion.switch_check`): two coordinates'
 #: integrations just past each switch agree to a few hundred tolerances (1e-13).
 SWITCH_DEFECT = 1e-10
@@ -42,12 +57,20 @@ def test_free01_every_joint_within_1e_9_of_range_after_switches():
     reactions = {}
     x_ref, xd_ref = joint_history(mech, lk, times, rtol=1e-12, reactions=reactions)
     s = traj.at(times)
+    # the run's own amplification: the same release with its rate one ulp larger
+    ulp = replace(mech, motion=replace(fm, rate=float(np.nextafter(fm.rate, np.inf))))
+    s1 = simulate(ulp, duration=3.0).at(times)
     dx = (s.x - x_ref + np.pi) % (2 * np.pi) - np.pi   # whole turns are the same angle
     for k, name in enumerate(traj.joints):
         assert np.max(np.abs(dx[:, k])) <= SWITCH_REL * np.ptp(x_ref[:, k]), name
         assert np.max(np.abs(s.xd[:, k] - xd_ref[:, k])) <= SWITCH_REL * np.ptp(xd_ref[:, k]), name
-        ref = reactions[name]  # before: 8e-7 of range
-        assert np.max(np.abs(s.reactions[name] - ref)) <= SWITCH_REL * np.max(np.ptp(ref, 0)), name
+        ref = reactions[name]  # before the switch fix: 8e-7 of range
+        rng = np.max(np.ptp(ref, 0))
+        spread = np.max(np.abs(s1.reactions[name] - s.reactions[name]), 1)
+        amplified = ACCUMULATED * RTOL_OVER_ULP * spread
+        bound = np.maximum(SWITCH_REL * rng, amplified)
+        assert np.all(np.max(np.abs(s.reactions[name] - ref), 1) <= bound), name
+        assert np.sum(bound > SWITCH_REL * rng) <= 1, name  # only next to the limits
     assert traj.switches_checked == 7
     assert traj.switch_defect <= SWITCH_DEFECT
 
