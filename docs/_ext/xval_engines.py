@@ -14,8 +14,8 @@ from __future__ import annotations
 import dataclasses
 import importlib
 
-from docutils import nodes
-from sphinx.util.docutils import SphinxDirective
+# docutils and Sphinx are imported where the page is built (the 'docs' extra), so that
+# the reference's tests run in CI's pytest before the docs extra is installed.
 
 
 def _range_text(rng) -> tuple[str, str]:
@@ -69,7 +69,8 @@ def engine_settings() -> list[tuple[str, str, object, object, str]]:
     return out
 
 
-def _table(rows, header) -> nodes.table:
+def _table(rows, header):
+    from docutils import nodes
     table = nodes.table()
     group = nodes.tgroup(cols=len(header))
     table += group
@@ -92,7 +93,8 @@ def _table(rows, header) -> nodes.table:
     return table
 
 
-def _section(title: str, document) -> nodes.section:
+def _section(title: str, document):
+    from docutils import nodes
     sec = nodes.section()
     sec["ids"].append(nodes.make_id("engine-" + title))
     sec["names"].append(nodes.fully_normalize_name("engine " + title))
@@ -104,7 +106,8 @@ def _section(title: str, document) -> nodes.section:
 HEADER = ("setting", "recommended", "accepted", "why")
 
 
-def engine_nodes(document) -> list[nodes.Node]:
+def engine_nodes(document) -> list:
+    from docutils import nodes
     out = []
     for name, description, driven, free, install in engine_settings():
         sec = _section(name, document)
@@ -123,16 +126,17 @@ def engine_nodes(document) -> list[nodes.Node]:
     return out
 
 
-class XvalEngineSettingsDirective(SphinxDirective):
-    """``xval-engine-settings``: every engine's settings and ranges, from the code."""
-
-    has_content = False
-
-    def run(self) -> list[nodes.Node]:
-        self.env.note_dependency(__file__)
-        return engine_nodes(self.state.document)
-
-
 def setup(app):
+    from sphinx.util.docutils import SphinxDirective
+
+    class XvalEngineSettingsDirective(SphinxDirective):
+        """``xval-engine-settings``: every engine's settings and ranges, from the code."""
+
+        has_content = False
+
+        def run(self) -> list:
+            self.env.note_dependency(__file__)
+            return engine_nodes(self.state.document)
+
     app.add_directive("xval-engine-settings", XvalEngineSettingsDirective)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
