@@ -29,6 +29,8 @@ from reports.tune.measured import (
     PRESCRIBED_FAMILIES,
     PRESCRIBED_FAMILY,
     Measured,
+    free_errors,
+    prescribed_errors,
 )
 
 
@@ -140,10 +142,7 @@ def _prescribed(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> M
             max_violation=req.max_violation, max_speed_error=req.max_speed_error)
     cpu = time.process_time() - t0
     comps = judged(compare_run(r)) if r.ok else []
-    errs = {c.quantity: (PRESCRIBED_FAMILY.get(c.quantity.rsplit(".", 1)[-1],
-                                               c.quantity.rsplit(".", 1)[-1]),
-                         float(c.normalised) if c.measured else math.inf, float(c.floor))
-            for c in comps}
+    errs = prescribed_errors(comps)
     cost = math.nan
     if timed and r.ok and r.steps > 0:
         from sim_models.runs.driven import time_engine
@@ -163,10 +162,7 @@ def _free(tc: TuneCase, engine: str, s, overrides: dict, timed: bool) -> Measure
     r = run_free(mech, engine, s, req, traj)
     cpu = time.process_time() - t0
     v = compare_free(r, traj, ref)
-    errs = {c.quantity: (c.family, float(c.normalised) if c.measured else math.inf, 0.0)
-            for c in v.judged}
-    if not v.has_loop:
-        errs.pop("loop.gap", None)
+    errs = free_errors(v)
     dur = float(req.duration)
     cost = math.nan
     if timed and r.ok and r.steps > 0:

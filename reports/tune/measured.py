@@ -54,4 +54,26 @@ class Measured:
                    default=0.0)
 
 
-__all__ = ["FREE_FAMILIES", "Measured", "PRESCRIBED_FAMILIES", "PRESCRIBED_FAMILY"]
+def prescribed_errors(comps) -> dict:
+    """:attr:`Measured.errors` of a prescribed run's judged comparisons: quantity ->
+    (family by the name's last part, normalised error (inf: not measured), floor)."""
+    out = {}
+    for c in comps:
+        last = c.quantity.rsplit(".", 1)[-1]
+        out[c.quantity] = (PRESCRIBED_FAMILY.get(last, last),
+                           float(c.normalised) if c.measured else math.inf, float(c.floor))
+    return out
+
+
+def free_errors(verdict) -> dict:
+    """:attr:`Measured.errors` of a free run's verdict: quantity -> (family, normalised
+    error (inf: not measured), 0); the loop gap only where the model has a loop."""
+    out = {c.quantity: (c.family, float(c.normalised) if c.measured else math.inf, 0.0)
+           for c in verdict.judged}
+    if not verdict.has_loop:
+        out.pop("loop.gap", None)
+    return out
+
+
+__all__ = ["FREE_FAMILIES", "Measured", "PRESCRIBED_FAMILIES", "PRESCRIBED_FAMILY",
+           "free_errors", "prescribed_errors"]

@@ -199,7 +199,7 @@ def measure(tc, s, overrides: dict, timed: bool, steps: int, repeats: int):
 
 def _prescribed(tc, s, overrides, step, tuned, timed, steps, repeats):
     from reports.comparison.compare import compare_run
-    from reports.tune.measured import PRESCRIBED_FAMILY, Measured
+    from reports.tune.measured import Measured, prescribed_errors
     from sim_models.own.mujoco_own import OwnMujocoSession, run_prescribed
     from sim_models.runs.engine_run import RunRequest
     from sim_models.runs.timing import time_steps
@@ -208,10 +208,7 @@ def _prescribed(tc, s, overrides, step, tuned, timed, steps, repeats):
     tree, r = run_prescribed(imp, req, step, tuned)
     cpu = time.process_time() - t0
     comps = judged(compare_run(r)) if r.ok else []
-    errs = {c.quantity: (PRESCRIBED_FAMILY.get(c.quantity.rsplit(".", 1)[-1],
-                                               c.quantity.rsplit(".", 1)[-1]),
-                         float(c.normalised) if c.measured else math.inf, float(c.floor))
-            for c in comps}
+    errs = prescribed_errors(comps)
     cost = math.nan
     if timed and r.ok and r.steps > 0:
         with OwnMujocoSession(tree, imp, s) as session:
@@ -227,7 +224,7 @@ def _free(tc, s, overrides, step, tuned, timed, steps, repeats):
     import numpy as np
 
     from reports.comparison.free_compare import compare_free
-    from reports.tune.measured import Measured
+    from reports.tune.measured import Measured, free_errors
     from sim_models.engines.free_protocol import free_start
     from sim_models.engines.protocol import compile_linkage
     from sim_models.own.mujoco_own_free import OwnFreeSession, run_free_own
@@ -237,10 +234,7 @@ def _free(tc, s, overrides, step, tuned, timed, steps, repeats):
     r = run_free_own(imp, req, traj, step, tuned)
     cpu = time.process_time() - t0
     v = compare_free(r, traj, ref)
-    errs = {c.quantity: (c.family, float(c.normalised) if c.measured else math.inf, 0.0)
-            for c in v.judged}
-    if not v.has_loop:
-        errs.pop("loop.gap", None)
+    errs = free_errors(v)
     dur = float(req.duration)
     cost = math.nan
     if timed and r.ok and r.steps > 0:
