@@ -20,7 +20,7 @@ import pytest
 
 from analytic.free_motion import WallLimitError, compiled, dop853, simulate
 
-from .test_free_motion_compiled import CHANGE_REL, _cases, largest_change
+from .test_free_motion_compiled import CHANGE_REL, _cases, assert_same_run, largest_change
 
 pytest.importorskip("numba")
 
@@ -187,15 +187,7 @@ def test_loop_matches_solve_ivp(name, loop, monkeypatch):
                   if isinstance(s.lk.derived.get("free_fast"), compiled.FastEOM)]
         assert served and sum(runs) > 0.9 * sum(len(s.ts) - 1 for s in served), \
             "the kernel took few of the steps"
-    assert fast.nfev == ref.nfev or tol > CHANGE_REL
-    assert [(a, b) for _, a, b in fast.switches] == [(a, b) for _, a, b in ref.switches]
-    assert max((abs(a[0] - b[0]) for a, b in zip(fast.switches, ref.switches, strict=True)),
-               default=0.0) <= tol * T
-    assert [e.kind for e in fast.events] == [e.kind for e in ref.events]
-    assert max((abs(e.t - f.t) for e, f in zip(fast.events, ref.events, strict=True)),
-               default=0.0) <= tol * T
-    worst = largest_change(fast, ref, np.linspace(0.0, T, 101))
-    assert max(worst.values()) <= tol, worst
+    assert_same_run(fast, ref, T, tol)
 
 
 def test_steps_by_scipy_while_the_loop_compiles(loop, monkeypatch):
