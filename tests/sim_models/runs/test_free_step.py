@@ -55,6 +55,7 @@ def test_quick_return_in_pinocchio_runs_at_the_step_chosen_from_the_motion():
     (a body turning 0.229 rad a step) and stopped at 0.385 s by its loop gap.  Now the
     step turns the fastest body (229 rad/s, checked by differences of its angle) by
     the cap, the run completes, and its verdict is the listed known limit."""
+    pytest.importorskip("pinocchio")  # the optional engine these runs use
     mech = free_case("quick-return", 2.0)
     run, v = release_and_judge(mech, "pinocchio", 2.0, 400)
     c = run.step_choice
@@ -70,6 +71,7 @@ def test_quick_return_in_pinocchio_runs_at_the_step_chosen_from_the_motion():
 
 def test_slow_release_keeps_the_recommended_step_exactly():
     """The seed four-bar released (31.5 rad/s: 0.03 rad a step at 1e-3 s)."""
+    pytest.importorskip("pinocchio")  # the optional engine these runs use
     run, v = release_and_judge(free_case("seed-four-bar", 1.0), "pinocchio", 1.0, 100)
     assert run.step_choice is None
     assert run.settings == free_settings("pinocchio") and run.settings.timestep == 1e-3
@@ -80,6 +82,7 @@ def test_slow_release_keeps_the_recommended_step_exactly():
 def test_a_step_the_user_sets_wins():
     """--timestep (and --set) is run as given: the quick-return at Pinocchio's 1e-3 s
     stops again by its loop gap, the settings line says nothing of the motion."""
+    pytest.importorskip("pinocchio")  # the optional engine these runs use
     base = ("simulate", "quick-return", "--engine", "pinocchio", "--samples", "101",
             "--json")
     for extra in (("--timestep", "1e-3"), ("--set", "pinocchio.timestep=1e-3")):
